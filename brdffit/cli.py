@@ -1,0 +1,226 @@
+"""The ``brdffit`` command line (SPEC section 7).
+
+Exit status: 0 success; 1 a fit did not converge (its result is still
+written, with ``converged: false``); 2 bad input or usage, reported in one
+line on stderr, with nothing written.
+"""
+
+import argparse
+import inspect
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from ._version import __version__
+from .errors import BrdfInputError
+
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class _UsageError(Exception):
+    """An argparse usage error, reported like any other bad input."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):
+        raise _UsageError(f"{message} (see {self.prog} --help)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``) and return the exit status."""
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+        return args.command(args)
+    except (BrdfInputError, _UsageError) as error:
+        print(f"brdffit: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except SystemExit as exit_:  # --help and --version
+        return exit_.code if isinstance(exit_.code, int) else EXIT_OK
+
+
+def run() -> None:
+    """Console-script entry point."""
+    sys.exit(main())
+
+
+# ------------------------------------------------------------------ the parser
+def _build_parser() -> argparse.ArgumentParser:
+    from .losses import LOSSES
+    from .models import MODELS
+    from .samples import ANGLE_UNITS, QUANTITIES
+
+    parser = _Parser(
+        prog="brdffit",
+        description="Fit analytic BRDF models to measured reflectance samples.",
+        allow_abbrev=False,
+    )
+    parser.add_argument("--version", action="version", version=f"brdffit {__version__}")
+    commands = parser.add_subparsers(title="commands", metavar="COMMAND", required=True)
+
+    def model_options(command: argparse.ArgumentParser, default: str | None) -> None:
+        default_text = f" (default {default})" if default else " (default: the model of a result file given as --params)"
+        command.add_argument("--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}")
+        command.add_argument("--fresnel", metavar="KIND", help="cook-torrance: schlick (default), dielectric, conductor, none")
+        command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
+
+    fit = commands.add_parser("fit", help="fit a model to a samples file", allow_abbrev=False)
+    fit.add_argument("samples", metavar="SAMPLES", help="samples file (CSV, SPEC section 4)")
+    model_options(fit, "ward")
+    fit.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
+    fit.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
+    fit.add_argument("--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)")
+    fit.add_argument("--angles", default="degrees", metavar="UNIT", help=f"angle columns in {' or '.join(ANGLE_UNITS)} (default degrees)")
+    fit.add_argument("--start", metavar="PARAMS", help="start from these parameters (JSON file or inline JSON) instead of the data-driven starts")
+    fit.add_argument("--starts", type=int, default=3, metavar="N", help="Levenberg-Marquardt runs from the N best grid starts (default 3)")
+    fit.add_argument("--max-steps", type=int, default=256, metavar="N", help="most solver steps per start (default 256)")
+    fit.add_argument("-o", "--output", metavar="FILE", help="result file (default: SAMPLES-stem.MODEL.json in the current folder)")
+    fit.set_defaults(command=_fit)
+
+    synth = commands.add_parser("synth", help="write synthetic samples of a model", allow_abbrev=False)
+    model_options(synth, None)
+    synth.add_argument("--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON")
+    synth.add_argument("--geometry", default="hemisphere", metavar="NAME", help="hemisphere (default), in-plane, random, near-specular")
+    synth.add_argument("--n-incident", type=int, metavar="N", help="light zenith angles (hemisphere, in-plane, near-specular; default 8)")
+    synth.add_argument("--n-theta", type=int, metavar="N", help="viewer zenith angles (hemisphere 36, in-plane 90)")
+    synth.add_argument("--n-phi", type=int, metavar="N", help="viewer azimuths (hemisphere; default 36)")
+    synth.add_argument("--n-samples", type=int, metavar="N", help="sample count (random, near-specular; default 10000)")
+    synth.add_argument("--spread", type=float, metavar="DEG", help="near-specular: widest angle from the mirror direction (default 10)")
+    synth.add_argument("--noise", type=float, default=0.0, metavar="LEVEL", help="noise level: 0.01 is 1%% for multiplicative noise (default 0)")
+    synth.add_argument("--noise-kind", default="multiplicative", metavar="KIND", help="multiplicative (default) or additive (LEVEL in 1/sr)")
+    synth.add_argument("--sigma-column", action="store_true", help="write the noise's 1-σ as sigma columns")
+    synth.add_argument("--seed", type=int, default=0, help="seed of the noise and of random geometries (default 0)")
+    synth.add_argument("-o", "--output", required=True, metavar="FILE", help="samples file to write")
+    synth.set_defaults(command=_synth)
+
+    models = commands.add_parser("models", help="list the models, their parameters and domains", allow_abbrev=False)
+    models.set_defaults(command=_models)
+    return parser
+
+
+# ------------------------------------------------------------------ commands
+def _fit(args: argparse.Namespace) -> int:
+    from .fit import fit
+    from .losses import get_loss
+    from .models import get_model
+    from .samples import load_samples
+
+    model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
+    get_loss(args.loss)
+    output = Path(args.output) if args.output else Path(f"{Path(args.samples).stem}.{model.name}.json")
+    _check_output(output, "-o")
+    start = _json_argument(args.start, "--start") if args.start else None
+    if isinstance(start, dict) and "params" in start:  # a result file
+        start = start["params"]
+    samples = load_samples(args.samples, angles=args.angles, quantity=args.quantity)
+    result = fit(samples, model, args.loss, max_theta=args.max_theta, start=start, n_starts=args.starts, max_steps=args.max_steps)
+    print(result.table(source=args.samples))
+    result.save(output)
+    print(f"wrote {output}")
+    if not result.converged:
+        print(f"brdffit: warning: the fit did not converge ({result.message}); written with converged: false", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    return EXIT_OK
+
+
+def _synth(args: argparse.Namespace) -> int:
+    from data_synth import GEOMETRIES, synthesize
+
+    from .models import get_model
+    from .samples import save_samples
+
+    params = _json_argument(args.params, "--params")
+    model_name, options = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}
+    if isinstance(params, dict) and "params" in params and "model" in params:  # a result file
+        if args.model not in (None, params["model"]):
+            raise BrdfInputError(f"--params {args.params} holds a {params['model']} result, not --model {args.model}")
+        model_name = params["model"]
+        options = {**params.get("model_options", {}), **{k: v for k, v in options.items() if v is not None}}
+        params = params["params"]
+    if model_name is None:
+        raise BrdfInputError("--model is required unless --params is a result file")
+    model = get_model(model_name, **options)
+    if args.geometry not in GEOMETRIES:
+        raise BrdfInputError(f"--geometry {args.geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
+    make_geometry = GEOMETRIES[args.geometry]
+    accepted = inspect.signature(make_geometry).parameters
+    given = {
+        name: getattr(args, name)
+        for name in ("n_incident", "n_theta", "n_phi", "n_samples", "spread")
+        if getattr(args, name) is not None
+    }
+    for name in given:
+        if name not in accepted:
+            raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {args.geometry}")
+    if "seed" in accepted:
+        given["seed"] = args.seed
+    output = Path(args.output)
+    _check_output(output, "-o")
+    wi, wo = make_geometry(**given)
+    samples = synthesize(
+        model.name,
+        params,
+        wi,
+        wo,
+        noise=args.noise,
+        noise_kind=args.noise_kind,
+        seed=args.seed,
+        with_sigma=args.sigma_column,
+        **model.model_options,
+    )
+    save_samples(samples, output)
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) of {model.name} to {output}")
+    return EXIT_OK
+
+
+def _models(args: argparse.Namespace) -> int:
+    from .models import MODELS, get_model, model_option_names
+
+    for name in MODELS:
+        model = get_model(name)
+        summary = model.summary + (f": {model.lobe.summary}" if model.lobe else "")
+        print(f"{name}\n  {summary}")
+        options = model_option_names(name)
+        if options:
+            print(f"  options: {', '.join('--' + option for option in options)}")
+        if name == "cook-torrance":
+            from .models.cook_torrance import FRESNEL_PARAMETERS
+
+            for fresnel in FRESNEL_PARAMETERS:
+                lines = get_model(name, fresnel=fresnel).describe_parameters()
+                print(f"  --fresnel {fresnel}: " + "; ".join(lines))
+        else:
+            print("  parameters: " + "; ".join(model.describe_parameters()))
+    return EXIT_OK
+
+
+# ------------------------------------------------------------------ helpers
+def _json_argument(value: str, option: str) -> Any:
+    """Inline JSON (starting with ``{``) or the content of the JSON file ``value``."""
+    if value.lstrip().startswith("{"):
+        text, where = value, f"{option} (inline JSON)"
+    else:
+        where = f"{option} {value}"
+        try:
+            text = Path(value).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise BrdfInputError(f"{where}: no such file") from None
+        except (OSError, UnicodeDecodeError) as error:
+            raise BrdfInputError(f"{where}: cannot be read ({error})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
+
+
+def _check_output(path: Path, option: str) -> None:
+    """Fail before any work if ``path`` cannot be written."""
+    folder = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise BrdfInputError(f"{option} {path}: is a folder; give a file name")
+    if not folder.is_dir():
+        raise BrdfInputError(f"{option} {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise BrdfInputError(f"{option} {path}: folder {folder} is not writable")

@@ -1,0 +1,10 @@
+"""Starting shapes shared by the lobe families: coarse, log-spaced, spanning real materials.
+
+Ngan et al. 2005 fit roughnesses of 0.005–0.65 and exponents of 1–10⁵ to the
+MERL materials; the fit starts from the best few points of these grids (see
+``brdffit/starts.py``), so each grid only needs to land within the basin of
+the optimum, a factor of ~2 in roughness.
+"""
+
+ROUGHNESS_GRID = (0.005, 0.01, 0.02, 0.04, 0.08, 0.15, 0.3, 0.6)
+EXPONENT_GRID = (3.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0, 30000.0)

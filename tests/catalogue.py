@@ -1,0 +1,45 @@
+"""A catalogue of models with realistic parameters, fed to ``pytest.mark.parametrize``.
+
+Each case is ``(model, options, params)``; the ids name the model and its options.
+Parameters are of real materials (Ngan et al. 2005's fits) or textbook values.
+"""
+
+import pytest
+
+CASES = [
+    ("lambert", {}, {"rho_d": [0.5, 0.3, 0.2]}),
+    ("ward", {}, {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}),
+    ("ward-aniso", {}, {"rho_d": [0.1, 0.1, 0.1], "rho_s": [0.05, 0.04, 0.03], "alpha_x": 0.08, "alpha_y": 0.25}),
+    ("ward-duer", {}, {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.025, 0.022, 0.015], "alpha": 0.146}),
+    ("cook-torrance", {"fresnel": "schlick"}, {"kd": [0.3, 0.26, 0.18], "ks": [0.41, 0.35, 0.23], "m": 0.139, "f0": 0.0203}),
+    ("cook-torrance", {"fresnel": "dielectric"}, {"kd": [0.3, 0.26, 0.18], "ks": [0.41, 0.35, 0.23], "m": 0.139, "eta": 1.5}),
+    ("cook-torrance", {"fresnel": "conductor"}, {"kd": [0.01, 0.01, 0.01], "ks": [0.9, 0.8, 0.6], "m": 0.2, "eta": 0.2, "k": 3.9}),
+    ("cook-torrance", {"fresnel": "none"}, {"kd": [0.3, 0.26, 0.18], "ks": [0.05, 0.04, 0.03], "m": 0.25}),
+    ("blinn-phong", {}, {"rho_d": [0.2, 0.1, 0.05], "rho_s": [0.05, 0.05, 0.05], "n": 60.0}),
+    ("phong", {}, {"rho_d": [0.0432, 0.0167, 0.00699], "rho_s": [0.0092, 0.00786, 0.00539], "n": 82.1}),
+    (
+        "lafortune",
+        {"lobes": 1},
+        {"rho_d": [0.151, 0.101, 0.0591], "lobes": [{"rho_s": [0.151, 0.132, 0.0906], "cxy": -0.595, "cz": 0.541, "n": 46.8}]},
+    ),
+    (
+        "lafortune",
+        {"lobes": 2},
+        {
+            "rho_d": [0.1, 0.1, 0.1],
+            "lobes": [
+                {"rho_s": [0.1, 0.08, 0.06], "cxy": -0.62, "cz": 0.48, "n": 30.0},
+                {"rho_s": [0.05, 0.05, 0.05], "cxy": 0.6, "cz": 0.529, "n": 8.0},
+            ],
+        },
+    ),
+]
+
+
+def case_id(case) -> str:
+    model, options, _ = case
+    return model + "".join(f"-{value}" for value in options.values())
+
+
+def parametrize_cases(cases=CASES):
+    return pytest.mark.parametrize(("model", "options", "params"), cases, ids=[case_id(c) for c in cases])
