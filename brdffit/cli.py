@@ -61,9 +61,15 @@ def _build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(title="commands", metavar="COMMAND", required=True)
 
     def model_options(command: argparse.ArgumentParser, default: str | None) -> None:
-        default_text = f" (default {default})" if default else " (default: the model of a result file given as --params)"
-        command.add_argument("--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}")
-        command.add_argument("--fresnel", metavar="KIND", help="cook-torrance: schlick (default), dielectric, conductor, none")
+        default_text = (
+            f" (default {default})" if default else " (default: the model of a result file given as --params)"
+        )
+        command.add_argument(
+            "--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}"
+        )
+        command.add_argument(
+            "--fresnel", metavar="KIND", help="cook-torrance: schlick (default), dielectric, conductor, none"
+        )
         command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
 
     fit = commands.add_parser("fit", help="fit a model to a samples file", allow_abbrev=False)
@@ -71,25 +77,68 @@ def _build_parser() -> argparse.ArgumentParser:
     model_options(fit, "ward")
     fit.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
     fit.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
-    fit.add_argument("--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)")
-    fit.add_argument("--angles", default="degrees", metavar="UNIT", help=f"angle columns in {' or '.join(ANGLE_UNITS)} (default degrees)")
-    fit.add_argument("--start", metavar="PARAMS", help="start from these parameters (JSON file or inline JSON) instead of the data-driven starts")
-    fit.add_argument("--starts", type=int, default=3, metavar="N", help="Levenberg-Marquardt runs from the N best grid starts (default 3)")
-    fit.add_argument("--max-steps", type=int, default=256, metavar="N", help="most solver steps per start (default 256)")
-    fit.add_argument("-o", "--output", metavar="FILE", help="result file (default: SAMPLES-stem.MODEL.json in the current folder)")
+    fit.add_argument(
+        "--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)"
+    )
+    fit.add_argument(
+        "--angles",
+        default="degrees",
+        metavar="UNIT",
+        help=f"angle columns in {' or '.join(ANGLE_UNITS)} (default degrees)",
+    )
+    fit.add_argument(
+        "--start",
+        metavar="PARAMS",
+        help="start from these parameters (JSON file or inline JSON) instead of the data-driven starts",
+    )
+    fit.add_argument(
+        "--starts",
+        type=int,
+        default=3,
+        metavar="N",
+        help="Levenberg-Marquardt runs from the N best grid starts (default 3)",
+    )
+    fit.add_argument(
+        "--max-steps", type=int, default=256, metavar="N", help="most solver steps per start (default 256)"
+    )
+    fit.add_argument(
+        "-o", "--output", metavar="FILE", help="result file (default: SAMPLES-stem.MODEL.json in the current folder)"
+    )
     fit.set_defaults(command=_fit)
 
     synth = commands.add_parser("synth", help="write synthetic samples of a model", allow_abbrev=False)
     model_options(synth, None)
-    synth.add_argument("--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON")
-    synth.add_argument("--geometry", default="hemisphere", metavar="NAME", help="hemisphere (default), in-plane, random, near-specular")
-    synth.add_argument("--n-incident", type=int, metavar="N", help="light zenith angles (hemisphere, in-plane, near-specular; default 8)")
+    synth.add_argument(
+        "--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON"
+    )
+    synth.add_argument(
+        "--geometry", default="hemisphere", metavar="NAME", help="hemisphere (default), in-plane, random, near-specular"
+    )
+    synth.add_argument(
+        "--n-incident",
+        type=int,
+        metavar="N",
+        help="light zenith angles (hemisphere, in-plane, near-specular; default 8)",
+    )
     synth.add_argument("--n-theta", type=int, metavar="N", help="viewer zenith angles (hemisphere 36, in-plane 90)")
     synth.add_argument("--n-phi", type=int, metavar="N", help="viewer azimuths (hemisphere; default 36)")
     synth.add_argument("--n-samples", type=int, metavar="N", help="sample count (random, near-specular; default 10000)")
-    synth.add_argument("--spread", type=float, metavar="DEG", help="near-specular: widest angle from the mirror direction (default 10)")
-    synth.add_argument("--noise", type=float, default=0.0, metavar="LEVEL", help="noise level: 0.01 is 1%% for multiplicative noise (default 0)")
-    synth.add_argument("--noise-kind", default="multiplicative", metavar="KIND", help="multiplicative (default) or additive (LEVEL in 1/sr)")
+    synth.add_argument(
+        "--spread", type=float, metavar="DEG", help="near-specular: widest angle from the mirror direction (default 10)"
+    )
+    synth.add_argument(
+        "--noise",
+        type=float,
+        default=0.0,
+        metavar="LEVEL",
+        help="noise level: 0.01 is 1%% for multiplicative noise (default 0)",
+    )
+    synth.add_argument(
+        "--noise-kind",
+        default="multiplicative",
+        metavar="KIND",
+        help="multiplicative (default) or additive (LEVEL in 1/sr)",
+    )
     synth.add_argument("--sigma-column", action="store_true", help="write the noise's 1-σ as sigma columns")
     synth.add_argument("--seed", type=int, default=0, help="seed of the noise and of random geometries (default 0)")
     synth.add_argument("-o", "--output", required=True, metavar="FILE", help="samples file to write")
@@ -115,12 +164,17 @@ def _fit(args: argparse.Namespace) -> int:
     if isinstance(start, dict) and "params" in start:  # a result file
         start = start["params"]
     samples = load_samples(args.samples, angles=args.angles, quantity=args.quantity)
-    result = fit(samples, model, args.loss, max_theta=args.max_theta, start=start, n_starts=args.starts, max_steps=args.max_steps)
+    result = fit(
+        samples, model, args.loss, max_theta=args.max_theta, start=start, n_starts=args.starts, max_steps=args.max_steps
+    )
     print(result.table(source=args.samples))
     result.save(output)
     print(f"wrote {output}")
     if not result.converged:
-        print(f"brdffit: warning: the fit did not converge ({result.message}); written with converged: false", file=sys.stderr)
+        print(
+            f"brdffit: warning: the fit did not converge ({result.message}); written with converged: false",
+            file=sys.stderr,
+        )
         return EXIT_NOT_CONVERGED
     return EXIT_OK
 

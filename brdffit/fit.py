@@ -6,7 +6,7 @@ step is physically valid; the solver is ``optimistix.LevenbergMarquardt``
 shape and reused for every start and every dataset of that shape.
 """
 
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import jax
@@ -91,11 +91,20 @@ def fit(
         n_samples=samples.n_samples,
         n_steps=int(n_steps),
         converged=converged,
-        message="" if converged else optx.RESULTS[result],
+        message="" if converged else _failure_message(result, max_steps),
     )
 
 
-@lru_cache(maxsize=None)
+def _failure_message(result, max_steps: int) -> str:
+    if result == optx.RESULTS.nonlinear_max_steps_reached:
+        return (
+            f"the maximum number of solver steps ({max_steps}) was reached before the tolerances were met;"
+            " raise --max-steps"
+        )
+    return optx.RESULTS[result]
+
+
+@cache
 def _compiled_solver(model: Model, loss: Loss, max_steps: int):
     """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per data shape."""
     solver = LevenbergMarquardt(rtol=RTOL, atol=ATOL, ftol=FTOL)

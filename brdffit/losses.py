@@ -54,7 +54,9 @@ LOSSES = {
         lambda v, y, ci: ci / (1.0 + v * ci),
     ),
     "l2": Loss("l2", "f − y", lambda v, y, ci: v, lambda v, y, ci: np.ones_like(v)),
-    "cosine": Loss("cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci, lambda v, y, ci: ci * np.ones_like(v)),
+    "cosine": Loss(
+        "cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci, lambda v, y, ci: ci * np.ones_like(v)
+    ),
     "cbrt": Loss("cbrt", "cbrt(f) − cbrt(y)", _cbrt, lambda v, y, ci: np.cbrt(v) / (3.0 * v)),
     "relative": Loss(
         "relative",

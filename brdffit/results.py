@@ -103,9 +103,8 @@ class FitResult:
         """A readable report: one row per parameter, one column per channel, and the fit's figures."""
         what = f" of {source}" if source else ""
         options = "".join(f", {key} {value}" for key, value in self.model_options.items())
-        lines = [
-            f"{self.model}{options} fit{what}: {self.n_samples} samples × {len(self.channels)} channel(s), loss {self.loss}"
-        ]
+        size = f"{self.n_samples} samples × {len(self.channels)} channel(s)"
+        lines = [f"{self.model}{options} fit{what}: {size}, loss {self.loss}"]
         rows = list(_parameter_rows(self.params))
         label_width = max(len("parameter"), *(len(label) for label, _ in rows))
         columns = [str(c) for c in self.channels]
@@ -115,9 +114,7 @@ class FitResult:
             values = value if isinstance(value, list) else [value]
             lines.append("  " + label.ljust(label_width) + "".join(_number(v).rjust(cell) for v in values))
         status = "converged" if self.converged else f"NOT converged: {self.message}"
-        lines.append(
-            f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps · {status}"
-        )
+        lines.append(f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps · {status}")
         return "\n".join(lines)
 
     def __str__(self) -> str:

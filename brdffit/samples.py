@@ -89,7 +89,7 @@ class Samples:
             sigma = np.broadcast_to(_float_array(sigma, "sigma", source).reshape(n, -1), values.shape).copy()
         if weight is not None:
             weight = _float_array(weight, "weight", source).reshape(n)
-        locate = lambda row: f"{source}: row {row}"  # noqa: E731
+        locate = lambda row: f"{source}: row {row}"
         checked = _Checked(locate)
         for name, column in (("wi", wi), ("wo", wo)):
             checked.finite(column, [f"{name}_x", f"{name}_y", f"{name}_z"])
@@ -187,7 +187,7 @@ def _parse_csv(text: str, source: str, angles: str, quantity: str) -> Samples:
     line_numbers = np.array([number for number, _ in rows])
     table = _parse_numbers([line for _, line in rows], line_numbers, names, delimiter, source)
 
-    locate = lambda row: f"{source}: row {row + 1} (line {line_numbers[row]})"  # noqa: E731
+    locate = lambda row: f"{source}: row {row + 1} (line {line_numbers[row]})"
     checked = _Checked(locate)
     checked.finite(table, names)
     if layout.angles:
@@ -226,13 +226,15 @@ def _parse_numbers(lines: list[str], line_numbers, names: list[str], delimiter, 
         where = f"{source}: row {row + 1} (line {line_numbers[row]})"
         if len(cells) != len(names):
             raise BrdfInputError(f"{where}: {len(cells)} cells, but the header names {len(names)} columns")
-        for name, cell in zip(names, cells):
+        for name, cell in zip(names, cells, strict=True):
             try:
                 float(cell)
             except ValueError:
                 shown = "an empty cell" if not cell else repr(cell)
                 raise BrdfInputError(f"{where}, column {name}: {shown} is not a number") from None
-    raise BrdfInputError(f"{source}: the table could not be read as numbers")  # pragma: no cover - loadtxt and the scan agree
+    raise BrdfInputError(
+        f"{source}: the table could not be read as numbers"
+    )  # pragma: no cover - loadtxt and the scan agree
 
 
 @dataclass(frozen=True)
@@ -261,7 +263,9 @@ class _Layout:
         has_vectors = any(name in position for name in VECTOR_COLUMNS)
         geometry_help = f"geometry is {', '.join(ANGLE_COLUMNS)} or {', '.join(VECTOR_COLUMNS)}"
         if has_angles and has_vectors:
-            raise BrdfInputError(f"{where}: both angle and direction-vector columns; give one geometry ({geometry_help})")
+            raise BrdfInputError(
+                f"{where}: both angle and direction-vector columns; give one geometry ({geometry_help})"
+            )
         if not (has_angles or has_vectors):
             raise BrdfInputError(f"{where}: no geometry columns; {geometry_help}")
         wanted = ANGLE_COLUMNS if has_angles else VECTOR_COLUMNS
@@ -304,12 +308,19 @@ class _Layout:
                 by_channel = {lower[i][len("sigma_") :]: i for i in sigma_columns}
                 for index in sigma_columns:
                     if lower[index] == "sigma":
-                        raise BrdfInputError(f"{where}: give either one 'sigma' column or one sigma_<channel> per channel, not both")
+                        raise BrdfInputError(
+                            f"{where}: give either one 'sigma' column or one sigma_<channel> per channel, not both"
+                        )
                     if lower[index][len("sigma_") :] not in [c.lower() for c in channels]:
-                        raise BrdfInputError(f"{where}: unknown column {names[index]!r}; sigma columns are sigma_<channel> for channels {', '.join(channels)}")
+                        raise BrdfInputError(
+                            f"{where}: unknown column {names[index]!r}; sigma columns are sigma_<channel>"
+                            f" for channels {', '.join(channels)}"
+                        )
                 missing = [c for c in channels if c.lower() not in by_channel]
                 if missing:
-                    raise BrdfInputError(f"{where}: missing column 'sigma_{missing[0]}'; give a sigma for every channel or one 'sigma'")
+                    raise BrdfInputError(
+                        f"{where}: missing column 'sigma_{missing[0]}'; give a sigma for every channel or one 'sigma'"
+                    )
                 sigma = [by_channel[c.lower()] for c in channels]
                 sigma_names = [names[i] for i in sigma]
         return cls(has_angles, geometry, value_columns, channels, sigma, sigma_names, weight)

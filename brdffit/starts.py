@@ -41,11 +41,15 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
         partial_model = replace(model, n_lobes=placed + 1)
         scored = []
         for shape in model.lobe.grid:
-            lobe = np.asarray(_lobe_values(model.lobe, {k: jnp.asarray(v) for k, v in shape.items()}, problem.wi, problem.wo))
+            lobe = np.asarray(
+                _lobe_values(model.lobe, {k: jnp.asarray(v) for k, v in shape.items()}, problem.wi, problem.wo)
+            )
             basis = np.vstack([np.full_like(lobe, 1.0 / np.pi), *chosen_values, lobe])
             albedos = _floored(_albedos(basis, measured, weight))
             shapes = [*chosen, shape]
-            params = Params(albedos[0], albedos[1:], {name: np.array([s[name] for s in shapes]) for name in model.lobe.names})
+            params = Params(
+                albedos[0], albedos[1:], {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
+            )
             theta = partial_model.to_unconstrained(params)
             scored.append((float(_cost(partial_model, loss, jnp.asarray(theta), problem)), theta, shape, lobe))
         scored.sort(key=lambda item: item[0])

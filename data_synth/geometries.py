@@ -33,7 +33,9 @@ def hemisphere_grid(n_incident: int = 8, n_theta: int = 36, n_phi: int = 36) -> 
     [0°, 90°); viewer azimuths are ``k · 360°/n_phi``. 8 × 36 × 36 gives light
     at 5.6°, 16.9°, …, 84.4° and the viewer every 2.5° in zenith and 10° in azimuth.
     """
-    n_incident, n_theta, n_phi = (_positive_count(k, v) for k, v in (("n_incident", n_incident), ("n_theta", n_theta), ("n_phi", n_phi)))
+    n_incident, n_theta, n_phi = (
+        _positive_count(k, v) for k, v in (("n_incident", n_incident), ("n_theta", n_theta), ("n_phi", n_phi))
+    )
     theta_i = _midpoints(n_incident, np.pi / 2)
     theta_o = _midpoints(n_theta, np.pi / 2)
     phi_o = np.arange(n_phi) * 2 * np.pi / n_phi
@@ -65,7 +67,9 @@ def uniform_random(n_samples: int = 10000, seed: int = 0) -> tuple[np.ndarray, n
     return _directions(theta[0], phi[0]), _directions(theta[1], phi[1])
 
 
-def near_specular(n_incident: int = 8, n_samples: int = 10000, spread: float = 10.0, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def near_specular(
+    n_incident: int = 8, n_samples: int = 10000, spread: float = 10.0, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
     """``n_samples`` pairs dense around the mirror direction, for sharp lobes.
 
     Light zeniths as in :func:`hemisphere_grid`; for each, viewer directions at
@@ -81,7 +85,7 @@ def near_specular(n_incident: int = 8, n_samples: int = 10000, spread: float = 1
     per_light = np.diff(np.linspace(0, n_samples, n_incident + 1).round().astype(int))
     horizon = np.cos(np.radians(89.9))
     pairs_i, pairs_o = [], []
-    for theta, count in zip(theta_i, per_light):
+    for theta, count in zip(theta_i, per_light, strict=True):
         wi = _directions(np.array([theta]), np.zeros(1))[0]
         mirror = np.asarray(mirror_direction(wi))
         tangent = np.cross([0.0, 1.0, 0.0], mirror)

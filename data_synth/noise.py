@@ -7,7 +7,9 @@ from brdffit.errors import BrdfInputError
 NOISE_KINDS = ("multiplicative", "additive")
 
 
-def add_noise(values: np.ndarray, level: float, kind: str = "multiplicative", seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def add_noise(
+    values: np.ndarray, level: float, kind: str = "multiplicative", seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
     """Noisy copy of ``values`` and the 1-σ of the noise (both like ``values``).
 
     ``multiplicative``: ``y (1 + level·ε)``, σ = ``level · y`` (``level`` 0.01 is 1%);

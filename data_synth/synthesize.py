@@ -36,4 +36,6 @@ def synthesize(
         raise BrdfInputError("a sigma column needs noise > 0 and, for multiplicative noise, values > 0 everywhere")
     if channels is None:
         channels = {1: ("value",), 3: ("r", "g", "b")}.get(values.shape[1])
-    return Samples.from_arrays(wi, wo, values, channels=channels, sigma=sigma if with_sigma else None, source="synthetic")
+    return Samples.from_arrays(
+        wi, wo, values, channels=channels, sigma=sigma if with_sigma else None, source="synthetic"
+    )

@@ -18,7 +18,9 @@ _FILES = {
     "lafortune": "ngan_lafortune.fit",
     "phong": "ngan_blinnphong.fit",
 }
-_LINE = re.compile(r"^(?P<name>[\w-]+) = Aggregate\(Lambertian\(albedo = (?P<diffuse>\[[^\]]*\])\), Ngan\w+\((?P<lobe>.*)\)\)$")
+_LINE = re.compile(
+    r"^(?P<name>[\w-]+) = Aggregate\(Lambertian\(albedo = (?P<diffuse>\[[^\]]*\])\), Ngan\w+\((?P<lobe>.*)\)\)$"
+)
 _FIELD = re.compile(r"(\w+) = (\[[^\]]*\]|[-\d.e+]+)")
 
 

@@ -103,7 +103,11 @@ _ENERGY_CASES = [
 ]
 
 
-@pytest.mark.parametrize(("model", "options", "specular", "shapes", "max_theta"), _ENERGY_CASES, ids=[c[0] + "".join(c[1].values()) for c in _ENERGY_CASES])
+@pytest.mark.parametrize(
+    ("model", "options", "specular", "shapes", "max_theta"),
+    _ENERGY_CASES,
+    ids=[c[0] + "".join(c[1].values()) for c in _ENERGY_CASES],
+)
 def test_directional_albedo_at_most_one(model, options, specular, shapes, max_theta):
     """Energy conservation: ∫ f cos θo dωo ≤ 1 for every incidence up to ``max_theta``.
 
@@ -111,7 +115,7 @@ def test_directional_albedo_at_most_one(model, options, specular, shapes, max_th
     diffuse_name = get_model(model, **options).diffuse_name
     names = list(shapes)
     for values in np.array(np.meshgrid(*shapes.values())).reshape(len(names), -1).T:
-        params = {diffuse_name: [0.5], **specular, **dict(zip(names, values))}
+        params = {diffuse_name: [0.5], **specular, **dict(zip(names, values, strict=True))}
         for theta in (0.0, 30.0, 60.0, 75.0, max_theta):
             assert directional_albedo(model, params, theta, options)[0] <= 1.0 + 1e-3, (params, theta)
 
@@ -140,9 +144,9 @@ def _in_plane(theta_i, theta_o):
 
 def test_ward_golden_values():
     # Normal incidence and viewing: rho_d/π + rho_s/(4π α²), evaluated by hand.
-    assert evaluate("ward", {"rho_d": [0.2], "rho_s": [0.1], "alpha": 0.2}, *_in_plane(0.0, 0.0))[0, 0] == pytest.approx(
-        0.2626056561016273, rel=1e-14
-    )
+    assert evaluate("ward", {"rho_d": [0.2], "rho_s": [0.1], "alpha": 0.2}, *_in_plane(0.0, 0.0))[
+        0, 0
+    ] == pytest.approx(0.2626056561016273, rel=1e-14)
     theta_i, theta_o, alpha = 30.0, 45.0, 0.2
     tan2 = math.tan(math.radians((theta_o - theta_i) / 2)) ** 2
     ci, co = math.cos(math.radians(theta_i)), math.cos(math.radians(theta_o))
@@ -195,8 +199,12 @@ def test_phong_family_golden_values():
     n, rho_d, rho_s = 40.0, 0.1, 0.3
     mirror = _in_plane(30.0, 30.0)
     params = {"rho_d": [rho_d], "rho_s": [rho_s], "n": n}
-    assert evaluate("phong", params, *mirror)[0, 0] == pytest.approx(rho_d / math.pi + rho_s * (n + 2) / (2 * math.pi), rel=1e-14)
-    assert evaluate("blinn-phong", params, *mirror)[0, 0] == pytest.approx(rho_d / math.pi + rho_s * (n + 8) / (8 * math.pi), rel=1e-14)
+    assert evaluate("phong", params, *mirror)[0, 0] == pytest.approx(
+        rho_d / math.pi + rho_s * (n + 2) / (2 * math.pi), rel=1e-14
+    )
+    assert evaluate("blinn-phong", params, *mirror)[0, 0] == pytest.approx(
+        rho_d / math.pi + rho_s * (n + 8) / (8 * math.pi), rel=1e-14
+    )
     # 15° away from the mirror direction in the plane: cos¹⁵°ⁿ; the half vector is 7.5° off the normal.
     off = _in_plane(30.0, 45.0)
     phong = rho_d / math.pi + rho_s * (n + 2) / (2 * math.pi) * math.cos(math.radians(15.0)) ** n
@@ -209,7 +217,9 @@ def test_lafortune_golden_values(rng):
     # cxy = -cz: the ratio form is exactly the Phong lobe, everywhere.
     wi, wo = random_directions(rng, 1000), random_directions(rng, 1000)
     c = 1 / math.sqrt(3)
-    lafortune = evaluate("lafortune", {"rho_d": [0.1], "lobes": [{"rho_s": [0.3], "cxy": -c, "cz": c, "n": 25.0}]}, wi, wo)
+    lafortune = evaluate(
+        "lafortune", {"rho_d": [0.1], "lobes": [{"rho_s": [0.3], "cxy": -c, "cz": c, "n": 25.0}]}, wi, wo
+    )
     phong = evaluate("phong", {"rho_d": [0.1], "rho_s": [0.3], "n": 25.0}, wi, wo)
     np.testing.assert_allclose(lafortune, phong, rtol=1e-12, atol=1e-300)
     # cxy = +cz: a retro-reflective lobe that peaks at (n+2)/(2π) with the viewer at the light.
@@ -290,7 +300,10 @@ def test_gradients_match_finite_differences(model, options, params, rng):
     analytic = np.asarray(jax.jacfwd(f)(jnp.asarray(theta0)))
     h = 1e-6
     numeric = np.stack(
-        [(np.asarray(f(jnp.asarray(theta0 + h * e))) - np.asarray(f(jnp.asarray(theta0 - h * e)))) / (2 * h) for e in np.eye(theta0.size)],
+        [
+            (np.asarray(f(jnp.asarray(theta0 + h * e))) - np.asarray(f(jnp.asarray(theta0 - h * e)))) / (2 * h)
+            for e in np.eye(theta0.size)
+        ],
         axis=1,
     )
     scale = np.max(np.abs(np.asarray(f(jnp.asarray(theta0)))))
@@ -308,7 +321,7 @@ def test_models_jit_and_vmap(rng):
     )
     batched = jax.jit(jax.vmap(built.evaluate, in_axes=(0, None, None)))(batch, wi, wo)
     for index in range(2):
-        one = jax.tree.map(lambda leaf: leaf[index], batch)
+        one = jax.tree.map(lambda leaf, i=index: leaf[i], batch)
         # XLA fuses and reorders the compiled arithmetic: a few ulp, amplified by exp(-tan²θh/m²).
         np.testing.assert_allclose(batched[index], built.evaluate(one, wi, wo), rtol=1e-13)
 
@@ -328,7 +341,9 @@ def test_parameter_forms_round_trip(model, options, params):
     expected = built.params_to_dict(physical)
     assert list(back) == list(expected) == list(params)
     for name, value in expected.items():
-        np.testing.assert_allclose(np.asarray(jax.tree.leaves(back[name])), np.asarray(jax.tree.leaves(value)), rtol=1e-12)
+        np.testing.assert_allclose(
+            np.asarray(jax.tree.leaves(back[name])), np.asarray(jax.tree.leaves(value)), rtol=1e-12
+        )
     assert len(built.unconstrained_labels(("r", "g", "b"))) == built.n_parameters(3)
 
 
@@ -343,7 +358,12 @@ def test_parameter_forms_round_trip(model, options, params):
         ("ward", {}, {"rho_d": "red", "rho_s": [0.1], "alpha": 0.1}, "rho_d must be a number or a list of numbers"),
         ("ward", {}, {"rho_d": [0.1], "rho_s": [0.1], "alpha": [0.1]}, "alpha must be a single number"),
         ("cook-torrance", {}, {"kd": [0.1], "ks": [0.1], "m": 0.1, "f0": 1.5}, "f0 = 1.5 is outside its domain [0, 1]"),
-        ("cook-torrance", {"fresnel": "dielectric"}, {"kd": [0.1], "ks": [0.1], "m": 0.1, "eta": 0.9}, "eta = 0.9 is outside its domain > 1"),
+        (
+            "cook-torrance",
+            {"fresnel": "dielectric"},
+            {"kd": [0.1], "ks": [0.1], "m": 0.1, "eta": 0.9},
+            "eta = 0.9 is outside its domain > 1",
+        ),
         ("lafortune", {}, {"rho_d": [0.1], "lobes": []}, "'lobes' must be a list of 1 lobe(s), got 0"),
         (
             "lafortune",
@@ -361,13 +381,24 @@ def test_bad_parameters_are_named(model, options, params, message):
 
 def test_lafortune_direction_is_rescaled_within_rounding():
     """Published tables round (cxy, cz) to 3 digits (2cxy² + cz² = 0.9988); the lobe only depends on their ratio."""
-    params = get_model("lafortune").params_from_dict({"rho_d": [0.1], "lobes": [{"rho_s": [0.1], "cxy": -0.577, "cz": 0.577, "n": 5.0}]})
+    params = get_model("lafortune").params_from_dict(
+        {"rho_d": [0.1], "lobes": [{"rho_s": [0.1], "cxy": -0.577, "cz": 0.577, "n": 5.0}]}
+    )
     assert 2 * params.shape["cxy"][0] ** 2 + params.shape["cz"][0] ** 2 == pytest.approx(1.0, abs=1e-15)
     assert params.shape["cxy"][0] == pytest.approx(-params.shape["cz"][0])
 
 
 def test_registry_names_models_and_options():
-    assert list(brdffit.MODELS) == ["lambert", "ward", "ward-aniso", "ward-duer", "cook-torrance", "blinn-phong", "phong", "lafortune"]
+    assert list(brdffit.MODELS) == [
+        "lambert",
+        "ward",
+        "ward-aniso",
+        "ward-duer",
+        "cook-torrance",
+        "blinn-phong",
+        "phong",
+        "lafortune",
+    ]
     with pytest.raises(BrdfInputError, match=r"^'lafortun' is not a model; choose one of: lambert, ward, ward-aniso"):
         get_model("lafortun")
     with pytest.raises(BrdfInputError, match=r"--fresnel does not apply to model ward; it takes no options"):

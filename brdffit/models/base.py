@@ -181,14 +181,20 @@ class Model:
         else:
             lobes, prefixes = [values], [f"{self.name}: "]
         specular = np.stack(
-            [_albedo(lobe[self.specular_name], prefix + self.specular_name) for lobe, prefix in zip(lobes, prefixes)]
+            [
+                _albedo(lobe[self.specular_name], prefix + self.specular_name)
+                for lobe, prefix in zip(lobes, prefixes, strict=True)
+            ]
         )
         if specular.shape[1] != diffuse.size:
             raise BrdfInputError(
                 f"{self.name}: {self.specular_name} has {specular.shape[1]} channel(s)"
                 f" but {self.diffuse_name} has {diffuse.size}"
             )
-        shapes = [self.lobe.checked_shape(_shape_numbers(lobe, self.lobe.names, prefix), prefix) for lobe, prefix in zip(lobes, prefixes)]
+        shapes = [
+            self.lobe.checked_shape(_shape_numbers(lobe, self.lobe.names, prefix), prefix)
+            for lobe, prefix in zip(lobes, prefixes, strict=True)
+        ]
         shape = {name: np.array([one[name] for one in shapes]) for name in self.lobe.names}
         return Params(diffuse, specular, shape)
 
@@ -198,7 +204,8 @@ class Model:
         if not self.n_lobes:
             return result
         lobes = [
-            {self.specular_name: _floats(params.specular[k])} | {name: float(params.shape[name][k]) for name in self.lobe.names}
+            {self.specular_name: _floats(params.specular[k])}
+            | {name: float(params.shape[name][k]) for name in self.lobe.names}
             for k in range(self.n_lobes)
         ]
         if self.lobes_as_list:

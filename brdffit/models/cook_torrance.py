@@ -53,7 +53,9 @@ class CookTorranceLobe(Lobe):
 
     def __post_init__(self):
         if self.fresnel not in FRESNEL_PARAMETERS:
-            raise BrdfInputError(f"--fresnel {self.fresnel!r} is not known; choose one of: {', '.join(FRESNEL_PARAMETERS)}")
+            raise BrdfInputError(
+                f"--fresnel {self.fresnel!r} is not known; choose one of: {', '.join(FRESNEL_PARAMETERS)}"
+            )
 
     @property
     def summary(self) -> str:
@@ -61,7 +63,7 @@ class CookTorranceLobe(Lobe):
 
     @property
     def parameters(self):
-        return (("m", POSITIVE),) + tuple((name, domain) for name, domain, _ in FRESNEL_PARAMETERS[self.fresnel])
+        return (("m", POSITIVE), *((name, domain) for name, domain, _ in FRESNEL_PARAMETERS[self.fresnel]))
 
     @property
     def grid(self):
@@ -92,4 +94,6 @@ class CookTorranceLobe(Lobe):
 def cook_torrance(fresnel: str = "schlick") -> Model:
     """``kd/π + ks · F·D·G/(4 ci co)``; ``fresnel`` one of schlick (default), dielectric, conductor, none."""
     lobe = CookTorranceLobe(fresnel)
-    return Model("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", (("fresnel", fresnel),))
+    return Model(
+        "cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", (("fresnel", fresnel),)
+    )

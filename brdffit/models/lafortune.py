@@ -107,4 +107,11 @@ def lafortune(lobes: int = 1) -> Model:
     """``rho_d/π`` plus ``lobes`` generalised cosine lobes (default 1)."""
     if isinstance(lobes, bool) or not isinstance(lobes, int | np.integer) or not 1 <= lobes <= MAX_LOBES:
         raise BrdfInputError(f"--lobes {lobes!r} is not allowed; choose a whole number from 1 to {MAX_LOBES}")
-    return Model("lafortune", "Lafortune 1997 generalised cosine lobes", LafortuneLobe(), int(lobes), options=(("lobes", int(lobes)),), lobes_as_list=True)
+    return Model(
+        "lafortune",
+        "Lafortune 1997 generalised cosine lobes",
+        LafortuneLobe(),
+        int(lobes),
+        options=(("lobes", int(lobes)),),
+        lobes_as_list=True,
+    )

@@ -1,0 +1,137 @@
+"""The fit: recovery of every model from the default start, losses, sigma, weights, starts, results."""
+
+import json
+
+import numpy as np
+import pytest
+from catalogue import CASES, parametrize_cases
+from reference_materials import flat_parameters
+
+import data_synth
+from brdffit import BrdfInputError, FitResult, Samples, evaluate, fit, load_result
+
+#: A geometry that sees every lobe: 6000 random pairs plus 6000 around the mirror direction.
+_RANDOM = data_synth.uniform_random(6000, seed=1)
+_SPECULAR = data_synth.near_specular(8, 6000, spread=25.0, seed=2)
+WI = np.vstack([_RANDOM[0], _SPECULAR[0]])
+WO = np.vstack([_RANDOM[1], _SPECULAR[1]])
+
+
+def noiseless(model, options, params):
+    return data_synth.synthesize(model, params, WI, WO, **options)
+
+
+def sorted_lobes(params):
+    """Lafortune lobes have no natural order; compare them sorted by cxy."""
+    if "lobes" in params:
+        params = params | {"lobes": sorted(params["lobes"], key=lambda lobe: lobe["cxy"])}
+    return params
+
+
+def assert_recovered(result, truth, rtol):
+    fitted, expected = flat_parameters(sorted_lobes(result.params)), flat_parameters(sorted_lobes(truth))
+    assert list(fitted) == list(expected)
+    for name, value in expected.items():
+        # Published direction components are rounded; the model rescales (cxy, cz) onto 2cxy² + cz² = 1.
+        tolerance = max(rtol, 2e-3) if name.endswith(("cxy", "cz")) else rtol
+        assert fitted[name] == pytest.approx(value, rel=tolerance, abs=1e-12), (name, fitted[name], value)
+
+
+@parametrize_cases()
+def test_recovers_noiseless_data_from_the_default_start(model, options, params):
+    """Noise-free data: the optimum is the truth, so the fit must land on it (to 1e-5, far inside
+    the tolerances the solver stops at) from the data-driven start."""
+    result = fit(noiseless(model, options, params), model, **options)
+    assert result.converged, result.message
+    assert result.cost < 1e-16
+    assert_recovered(result, params, rtol=1e-5)
+
+
+@pytest.mark.parametrize("loss", ["log", "l2", "cosine", "cbrt", "relative"])
+def test_every_loss_finds_the_optimum(loss):
+    model, options, params = CASES[4]  # cook-torrance, Schlick
+    result = fit(noiseless(model, options, params), model, loss, **options)
+    assert result.converged and result.loss == loss
+    assert_recovered(result, params, rtol=1e-5)
+
+
+def test_sigma_and_weight_keep_the_noiseless_optimum(rng):
+    model, options, params = CASES[1]
+    clean = noiseless(model, options, params)
+    weighted = Samples.from_arrays(
+        clean.wi, clean.wo, clean.values, clean.channels, sigma=0.01 * clean.values, weight=rng.random(clean.n_samples)
+    )
+    assert_recovered(fit(weighted, model), params, rtol=1e-5)
+
+
+def test_sigma_gives_a_chi_squared_cost():
+    """With the true sigma, the cost at the optimum is χ² with N·C - k degrees of freedom:
+    mean N·C - k, standard deviation sqrt(2(N·C - k)); a 5σ band."""
+    model, _, params = CASES[1]
+    noisy = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=5, with_sigma=True)
+    result = fit(noisy, model, "l2")
+    dof = noisy.values.size - 7
+    assert abs(result.cost - dof) < 5 * np.sqrt(2 * dof)
+
+
+def test_lambert_l2_is_the_mean():
+    """For Lambert and the l2 loss the optimum is rho_d = π·mean(y) per channel, exactly."""
+    samples = data_synth.synthesize("lambert", {"rho_d": [0.2, 0.4]}, WI, WO, noise=0.05, seed=9)
+    result = fit(samples, "lambert", "l2")
+    np.testing.assert_allclose(result.params["rho_d"], np.pi * samples.values.mean(axis=0), rtol=1e-10)
+
+
+def test_max_theta_drops_samples():
+    model, options, params = CASES[1]
+    samples = noiseless(model, options, params)
+    result = fit(samples, model, max_theta=60.0)
+    kept = np.sum((samples.theta_i <= 60) & (samples.theta_o <= 60))
+    assert result.n_samples == kept < samples.n_samples
+
+
+def test_start_is_used_and_checked():
+    model, options, params = CASES[1]
+    samples = noiseless(model, options, params)
+    result = fit(samples, model, start=params, n_starts=1)
+    assert result.n_steps <= 3 and result.converged
+    with pytest.raises(BrdfInputError, match="start parameters have 1 channel"):
+        fit(samples, model, start={"rho_d": [0.1], "rho_s": [0.1], "alpha": 0.1})
+
+
+def test_not_converged_is_reported():
+    model, options, params = CASES[4]
+    result = fit(noiseless(model, options, params), model, max_steps=2, **options)
+    assert result.converged is False and "maximum number of solver steps" in result.message
+
+
+def test_fits_are_deterministic():
+    model, options, params = CASES[10]
+    samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=4, **options)
+    assert fit(samples, model, **options) == fit(samples, model, **options)
+
+
+def test_result_round_trip_and_predict(tmp_path):
+    model, options, params = CASES[11]  # two Lafortune lobes
+    result = fit(noiseless(model, options, params), model, **options)
+    result.save(tmp_path / "r.json")
+    again = load_result(tmp_path / "r.json")
+    assert again == result
+    np.testing.assert_array_equal(
+        result.predict(WI[:10], WO[:10]), evaluate(model, result.params, WI[:10], WO[:10], **options)
+    )
+    content = json.loads((tmp_path / "r.json").read_text())
+    assert content["model_options"] == {"lobes": 2} and list(content["params"]) == ["rho_d", "lobes"]
+    assert list(content["params"]["lobes"][0]) == ["rho_s", "cxy", "cz", "n"]
+    assert "lobe 2 cxy" in result.table()
+
+
+def test_bad_calls():
+    samples = noiseless(*CASES[0])
+    with pytest.raises(BrdfInputError, match="fit takes Samples"):
+        fit("samples.csv", "ward")
+    with pytest.raises(BrdfInputError, match="'wrd' is not a model"):
+        fit(samples, "wrd")
+    with pytest.raises(BrdfInputError, match="--max-steps 0 is not allowed"):
+        fit(samples, "ward", max_steps=0)
+    with pytest.raises(BrdfInputError, match="not a brdffit result file"):
+        FitResult.from_dict({"model": "ward"})

@@ -1,0 +1,134 @@
+"""Reading, checking and writing samples files (SPEC section 4).
+
+The bad-input cases are exercised end to end through the command line in
+``test_cli.py``; here the loader's successful paths and the array API.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import directions_from_degrees, random_directions
+
+from brdffit import BrdfInputError, Samples, load_samples, save_samples
+
+
+def write(tmp_path, text, name="samples.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_angles_with_one_value_column(tmp_path):
+    path = write(tmp_path, "# a comment\ntheta_i,phi_i,theta_o,phi_o,value\n0,0,0,0,0.5\n\n30,0,45,180,0.25 # inline\n")
+    samples = load_samples(path)
+    assert samples.channels == ("value",) and samples.n_samples == 2 and samples.n_channels == 1
+    np.testing.assert_allclose(samples.wi, directions_from_degrees([0, 30], [0, 0]), atol=1e-16)
+    np.testing.assert_allclose(samples.wo, directions_from_degrees([0, 45], [0, 180]), atol=1e-16)
+    np.testing.assert_array_equal(samples.values, [[0.5], [0.25]])
+    assert samples.sigma is None and samples.weight is None and samples.source == str(path)
+
+
+def test_whitespace_separated_vectors_are_normalised(tmp_path):
+    text = "wi_x wi_y wi_z wo_x wo_y wo_z r g b\n0 0 1 0.6 0 0.8 0.1 0.2 0.3\n0 0 1.0004 0 0.6 0.8 0.1 0.2 0.3\n"
+    samples = load_samples(write(tmp_path, text))
+    assert samples.channels == ("r", "g", "b")
+    np.testing.assert_allclose(np.linalg.norm(samples.wi, axis=1), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(samples.wo[1], [0, 0.6, 0.8])
+
+
+def test_radians_and_header_case(tmp_path):
+    text = f"Theta_I,Phi_I,Theta_O,Phi_O,Value\n{math.pi / 6},0,{math.pi / 4},{math.pi},0.25\n"
+    samples = load_samples(write(tmp_path, text), angles="radians")
+    np.testing.assert_allclose(samples.wo, directions_from_degrees(45, 180), atol=1e-16)
+    assert samples.channels == ("value",)  # the reserved names are matched without regard to case
+
+
+def test_named_channels_sigma_and_weight(tmp_path):
+    text = (
+        "theta_i,phi_i,theta_o,phi_o,400,500,600,sigma_400,sigma_500,sigma_600,weight\n"
+        "10,0,20,90,0.1,0.2,0.3,0.01,0.02,0.03,2\n"
+    )
+    samples = load_samples(write(tmp_path, text))
+    assert samples.channels == ("400", "500", "600")
+    np.testing.assert_array_equal(samples.sigma, [[0.01, 0.02, 0.03]])
+    np.testing.assert_array_equal(samples.weight, [2.0])
+
+
+def test_one_sigma_serves_every_channel(tmp_path):
+    samples = load_samples(write(tmp_path, "theta_i,phi_i,theta_o,phi_o,r,g,b,sigma\n10,0,20,90,0.1,0.2,0.3,0.05\n"))
+    np.testing.assert_array_equal(samples.sigma, [[0.05, 0.05, 0.05]])
+
+
+@pytest.mark.parametrize(
+    ("quantity", "factor"),
+    [("brdf", 1.0), ("reflectance-factor", 1 / math.pi), ("cosine-weighted", 1 / math.cos(math.radians(60)))],
+)
+def test_quantities_become_brdf(tmp_path, quantity, factor):
+    """R = π f and f·cos θi are converted to f; sigma scales the same way."""
+    path = write(tmp_path, "theta_i,phi_i,theta_o,phi_o,value,sigma\n60,0,20,90,0.5,0.01\n")
+    samples = load_samples(path, quantity=quantity)
+    assert samples.values[0, 0] == pytest.approx(0.5 * factor, rel=1e-15)
+    assert samples.sigma[0, 0] == pytest.approx(0.01 * factor, rel=1e-15)
+
+
+def test_save_and_load_round_trip(tmp_path, rng):
+    n = 50
+    original = Samples.from_arrays(
+        random_directions(rng, n),
+        random_directions(rng, n),
+        rng.random((n, 3)),
+        channels=("r", "g", "b"),
+        sigma=0.01 + rng.random((n, 3)),
+        weight=rng.random(n),
+    )
+    save_samples(original, tmp_path / "out.csv")
+    again = load_samples(tmp_path / "out.csv")
+    # Vectors go through angles in degrees and back: ~1e-16 absolute.
+    np.testing.assert_allclose(again.wi, original.wi, atol=1e-15)
+    np.testing.assert_allclose(again.wo, original.wo, atol=1e-15)
+    np.testing.assert_array_equal(again.values, original.values)
+    np.testing.assert_array_equal(again.sigma, original.sigma)
+    np.testing.assert_array_equal(again.weight, original.weight)
+    assert again.channels == original.channels
+
+
+def test_single_channel_round_trip_uses_value_and_sigma(tmp_path, rng):
+    samples = Samples.from_arrays(
+        random_directions(rng, 3), random_directions(rng, 3), [0.1, 0.2, 0.3], sigma=[0.01, 0.01, 0.02]
+    )
+    save_samples(samples, tmp_path / "one.csv")
+    assert (tmp_path / "one.csv").read_text().splitlines()[0] == "theta_i,phi_i,theta_o,phi_o,value,sigma"
+    assert load_samples(tmp_path / "one.csv").channels == ("value",)
+
+
+def test_within_max_theta(rng):
+    wi = directions_from_degrees([10, 50, 70], [0, 0, 0])
+    wo = directions_from_degrees([20, 20, 20], [90, 90, 90])
+    samples = Samples.from_arrays(wi, wo, [1.0, 2.0, 3.0])
+    assert samples.within(None) is samples
+    np.testing.assert_array_equal(samples.within(60).values[:, 0], [1.0, 2.0])
+    with pytest.raises(BrdfInputError, match=r"no samples have θi and θo ≤ --max-theta 5 degrees"):
+        samples.within(5)
+    with pytest.raises(BrdfInputError, match=r"--max-theta 95 is not allowed; give degrees in \(0, 90\]"):
+        samples.within(95)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"values": [[-1.0], [0.1]]}, "<arrays>: row 0, column value: -1: negative reflectance is not allowed"),
+        ({"values": [[np.nan], [0.1]]}, "row 0, column value: nan is not allowed"),
+        ({"wi": [[0, 0, -1.0], [0, 0, 1.0]]}, "row 0, column wi_z: -1 ≤ 0: the direction is below the horizon"),
+        ({"wo": [[0, 0, 1.0], [0, 0, 2.0]]}, "row 1, columns wo_x, wo_y, wo_z: length 2 is not 1"),
+        ({"sigma": [0.0, 0.1]}, "row 0, column sigma_value: 0: sigma must be > 0"),
+        ({"weight": [0.0, 0.0]}, "every weight is 0"),
+        ({"wi": [[0, 0, 1.0]]}, "wi must have shape (2, 3)"),
+        ({"channels": ("a", "b")}, "2 channel names for 1 value columns"),
+    ],
+)
+def test_from_arrays_checks_like_the_file(change, message):
+    arrays = {"wi": [[0, 0, 1.0], [0, 0, 1.0]], "wo": [[0, 0, 1.0], [0, 0, 1.0]], "values": [[0.2], [0.1]]} | change
+    with pytest.raises(BrdfInputError) as error:
+        Samples.from_arrays(**arrays)
+    assert message in str(error.value)
