@@ -43,7 +43,15 @@ def main(argv: list[str] | None = None) -> int:
 
 def run() -> None:
     """Console-script entry point."""
-    sys.exit(main())
+    try:
+        status = main()
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # The reader went away (`brdffit fit … | head`): files are already written; say nothing more.
+        # Python docs, "Note on SIGPIPE": point stdout at devnull so the final flush cannot fail again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        status = EXIT_OK
+    sys.exit(status)
 
 
 # ------------------------------------------------------------------ the parser
@@ -167,8 +175,8 @@ def _fit(args: argparse.Namespace) -> int:
     result = fit(
         samples, model, args.loss, max_theta=args.max_theta, start=start, n_starts=args.starts, max_steps=args.max_steps
     )
-    print(result.table(source=args.samples))
     result.save(output)
+    print(result.table(source=args.samples))
     print(f"wrote {output}")
     if not result.converged:
         print(

@@ -102,7 +102,8 @@ class FitResult:
     def table(self, source: str | None = None) -> str:
         """A readable report: one row per parameter, one column per channel, and the fit's figures."""
         what = f" of {source}" if source else ""
-        options = "".join(f", {key} {value}" for key, value in self.model_options.items())
+        options = ", ".join(f"{key} {value}" for key, value in self.model_options.items())
+        options = f" ({options})" if options else ""
         size = f"{self.n_samples} samples × {len(self.channels)} channel(s)"
         lines = [f"{self.model}{options} fit{what}: {size}, loss {self.loss}"]
         rows = list(_parameter_rows(self.params))

@@ -321,6 +321,15 @@ def test_help_and_version(capsys):
     assert status == 0 and "--max-theta DEG" in out and "--loss NAME" in out
 
 
+def test_output_piped_into_a_closed_reader(tmp_path):
+    """`brdffit fit … | head`: no traceback, and the result is written before anything is printed."""
+    script = Path(sys.executable).with_name("brdffit")
+    output = tmp_path / "r.json"
+    pipeline = f"'{script}' fit '{EXAMPLE}' --model lambert -o '{output}' | true"  # the reader is gone at once
+    done = subprocess.run(["bash", "-c", pipeline], capture_output=True, text=True, check=False)
+    assert done.stderr == "" and output.exists()
+
+
 def test_console_script_and_checkout_shim(tmp_path):
     """`brdffit` (installed) and `python cli.py` (checkout) are the same program, in a fresh process."""
     script = Path(sys.executable).with_name("brdffit")
