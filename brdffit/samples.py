@@ -28,6 +28,7 @@ import numpy as np
 
 from ._files import write_text_atomic
 from .errors import BrdfInputError
+from .geometry import direction_to_spherical, spherical_to_direction
 
 ANGLE_COLUMNS = ("theta_i", "phi_i", "theta_o", "phi_o")
 VECTOR_COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
@@ -362,8 +363,7 @@ class _Checked:
         )
         if unit == "degrees":
             theta, phi = np.radians(theta), np.radians(phi)
-        sin_theta = np.sin(theta)
-        directions = np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), np.cos(theta)], axis=-1)
+        directions = np.asarray(spherical_to_direction(theta, phi))
         return directions[:, 0], directions[:, 1]
 
     def unit_directions(self, vectors: np.ndarray, name: str) -> np.ndarray:
@@ -418,9 +418,7 @@ def save_samples(samples: Samples, path: str | os.PathLike) -> None:
     Numbers are written with 17 significant digits, so reading the file back
     gives the same float64 values (up to the angle ↔ vector conversion, ~1e-16).
     """
-    theta_i, phi_i = _angles_degrees(samples.wi)
-    theta_o, phi_o = _angles_degrees(samples.wo)
-    columns = [theta_i, phi_i, theta_o, phi_o]
+    columns = [np.degrees(np.asarray(angle)) for w in (samples.wi, samples.wo) for angle in direction_to_spherical(w)]
     header = list(ANGLE_COLUMNS) + list(samples.channels)
     columns += list(samples.values.T)
     if samples.sigma is not None:
@@ -432,9 +430,3 @@ def save_samples(samples: Samples, path: str | os.PathLike) -> None:
     table = np.column_stack(columns)
     body = "\n".join(",".join(f"{x:.17g}" for x in row) for row in table)
     write_text_atomic(path, ",".join(header) + "\n" + body + "\n")
-
-
-def _angles_degrees(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    theta = np.degrees(np.arctan2(np.hypot(directions[:, 0], directions[:, 1]), directions[:, 2]))
-    phi = np.degrees(np.arctan2(directions[:, 1], directions[:, 0]))
-    return theta, phi

@@ -28,7 +28,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import optimistix as optx
-from optimistix._misc import sum_squares
 
 
 class _DescentState(eqx.Module):
@@ -82,8 +81,8 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
     def step(self, fn, y, args, options, state, tags):
         new_y, new_state, aux = super().step(fn, y, args, options, state, tags)
         accepted = (new_state.num_accepted_steps > state.num_accepted_steps) & ~state.first_step
-        cost_before = sum_squares(state.f_info.residual)
-        cost_after = sum_squares(new_state.f_info.residual)
+        cost_before = jnp.sum(jnp.square(state.f_info.residual))
+        cost_after = jnp.sum(jnp.square(new_state.f_info.residual))
         # The step just tried went from the last accepted point y to state.y_eval;
         # predict_reduction returns ½(|r + Jδ|² - |r|²), negative for a decrease.
         predicted = -2.0 * self.search.predict_reduction(state.y_eval - y, state.f_info)

@@ -8,12 +8,11 @@ midpoints, so no direction lies on the horizon. Random geometries take a seed.
 import numpy as np
 
 from brdffit.errors import BrdfInputError
-from brdffit.geometry import mirror_direction
+from brdffit.geometry import mirror_direction, spherical_to_direction
 
 
 def _directions(theta, phi) -> np.ndarray:
-    sin_theta = np.sin(theta)
-    return np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), np.cos(theta)], axis=-1)
+    return np.asarray(spherical_to_direction(np.asarray(theta), np.asarray(phi)))
 
 
 def _midpoints(count: int, stop: float, start: float = 0.0) -> np.ndarray:
