@@ -9,6 +9,8 @@ import math
 import numpy as np
 import pytest
 from conftest import directions_from_degrees, random_directions
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from brdffit import BrdfInputError, Samples, load_samples, save_samples
 
@@ -132,3 +134,27 @@ def test_from_arrays_checks_like_the_file(change, message):
     with pytest.raises(BrdfInputError) as error:
         Samples.from_arrays(**arrays)
     assert message in str(error.value)
+
+
+_VALID = (
+    "theta_i,phi_i,theta_o,phi_o,r,g,b,sigma,weight\n10,0,20,90,0.1,0.2,0.3,0.01,1\n30,0,45,180,0.5,0.4,0.3,0.02,2\n"
+)
+_CELL = st.sampled_from(
+    ["", " ", "nan", "inf", "-1", "0", "1e400", "abc", ",", "#", "\n", "90", "-0", "1e-320", "\t", "\x00"]
+)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=st.one_of(st.text(max_size=300), st.lists(_CELL, max_size=12).map("".join)))
+def test_the_reader_only_ever_raises_brdf_input_error(tmp_path, text):
+    """Arbitrary text, and valid files with random cells spliced in, load or fail with one line."""
+    for candidate in (text, _VALID[:40] + text + _VALID[40:], _VALID + text):
+        path = tmp_path / "fuzz.csv"
+        path.write_bytes(candidate.encode("utf-8", errors="replace"))
+        try:
+            samples = load_samples(path)
+        except BrdfInputError as error:
+            assert "\n" not in str(error) and str(error).startswith(str(path))
+        else:
+            assert np.all(np.isfinite(samples.values)) and np.all(samples.values >= 0)
+            assert np.all(samples.wi[:, 2] > 0) and np.all(samples.wo[:, 2] > 0)
