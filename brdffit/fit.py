@@ -63,6 +63,12 @@ def fit(
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
         raise BrdfInputError(f"--max-steps {max_steps!r} is not allowed; give a whole number ≥ 1")
     samples = samples.within(max_theta)
+    n_parameters = model.n_parameters(samples.n_channels)
+    if samples.values.size < n_parameters:
+        raise BrdfInputError(
+            f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
+            f" the {n_parameters} parameters of {model.name}; give at least {n_parameters} values"
+        )
     problem = build_problem(loss, samples)
     if start is not None:
         params = model.params_from_dict(start)

@@ -96,9 +96,11 @@ def linearised_weight(loss: Loss, values: np.ndarray, cos_i: np.ndarray, scale: 
     """Weights (N, C) of ``(f - y)²`` in the loss linearised about ``f = y``: ``(scale · T'(y))²``.
 
     Used for the starting guess, where the albedos solve this weighted linear problem.
-    The slope is taken no closer to 0 than 0.1% of the mean measurement, where
-    the cube root's slope would be infinite.
+    The slope is taken no closer to 0 than 0.1% of the mean measurement (and
+    1e-12 1/sr), where the cube root's slope would be infinite; the weights are
+    divided by their largest, which leaves the weighted problem unchanged and
+    keeps their squares finite.
     """
-    at = np.maximum(values, 1e-3 * np.mean(values) + np.finfo(float).tiny)
-    slope = loss.slope(at, values, np.asarray(cos_i)[:, None])
-    return (scale * slope) ** 2
+    at = np.maximum(values, max(1e-3 * float(np.mean(values)), 1e-12))
+    weighted_slope = np.abs(scale * loss.slope(at, values, np.asarray(cos_i)[:, None]))
+    return (weighted_slope / np.max(weighted_slope)) ** 2

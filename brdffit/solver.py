@@ -19,6 +19,10 @@ Levenberg-Marquardt algorithm: implementation and theory", 1978):
   stops when the last accepted step lowered the sum of squares by a relative
   ``actred ≤ ftol`` that the linear model predicted (``prered ≤ ftol``,
   ``actred ≤ 2·prered``): no step can still lower the cost by more than ``ftol``.
+* **Zero-residual stop.** When the data are fitted exactly at the boundary (all
+  values 0, say) the cost falls by a constant fraction per step towards 0 and no
+  relative test fires; the solver also stops once the sum of squares is below
+  ``atol²``, the residuals being at rounding level.
 """
 
 from collections.abc import Callable
@@ -95,5 +99,6 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             & (predicted_relative <= self.ftol)
             & (actual_relative <= 2.0 * predicted_relative)
         )
-        new_state = eqx.tree_at(lambda s: s.terminate, new_state, new_state.terminate | small)
+        exact = accepted & (cost_after <= self.atol**2)
+        new_state = eqx.tree_at(lambda s: s.terminate, new_state, new_state.terminate | small | exact)
         return new_y, new_state, aux

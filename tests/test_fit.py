@@ -125,6 +125,22 @@ def test_result_round_trip_and_predict(tmp_path):
     assert "lobe 2 cxy" in result.table()
 
 
+@pytest.mark.parametrize(("model", "loss"), [("ward", "log"), ("lambert", "cbrt"), ("cook-torrance", "relative")])
+def test_all_zero_data_fits_zero_albedos_and_converges(model, loss):
+    """A black sample: the optimum is on the boundary with cost 0; every loss must get there and stop."""
+    wi, wo = data_synth.uniform_random(50, seed=0)
+    result = fit(Samples.from_arrays(wi, wo, np.zeros(50)), model, loss)
+    assert result.converged and result.n_steps < 50 and result.rmse < 1e-6
+
+
+def test_too_few_values_for_the_parameters():
+    wi, wo = data_synth.uniform_random(2, seed=0)
+    with pytest.raises(
+        BrdfInputError, match=r"2 sample\(s\) × 1 channel\(s\) cannot determine the 3 parameters of ward"
+    ):
+        fit(Samples.from_arrays(wi, wo, [0.1, 0.2]), "ward")
+
+
 def test_bad_calls():
     samples = noiseless(*CASES[0])
     with pytest.raises(BrdfInputError, match="fit takes Samples"):
