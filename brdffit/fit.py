@@ -14,6 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from ._checks import whole_number
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, get_model
@@ -58,10 +59,8 @@ def fit(
     loss = get_loss(loss)
     if not isinstance(samples, Samples):
         raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
-    if isinstance(n_starts, bool) or not isinstance(n_starts, int) or n_starts < 1:
-        raise BrdfInputError(f"n_starts {n_starts!r} is not allowed; give a whole number ≥ 1")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
-        raise BrdfInputError(f"--max-steps {max_steps!r} is not allowed; give a whole number ≥ 1")
+    n_starts = whole_number("--starts", n_starts)
+    max_steps = whole_number("--max-steps", max_steps)
     samples = samples.within(max_theta)
     n_parameters = model.n_parameters(samples.n_channels)
     if samples.values.size < n_parameters:

@@ -7,6 +7,7 @@ midpoints, so no direction lies on the horizon. Random geometries take a seed.
 
 import numpy as np
 
+from brdffit._checks import whole_number
 from brdffit.errors import BrdfInputError
 from brdffit.geometry import mirror_direction, spherical_to_direction
 
@@ -20,9 +21,7 @@ def _midpoints(count: int, stop: float, start: float = 0.0) -> np.ndarray:
 
 
 def _positive_count(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise BrdfInputError(f"--{name.replace('_', '-')} {value!r} is not allowed; give a whole number ≥ 1")
-    return int(value)
+    return whole_number(f"--{name.replace('_', '-')}", value)
 
 
 def hemisphere_grid(n_incident: int = 8, n_theta: int = 36, n_phi: int = 36) -> tuple[np.ndarray, np.ndarray]:

@@ -136,7 +136,7 @@ def test_not_a_text_file(tmp_path, capsys):
         (["--angles", "gradians"], ["--angles 'gradians' is not allowed"]),
         (["--max-theta", "0"], ["--max-theta 0.0 is not allowed"]),
         (["--max-theta", "abc"], ["argument --max-theta: invalid float value: 'abc'"]),
-        (["--starts", "0"], ["n_starts 0 is not allowed"]),
+        (["--starts", "0"], ["--starts 0 is not allowed; give a whole number ≥ 1"]),
         (["--start", "{bad json"], ["--start (inline JSON): not valid JSON"]),
         (["--start", '{"rho_d": [0.1]}'], ["ward: missing parameter 'rho_s'"]),
         (["--bogus"], ["unrecognized arguments: --bogus"]),

@@ -405,7 +405,7 @@ def test_registry_names_models_and_options():
         get_model("ward", fresnel="schlick")
     with pytest.raises(BrdfInputError, match=r"--fresnel 'fresnell' is not known; choose one of: schlick, dielectric"):
         get_model("cook-torrance", fresnel="fresnell")
-    with pytest.raises(BrdfInputError, match=r"--lobes 0 is not allowed; choose a whole number from 1 to 8"):
+    with pytest.raises(BrdfInputError, match=r"--lobes 0 is not allowed; give a whole number from 1 to 8"):
         get_model("lafortune", lobes=0)
     assert get_model("lafortune", lobes=3).n_lobes == 3
     assert get_model("cook-torrance").model_options == {"fresnel": "schlick"}

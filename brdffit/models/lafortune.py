@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
+from .._checks import whole_number
 from ..domains import POSITIVE
 from ..errors import BrdfInputError
 from ..geometry import safe_power
@@ -105,13 +106,12 @@ class _DirectionComponent:
 
 def lafortune(lobes: int = 1) -> Model:
     """``rho_d/π`` plus ``lobes`` generalised cosine lobes (default 1)."""
-    if isinstance(lobes, bool) or not isinstance(lobes, int | np.integer) or not 1 <= lobes <= MAX_LOBES:
-        raise BrdfInputError(f"--lobes {lobes!r} is not allowed; choose a whole number from 1 to {MAX_LOBES}")
+    lobes = whole_number("--lobes", lobes, 1, MAX_LOBES)
     return Model(
         "lafortune",
         "Lafortune 1997 generalised cosine lobes",
         LafortuneLobe(),
-        int(lobes),
-        options=(("lobes", int(lobes)),),
+        lobes,
+        options=(("lobes", lobes),),
         lobes_as_list=True,
     )
