@@ -1,12 +1,14 @@
 """Fit a model to samples: Levenberg-Marquardt (optimistix) from data-driven starts.
 
 The parameters move in unconstrained coordinates (``domains.py``), so every
-step is physically valid; the solver is ``optimistix.LevenbergMarquardt``
-(Moré 1978's trust-region form), jit-compiled once per model, loss and data
-shape and reused for every start and every dataset of that shape.
+step is physically valid. The solver (``solver.py``) is compiled once per
+model, loss and bucketed data size (``problem.padded_size``) and reused for
+every start and every dataset of that size. On large data the starts are
+searched on a seeded subsample of :data:`SEARCH_SAMPLES` samples and only the
+winner is refined on all of them.
 """
 
-from functools import cache
+from functools import cache, partial
 from typing import Any
 
 import jax
@@ -18,22 +20,25 @@ from ._checks import whole_number
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, get_model
-from .problem import Problem, build_problem, residuals
+from .problem import DTYPES, Problem, build_problem, normal_equations, residuals
 from .results import FitResult
 from .samples import Samples
 from .solver import LevenbergMarquardt
 from .starts import starting_points
 
-#: Relative and absolute tolerances of the solver's Cauchy termination (``optimistix.cauchy_termination``):
-#: it stops when both the step and the change of every residual are below ``atol + rtol·|value|``.
-RTOL = 1e-8
-ATOL = 1e-8
-#: MINPACK's ``ftol`` (``solver.py``): it also stops when a step lowers the cost by a relative 1e-10 or less and
-#: the linear model predicts no more. At the optimum of N residuals, that leaves each parameter within
-#: ~sqrt(1e-10·N) standard errors of it: 0.002 σ for 10⁴ samples × 3 channels.
+#: MINPACK's ftol (``solver.py``): stop when a step lowers the cost by a relative 1e-10 or less and the linear
+#: model predicts no more. At the optimum of N residuals that leaves each parameter within ~sqrt(1e-10·N)
+#: standard errors of it: 0.002 σ for 10⁴ samples × 3 channels, 0.02 σ at MERL's 4.4·10⁶.
 FTOL = 1e-10
+#: MINPACK's gtol: stop when every Jacobian column makes a cosine ≤ 1e-8 with the residuals (parameters within
+#: ~1e-8·sqrt(N) σ of a stationary point).
+GTOL = 1e-8
+#: A residual norm below this is an exact fit (noise-free data, or all-zero data fitted by zero albedos).
+ATOL = 1e-8
 MAX_STEPS = 256
 N_STARTS = 3
+#: Starts are searched on at most this many samples (a seeded random subset); the winner is refined on all.
+SEARCH_SAMPLES = 2**16
 
 
 def fit(
@@ -45,6 +50,8 @@ def fit(
     start: dict[str, Any] | None = None,
     n_starts: int = N_STARTS,
     max_steps: int = MAX_STEPS,
+    dtype: str = "float64",
+    seed: int = 0,
     **model_options: Any,
 ) -> FitResult:
     """Fit ``model`` to ``samples`` by minimising ``loss`` (SPEC section 3).
@@ -52,15 +59,39 @@ def fit(
     ``max_theta``: drop samples with θi or θo above this many degrees.
     ``start``: parameters (SPEC section 5 dictionary) to start from instead of
     the data-driven starts. ``n_starts``: how many of the best grid starts to
-    run Levenberg-Marquardt from; the lowest cost wins. ``model_options``:
-    ``fresnel=`` for cook-torrance, ``lobes=`` for lafortune.
+    run Levenberg-Marquardt from; the lowest cost wins. ``dtype``: ``float32``
+    evaluates the model in single precision (sums and the solve stay float64).
+    ``seed``: the subsample the starts are searched on, for more than
+    :data:`SEARCH_SAMPLES` samples. ``model_options``: ``fresnel=`` for
+    cook-torrance, ``lobes=`` for lafortune.
     """
+    model, loss, samples = _checked(samples, model, loss, max_theta, dtype, **model_options)
+    n_starts = whole_number("--starts", n_starts)
+    max_steps = whole_number("--max-steps", max_steps)
+    full = build_problem(loss, samples, dtype)
+    solve = compiled_solver(model, loss, max_steps)
+    if start is not None:
+        starts = [start_vector(model, start, samples.n_channels)]
+    else:
+        search = full
+        if samples.n_samples > SEARCH_SAMPLES:
+            chosen = np.sort(np.random.default_rng(seed).choice(samples.n_samples, SEARCH_SAMPLES, replace=False))
+            search = build_problem(loss, samples.select(chosen), dtype)
+        starts = starting_points(model, loss, search, n_starts)
+        if search is not full and len(starts) > 1:
+            starts = [_best([solve(jnp.asarray(theta), search) for theta in starts])[0]]
+    runs = [solve(jnp.asarray(theta), full) for theta in starts]
+    return result_of(model, loss, samples, full, *_best(runs), max_steps)
+
+
+def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
+    """The model, the loss and the samples kept by ``max_theta``, after every check of the arguments."""
     model = get_model(model, **model_options)
     loss = get_loss(loss)
     if not isinstance(samples, Samples):
         raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
-    n_starts = whole_number("--starts", n_starts)
-    max_steps = whole_number("--max-steps", max_steps)
+    if dtype not in DTYPES:
+        raise BrdfInputError(f"--dtype {dtype!r} is not allowed; choose one of: {', '.join(DTYPES)}")
     samples = samples.within(max_theta)
     n_parameters = model.n_parameters(samples.n_channels)
     if samples.values.size < n_parameters:
@@ -68,22 +99,25 @@ def fit(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
             f" the {n_parameters} parameters of {model.name}; give at least {n_parameters} values"
         )
-    problem = build_problem(loss, samples)
-    if start is not None:
-        params = model.params_from_dict(start)
-        if params.diffuse.size != samples.n_channels:
-            raise BrdfInputError(
-                f"start parameters have {params.diffuse.size} channel(s) but the samples have {samples.n_channels}"
-            )
-        starts = [model.to_unconstrained(params)]
-    else:
-        starts = starting_points(model, loss, problem, n_starts)
+    return model, loss, samples
 
-    solve = _compiled_solver(model, loss, max_steps)
-    runs = [solve(jnp.asarray(theta), problem) for theta in starts]
-    theta, cost, n_steps, result = min(runs, key=lambda run: float(run[1]))
-    params = model.from_unconstrained(theta, samples.n_channels)
-    predicted = np.asarray(model.evaluate(params, problem.wi, problem.wo))
+
+def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.ndarray:
+    params = model.params_from_dict(start)
+    if params.diffuse.size != n_channels:
+        raise BrdfInputError(
+            f"start parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
+        )
+    return model.to_unconstrained(params)
+
+
+def _best(runs):
+    return min(runs, key=lambda run: float(run[1]))
+
+
+def result_of(model: Model, loss: Loss, samples: Samples, problem: Problem, theta, cost, n_steps, result, max_steps):
+    """The :class:`FitResult` of a solve, with the rmse over the real (unpadded) samples."""
+    params = model.from_unconstrained(jnp.asarray(theta), samples.n_channels)
     converged = bool(result == optx.RESULTS.successful)
     return FitResult(
         model=model.name,
@@ -92,12 +126,22 @@ def fit(
         params=model.params_to_dict(jax.tree.map(np.asarray, params)),
         loss=loss.name,
         cost=float(cost),
-        rmse=float(np.sqrt(np.mean((predicted - samples.values) ** 2))),
+        rmse=float(_rmse(model, jnp.asarray(theta), problem, samples.n_samples)),
         n_samples=samples.n_samples,
         n_steps=int(n_steps),
         converged=converged,
         message="" if converged else _failure_message(result, max_steps),
     )
+
+
+@partial(jax.jit, static_argnums=0)
+def _rmse(model: Model, theta, problem: Problem, n_samples):
+    """``sqrt(mean((f - y)²))`` in 1/sr over the first ``n_samples`` rows (the rest is padding)."""
+    params = model.from_unconstrained(theta, problem.measured.shape[1])
+    predicted = model.evaluate(jax.tree.map(lambda x: x.astype(problem.wi.dtype), params), problem.wi, problem.wo)
+    real = (jnp.arange(problem.wi.shape[0]) < n_samples)[:, None]
+    squared = jnp.where(real, (predicted - problem.measured).astype(jnp.float64) ** 2, 0.0)
+    return jnp.sqrt(jnp.sum(squared) / (n_samples * problem.measured.shape[1]))
 
 
 def _failure_message(result, max_steps: int) -> str:
@@ -110,17 +154,17 @@ def _failure_message(result, max_steps: int) -> str:
 
 
 @cache
-def _compiled_solver(model: Model, loss: Loss, max_steps: int):
-    """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per data shape."""
-    solver = LevenbergMarquardt(rtol=RTOL, atol=ATOL, ftol=FTOL)
-
-    def residual_vector(theta, problem: Problem):
-        return residuals(model, loss, theta, problem)
+def compiled_solver(model: Model, loss: Loss, max_steps: int):
+    """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per problem size and dtype."""
+    residual_fn = partial(residuals, model, loss)
+    solver = LevenbergMarquardt(
+        normal_equations=partial(normal_equations, model, loss), rtol=FTOL, atol=ATOL, gtol=GTOL
+    )
 
     @jax.jit
     def solve(theta0, problem: Problem):
-        solution = optx.least_squares(residual_vector, solver, theta0, args=problem, max_steps=max_steps, throw=False)
-        cost = jnp.sum(residual_vector(solution.value, problem) ** 2)
+        solution = optx.least_squares(residual_fn, solver, theta0, args=problem, max_steps=max_steps, throw=False)
+        cost = 2.0 * solution.state.f_info.f
         return solution.value, cost, solution.stats["num_steps"], solution.result
 
     return solve

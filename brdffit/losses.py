@@ -22,8 +22,8 @@ with a ``sigma`` column every loss is a χ² to first order in ``f - y`` (see
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
-import numpy as np
 
 from .errors import BrdfInputError
 
@@ -33,12 +33,15 @@ RELATIVE_FLOOR = 1e-4
 
 @dataclass(frozen=True)
 class Loss:
-    """A residual transform ``T(v; y, ci)`` and its slope ``dT/dv`` (evaluated at the measurement)."""
+    """A residual transform ``T(v; y, ci)`` applied to model values ``v`` and measurements ``y`` alike (JAX)."""
 
     name: str
     summary: str
-    transform: Callable  # (values, measured, cos_i) -> transformed values; JAX
-    slope: Callable  # (values, measured, cos_i) -> dT/dv; numpy
+    transform: Callable  # (values, measured, cos_i) -> transformed values
+
+    def value_and_slope(self, values, measured, cos_i):
+        """``T(values)`` and ``dT/dv`` at ``values``, elementwise (forward mode)."""
+        return jax.jvp(lambda v: self.transform(v, measured, cos_i), (values,), (jnp.ones_like(values),))
 
 
 def _cbrt(values, measured, cos_i):
@@ -47,22 +50,12 @@ def _cbrt(values, measured, cos_i):
 
 
 LOSSES = {
-    "log": Loss(
-        "log",
-        "ln(1 + f·cos θi) − ln(1 + y·cos θi) (Löw et al. 2012)",
-        lambda v, y, ci: jnp.log1p(v * ci),
-        lambda v, y, ci: ci / (1.0 + v * ci),
-    ),
-    "l2": Loss("l2", "f − y", lambda v, y, ci: v, lambda v, y, ci: np.ones_like(v)),
-    "cosine": Loss(
-        "cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci, lambda v, y, ci: ci * np.ones_like(v)
-    ),
-    "cbrt": Loss("cbrt", "cbrt(f) − cbrt(y)", _cbrt, lambda v, y, ci: np.cbrt(v) / (3.0 * v)),
+    "log": Loss("log", "ln(1 + f·cos θi) − ln(1 + y·cos θi) (Löw et al. 2012)", lambda v, y, ci: jnp.log1p(v * ci)),
+    "l2": Loss("l2", "f − y", lambda v, y, ci: v),
+    "cosine": Loss("cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci),
+    "cbrt": Loss("cbrt", "cbrt(f) − cbrt(y)", _cbrt),
     "relative": Loss(
-        "relative",
-        f"(f − y) / max(y, {RELATIVE_FLOOR:g})",
-        lambda v, y, ci: v / jnp.maximum(y, RELATIVE_FLOOR),
-        lambda v, y, ci: 1.0 / np.maximum(y, RELATIVE_FLOOR),
+        "relative", f"(f − y) / max(y, {RELATIVE_FLOOR:g})", lambda v, y, ci: v / jnp.maximum(y, RELATIVE_FLOOR)
     ),
 }
 
@@ -74,33 +67,33 @@ def get_loss(name: str) -> Loss:
     return LOSSES[name]
 
 
-def residual_scale(loss: Loss, values: np.ndarray, cos_i: np.ndarray, sigma=None, weight=None) -> np.ndarray:
-    """Per-sample, per-channel factor (N, C) that multiplies ``T(f) - T(y)``.
+def residual_scale(loss: Loss, values, cos_i, sigma=None, weight=None):
+    """Per-sample, per-channel factor (N, C) that multiplies ``T(f) - T(y)`` (JAX).
 
     ``sqrt(weight) / (sigma · |T'(y*)|)`` with ``y* = max(y, sigma)``, where the
     slope is taken no closer to 0 than one σ (the cube root's slope is infinite
     at 0); ``sqrt(weight)`` alone without ``sigma``. For ``l2`` this is exactly
-    ``sqrt(weight)/sigma``.
+    ``sqrt(weight)/sigma``. ``cos_i`` is (N, 1).
     """
-    cos_i = np.asarray(cos_i)[:, None]
-    scale = np.ones_like(values)
+    scale = jnp.ones_like(values)
     if sigma is not None:
-        at = np.maximum(values, sigma)
-        scale = 1.0 / (sigma * np.abs(loss.slope(at, values, cos_i)))
+        _, slope = loss.value_and_slope(jnp.maximum(values, sigma), values, cos_i)
+        scale = 1.0 / (sigma * jnp.abs(slope))
     if weight is not None:
-        scale = scale * np.sqrt(np.asarray(weight))[:, None]
+        scale = scale * jnp.sqrt(weight)[:, None]
     return scale
 
 
-def linearised_weight(loss: Loss, values: np.ndarray, cos_i: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """Weights (N, C) of ``(f - y)²`` in the loss linearised about ``f = y``: ``(scale · T'(y))²``.
+def linearised_weight(loss: Loss, values, cos_i, scale):
+    """Weights (N, C) of ``(f - y)²`` in the loss linearised about ``f = y``: ``(scale · T'(y))²`` (JAX).
 
     Used for the starting guess, where the albedos solve this weighted linear problem.
     The slope is taken no closer to 0 than 0.1% of the mean measurement (and
     1e-12 1/sr), where the cube root's slope would be infinite; the weights are
     divided by their largest, which leaves the weighted problem unchanged and
-    keeps their squares finite.
+    keeps their squares finite. ``cos_i`` is (N, 1).
     """
-    at = np.maximum(values, max(1e-3 * float(np.mean(values)), 1e-12))
-    weighted_slope = np.abs(scale * loss.slope(at, values, np.asarray(cos_i)[:, None]))
-    return (weighted_slope / np.max(weighted_slope)) ** 2
+    at = jnp.maximum(values, jnp.maximum(1e-3 * jnp.mean(values), 1e-12))
+    _, slope = loss.value_and_slope(at, values, cos_i)
+    weighted_slope = jnp.abs(scale * slope)
+    return (weighted_slope / jnp.max(weighted_slope)) ** 2

@@ -1,23 +1,38 @@
-"""A fitting problem as arrays, and its residual vector.
+"""A fitting problem as arrays, its residuals, and the normal equations accumulated in one pass.
 
 The residual of sample ``n``, channel ``c`` is
 ``scale[n, c] · (T(f(wi_n, wo_n))[c] - T(y)[n, c])`` with ``T`` the loss transform
 (``losses.py``) and ``f`` the model at the parameters the unconstrained vector
 ``theta`` maps to (``models/base.py``).
+
+Sizes are *bucketed*: a problem of N samples is padded to ``padded_size(N)``
+(N rounded up to 4 significant bits, at most 1/8 more) with rows of scale 0,
+which add nothing to any sum. Datasets of nearby sizes then share one compiled
+solver, and the rows split evenly into chunks of at most :data:`CHUNK` samples,
+over which :func:`normal_equations` accumulates ``JᵀJ``, ``Jᵀr`` and ``rᵀr``
+without ever holding the (N·C × k) Jacobian or the residual vector.
 """
 
+from functools import partial
 from typing import Any, NamedTuple
 
+import jax
 import jax.numpy as jnp
-import numpy as np
 
 from .losses import Loss, residual_scale
 from .models import Model
 from .samples import Samples
 
+#: Most samples per chunk of the normal-equation pass: 2¹⁴ × 3 channels × 8 parameters is a 3 MB Jacobian block.
+CHUNK = 2**14
+DTYPES = ("float64", "float32")
+
 
 class Problem(NamedTuple):
-    """The data of one fit, as arrays (a JAX pytree, so one compiled solver serves every dataset of a shape)."""
+    """The data of one fit, as arrays (a JAX pytree, so one compiled solver serves every dataset of a shape).
+
+    Rows beyond the samples' count are padding with ``scale = 0``.
+    """
 
     wi: Any  # (N, 3)
     wo: Any  # (N, 3)
@@ -26,17 +41,113 @@ class Problem(NamedTuple):
     scale: Any  # (N, C)
 
 
-def build_problem(loss: Loss, samples: Samples) -> Problem:
-    cos_i = samples.wi[:, 2]
-    measured = samples.values
-    target = np.asarray(loss.transform(jnp.asarray(measured), measured, cos_i[:, None]))
-    scale = residual_scale(loss, measured, cos_i, samples.sigma, samples.weight)
-    return Problem(*(jnp.asarray(a) for a in (samples.wi, samples.wo, measured, target, scale)))
+def padded_size(n: int) -> int:
+    """``n`` rounded up to ``m·2^e`` with ``8 ≤ m ≤ 16``: at most 12.5% padding, few distinct sizes."""
+    exponent = max(n.bit_length() - 4, 0)
+    return -(-n // 2**exponent) * 2**exponent
+
+
+def chunk_size(n_padded: int) -> int:
+    """The largest power of two ≤ :data:`CHUNK` that divides ``n_padded`` (all of it when it fits in one chunk)."""
+    if n_padded <= CHUNK:
+        return n_padded
+    return min(n_padded & -n_padded, CHUNK)
+
+
+def build_problem(loss: Loss, samples: Samples, dtype: str = "float64") -> Problem:
+    """The padded arrays of ``samples`` for ``loss``; the model is evaluated in ``dtype``, sums stay float64."""
+    n = samples.n_samples
+    return _padded_problem(
+        loss,
+        padded_size(n),
+        dtype,
+        *(jnp.asarray(a) for a in (samples.wi, samples.wo, samples.values)),
+        None if samples.sigma is None else jnp.asarray(samples.sigma),
+        None if samples.weight is None else jnp.asarray(samples.weight),
+    )
+
+
+@partial(jax.jit, static_argnums=(0, 1, 2))
+def _padded_problem(loss: Loss, size: int, dtype: str, wi, wo, measured, sigma, weight) -> Problem:
+    cos_i = wi[:, 2:3]
+    target = loss.transform(measured, measured, cos_i)
+    scale = residual_scale(loss, measured, cos_i, sigma, weight)
+    padding = size - wi.shape[0]
+
+    def pad(array, value=0.0):
+        return jnp.pad(array, ((0, padding), (0, 0)), constant_values=value).astype(dtype)
+
+    normal = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], wi.dtype), (padding, 3))
+    return Problem(
+        jnp.concatenate([wi, normal]).astype(dtype),
+        jnp.concatenate([wo, normal]).astype(dtype),
+        pad(measured),
+        pad(target),
+        pad(scale),
+    )
 
 
 def residuals(model: Model, loss: Loss, theta, problem: Problem):
-    """Residuals (N, C) at the unconstrained parameters ``theta``."""
+    """Residuals (N, C) at the unconstrained parameters ``theta``, computed in the problem's dtype."""
     params = model.from_unconstrained(theta, problem.measured.shape[1])
+    params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
     predicted = model.evaluate(params, problem.wi, problem.wo)
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
     return (transformed - problem.target) * problem.scale
+
+
+def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):
+    """Residuals ``r`` (N, C), their weights ``w = scale·T'(f)`` (N, C) and the model's basis (N, M).
+
+    The residual Jacobian is ``∂r[n, c]/∂θ = w[n, c] · Σ_m basis[n, m] · A[c, m]``
+    with ``A`` from :meth:`Model.jacobian_coefficients`; ``T'`` by forward mode.
+    """
+    values, basis = model.value_and_basis(theta, problem.wi, problem.wo, problem.measured.shape[1])
+    transformed, slope = loss.value_and_slope(values, problem.measured, problem.wi[:, 2:3])
+    return (transformed - problem.target) * problem.scale, slope * problem.scale, basis
+
+
+def _chunks(problem: Problem) -> Problem:
+    n = problem.wi.shape[0]
+    size = chunk_size(n)
+    return jax.tree.map(lambda a: a.reshape(n // size, size, *a.shape[1:]), problem)
+
+
+def normal_equations(model: Model, loss: Loss, theta, problem: Problem):
+    """``(rᵀr, Jᵀr, JᵀJ)`` at ``theta``, float64, in one pass over the chunks of ``problem``.
+
+    With ``J[n, c] = w[n, c] Σ_m B[n, m] A[c, m]`` (:func:`residuals_and_basis`),
+    ``JᵀJ = Σ_c A_cᵀ Q_c A_c`` and ``Jᵀr = Σ_c A_cᵀ R_c``, where the pass only
+    accumulates ``Q_c = Σ_n w²[n, c] B_n B_nᵀ`` (C × M × M) and
+    ``R_c = Σ_n w[n, c] r[n, c] B_n`` (C × M): the Jacobian itself is never
+    formed, and memory is that of one chunk whatever the data size.
+    """
+
+    def accumulate(sums, chunk):
+        r, w, basis = (x.astype(jnp.float64) for x in residuals_and_basis(model, loss, theta, chunk))
+        cost, projected, gram = sums
+        weighted = w[:, :, None] * basis[:, None, :]  # (n, C, M)
+        return (
+            cost + jnp.sum(r * r),
+            projected + jnp.einsum("ncm,nc->cm", weighted, r),
+            gram + jnp.einsum("ncm,ncl->cml", weighted, weighted),
+        ), None
+
+    c = problem.measured.shape[1]
+    coefficients = model.jacobian_coefficients(theta, c)
+    m = coefficients.shape[1]
+    start = (jnp.zeros((), jnp.float64), jnp.zeros((c, m), jnp.float64), jnp.zeros((c, m, m), jnp.float64))
+    (cost, projected, gram), _ = jax.lax.scan(accumulate, start, _chunks(problem))
+    gradient = jnp.einsum("cmp,cm->p", coefficients, projected)
+    return cost, gradient, jnp.einsum("cmp,cml,clq->pq", coefficients, gram, coefficients)
+
+
+def cost(residual_fn, theta, problem: Problem):
+    """``rᵀr`` at ``theta``, float64, chunk by chunk."""
+
+    def accumulate(total, chunk):
+        r = residual_fn(theta, chunk).astype(jnp.float64)
+        return total + jnp.sum(r * r), None
+
+    total, _ = jax.lax.scan(accumulate, jnp.zeros((), jnp.float64), _chunks(problem))
+    return total

@@ -4,10 +4,11 @@ Every model is linear in its albedos (``models/base.py``). For a fixed lobe
 shape, the albedos that minimise the loss *linearised about the data*,
 ``Σ w (f - y)²`` with ``w = (scale · T'(y))²`` (``losses.linearised_weight``), are
 a small non-negative least-squares problem per channel (Golub & Pereyra 1973,
-variable projection; Lawson & Hanson's NNLS via ``scipy.optimize.nnls``). Each
-shape of the lobe family's coarse grid gets its best albedos, is scored by the
-true loss, and the best few become the Levenberg-Marquardt starts. Models with
-several lobes (Lafortune) add their lobes greedily, one at a time.
+variable projection; Lawson & Hanson's NNLS via ``scipy.optimize.nnls``). Every
+shape of the lobe family's coarse grid gets its best albedos and is scored by
+the true loss, all shapes at once; the best few become the Levenberg-Marquardt
+starts. Models with several lobes (Lafortune) place their lobes greedily, one
+at a time.
 """
 
 from dataclasses import replace
@@ -28,52 +29,48 @@ ALBEDO_FLOOR = 1e-3
 
 def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -> list[np.ndarray]:
     """Up to ``n_starts`` unconstrained start vectors, best first."""
-    measured = np.asarray(problem.measured)
-    weight = linearised_weight(loss, measured, np.asarray(problem.wi[:, 2]), np.asarray(problem.scale))
-    n_channels = measured.shape[1]
+    weight = _weights(loss, problem)
+    n_channels = problem.measured.shape[1]
+    diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
     if not model.n_lobes:
-        diffuse = _albedos(np.full((1, measured.shape[0]), 1.0 / np.pi), measured, weight)[0]
+        diffuse = _albedos(*_gram(diffuse_basis, weight, problem.measured))[0]
         return [model.to_unconstrained(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
 
+    grid = model.lobe.grid
+    stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
+    lobes = _grid_lobes(model.lobe, stacked, problem.wi, problem.wo)  # (G, N)
     chosen: list[dict[str, float]] = []  # shapes of the lobes already placed
-    chosen_values: list[np.ndarray] = []
+    fixed = diffuse_basis
     for placed in range(model.n_lobes):
         partial_model = replace(model, n_lobes=placed + 1)
-        scored = []
-        for shape in model.lobe.grid:
-            lobe = np.asarray(
-                _lobe_values(model.lobe, {k: jnp.asarray(v) for k, v in shape.items()}, problem.wi, problem.wo)
-            )
-            basis = np.vstack([np.full_like(lobe, 1.0 / np.pi), *chosen_values, lobe])
-            albedos = _floored(_albedos(basis, measured, weight))
+        grams, rhs = _grid_grams(fixed, lobes, weight, problem.measured)
+        thetas = []
+        for index, shape in enumerate(grid):
+            albedos = _floored(_albedos(np.asarray(grams[index]), np.asarray(rhs[index])))
             shapes = [*chosen, shape]
-            params = Params(
-                albedos[0], albedos[1:], {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
-            )
-            theta = partial_model.to_unconstrained(params)
-            scored.append((float(_cost(partial_model, loss, jnp.asarray(theta), problem)), theta, shape, lobe))
-        scored.sort(key=lambda item: item[0])
-        chosen.append(scored[0][2])
-        chosen_values.append(scored[0][3])
-    return [theta for _, theta, _, _ in scored[:n_starts]]
+            shape_arrays = {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
+            thetas.append(partial_model.to_unconstrained(Params(albedos[0], albedos[1:], shape_arrays)))
+        costs = np.asarray(_grid_costs(partial_model, loss, jnp.asarray(np.stack(thetas)), problem))
+        order = np.argsort(costs, kind="stable")
+        chosen.append(grid[order[0]])
+        fixed = jnp.concatenate([fixed, lobes[order[0]][None]])
+    return [thetas[index] for index in order[:n_starts]]
 
 
-def _albedos(basis: np.ndarray, measured: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """Non-negative albedos (B, C) minimising ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²`` per channel.
+def _albedos(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Non-negative albedos (B, C) from per-channel normal equations ``gram`` (C, B, B) and ``rhs`` (C, B).
 
-    Solved on the B×B normal equations through their Cholesky factor ``R``:
-    ``|R x - R⁻ᵀ Bᵀ W y|²`` equals the weighted sum of squares up to a constant.
+    NNLS on the B×B system through its Cholesky factor ``R``: ``|R x - R⁻ᵀ rhs|²``
+    equals the weighted sum of squares up to a constant.
     """
-    n_basis, n_channels = basis.shape[0], measured.shape[1]
+    n_channels, n_basis = rhs.shape
     albedos = np.zeros((n_basis, n_channels))
     for channel in range(n_channels):
-        weighted = basis * weight[:, channel]
-        gram = weighted @ basis.T
-        rhs = weighted @ measured[:, channel]
         # A lobe that no sample sees has a zero row; a relative ridge keeps the factor defined.
-        gram = gram + 1e-12 * np.trace(gram) * np.eye(n_basis) + np.finfo(float).tiny * np.eye(n_basis)
-        upper = np.linalg.cholesky(gram).T
-        albedos[:, channel], _ = scipy.optimize.nnls(upper, np.linalg.solve(upper.T, rhs))
+        matrix = gram[channel]
+        matrix = matrix + (1e-12 * np.trace(matrix) + np.finfo(float).tiny) * np.eye(n_basis)
+        upper = np.linalg.cholesky(matrix).T
+        albedos[:, channel], _ = scipy.optimize.nnls(upper, np.linalg.solve(upper.T, rhs[channel]))
     return albedos
 
 
@@ -82,10 +79,28 @@ def _floored(albedos: np.ndarray) -> np.ndarray:
 
 
 @partial(jax.jit, static_argnums=0)
-def _lobe_values(lobe, shape, wi, wo):
-    return lobe(shape, wi, wo)
+def _weights(loss: Loss, problem: Problem):
+    return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
+
+
+@jax.jit
+def _gram(basis, weight, measured):
+    """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
+    weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
+    return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
+
+
+@jax.jit
+def _grid_grams(fixed, lobes, weight, measured):
+    """:func:`_gram` for the basis ``fixed`` plus each grid lobe: (G, C, B, B), (G, C, B)."""
+    return jax.vmap(lambda lobe: _gram(jnp.concatenate([fixed, lobe[None]]), weight, measured))(lobes)
+
+
+@partial(jax.jit, static_argnums=0)
+def _grid_lobes(lobe, shapes, wi, wo):
+    return jax.vmap(lambda shape: lobe(shape, wi, wo))(shapes)
 
 
 @partial(jax.jit, static_argnums=(0, 1))
-def _cost(model: Model, loss: Loss, theta, problem: Problem):
-    return jnp.sum(residuals(model, loss, theta, problem) ** 2)
+def _grid_costs(model: Model, loss: Loss, thetas, problem: Problem):
+    return jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)

@@ -37,7 +37,7 @@ def test_sigma_makes_every_loss_chi_squared_to_first_order(name):
     loss = get_loss(name)
     y = np.array([[0.5]])
     sigma = np.array([[0.01]])
-    scale = residual_scale(loss, y, np.array([CI]), sigma=sigma)
+    scale = np.asarray(residual_scale(loss, y, np.array([[CI]]), sigma=sigma))
     f = 0.5 + 1e-6
     residual = (
         float(loss.transform(jnp.asarray(f), y[0, 0], CI)) - float(loss.transform(jnp.asarray(0.5), y[0, 0], CI))
@@ -48,7 +48,7 @@ def test_sigma_makes_every_loss_chi_squared_to_first_order(name):
 def test_l2_scale_is_sqrt_weight_over_sigma():
     loss = get_loss("l2")
     scale = residual_scale(
-        loss, np.array([[0.2, 0.3]]), np.array([0.5]), sigma=np.array([[0.01, 0.02]]), weight=np.array([4.0])
+        loss, np.array([[0.2, 0.3]]), np.array([[0.5]]), sigma=np.array([[0.01, 0.02]]), weight=np.array([4.0])
     )
     np.testing.assert_allclose(scale, [[2 / 0.01, 2 / 0.02]])
 

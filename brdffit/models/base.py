@@ -145,6 +145,72 @@ class Model:
         """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions."""
         return jax.vmap(lambda one_shape: self.lobe(one_shape, wi, wo))(dict(shape))
 
+    def value_and_basis(self, theta, wi, wo, n_channels: int, dtype=None):
+        """BRDF values (N, C) and the per-sample basis (N, M) of their derivatives at the unconstrained ``theta``.
+
+        The basis is ``[1/π, lobe_k, ∂lobe_k/∂u_ks]`` (M = 1 + K + K·S): the
+        albedos enter linearly, so the derivatives of every channel with respect
+        to every parameter are combinations of these M functions, with the
+        coefficients of :meth:`jacobian_coefficients`. Only the S shape
+        coordinates of each lobe are differentiated (forward mode), once per
+        sample. The model is evaluated in ``dtype`` (default: that of ``wi``).
+        """
+        dtype = dtype or wi.dtype
+        visible = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        normal = jnp.asarray(NORMAL, dtype=wi.dtype)
+        wi = jnp.where(visible[:, None], wi, normal)
+        wo = jnp.where(visible[:, None], wo, normal)
+        n, c = wi.shape[0], n_channels
+        diffuse = NON_NEGATIVE.to_physical(theta[:c]).astype(dtype)
+        values = jnp.broadcast_to(diffuse / jnp.pi, (n, c))
+        columns = [jnp.full((n, 1), 1.0 / jnp.pi, dtype=dtype)]
+        if self.n_lobes:
+            k, s = self.n_lobes, self.lobe.n_unconstrained
+            specular = NON_NEGATIVE.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
+
+            def lobe_and_derivatives(u):
+                def lobe(v):
+                    shape = jax.tree.map(lambda x: x.astype(dtype), self.lobe.shape_from_unconstrained(v))
+                    value = self.lobe(shape, wi, wo)
+                    return value, value
+
+                derivatives, value = jax.jacfwd(lobe, has_aux=True)(u)
+                return value, derivatives.astype(dtype)
+
+            lobes, lobe_derivatives = jax.vmap(lobe_and_derivatives)(theta[(1 + k) * c :].reshape(k, s))
+            values = values + lobes.T @ specular
+            columns += [lobes.T, jnp.transpose(lobe_derivatives, (1, 0, 2)).reshape(n, k * s)]
+        basis = jnp.concatenate(columns, axis=1)
+        return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None], basis, 0.0)
+
+    def jacobian_coefficients(self, theta, n_channels: int):
+        """``A`` (C, M, k) with ``∂f[n, c]/∂theta = Σ_m basis[n, m] · A[c, m]`` (see :meth:`value_and_basis`).
+
+        Row 0 (the diffuse basis) carries ``d rho_d/du``; the lobe rows carry
+        ``d rho_s/du``; the shape-derivative rows carry the specular albedos.
+        """
+        c, k = n_channels, self.n_lobes
+        eye_c = jnp.eye(c, dtype=theta.dtype)
+        _, diffuse_slope = jax.jvp(NON_NEGATIVE.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
+        if not k:
+            return (eye_c * diffuse_slope)[:, None, :]
+        s = self.lobe.n_unconstrained
+        u_specular = theta[c : (1 + k) * c].reshape(k, c)
+        specular, specular_slope = jax.jvp(NON_NEGATIVE.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
+        eye_k, eye_s = jnp.eye(k, dtype=theta.dtype), jnp.eye(s, dtype=theta.dtype)
+        diffuse_rows = (eye_c * diffuse_slope)[:, None, :]
+        lobe_rows = specular_slope.T[:, :, None, None] * eye_k[None, :, :, None] * eye_c[:, None, None, :]
+        shape_rows = specular.T[:, :, None, None, None] * eye_k[None, :, None, :, None] * eye_s[None, None, :, None, :]
+        zeros = lambda rows, cols: jnp.zeros((c, rows, cols), theta.dtype)
+        return jnp.concatenate(
+            [
+                jnp.concatenate([diffuse_rows, zeros(1, k * c), zeros(1, k * s)], axis=2),
+                jnp.concatenate([zeros(k, c), lobe_rows.reshape(c, k, k * c), zeros(k, k * s)], axis=2),
+                jnp.concatenate([zeros(k * s, c), zeros(k * s, k * c), shape_rows.reshape(c, k * s, k * s)], axis=2),
+            ],
+            axis=1,
+        )
+
     # ------------------------------------------------------------ parameter forms
     @property
     def parameter_names(self) -> tuple[str, ...]:
