@@ -110,6 +110,12 @@ def _build_parser() -> argparse.ArgumentParser:
         "--max-steps", type=int, default=256, metavar="N", help="most solver steps per start (default 256)"
     )
     fit.add_argument(
+        "--dtype",
+        default="float64",
+        metavar="TYPE",
+        help="float64 (default), or float32: solve in single precision, then refine in double",
+    )
+    fit.add_argument(
         "-o", "--output", metavar="FILE", help="result file (default: SAMPLES-stem.MODEL.json in the current folder)"
     )
     fit.set_defaults(command=_fit)
@@ -173,7 +179,14 @@ def _fit(args: argparse.Namespace) -> int:
         start = start["params"]
     samples = load_samples(args.samples, angles=args.angles, quantity=args.quantity)
     result = fit(
-        samples, model, args.loss, max_theta=args.max_theta, start=start, n_starts=args.starts, max_steps=args.max_steps
+        samples,
+        model,
+        args.loss,
+        max_theta=args.max_theta,
+        start=start,
+        n_starts=args.starts,
+        max_steps=args.max_steps,
+        dtype=args.dtype,
     )
     result.save(output)
     print(result.table(source=args.samples))

@@ -26,15 +26,13 @@ from .samples import Samples
 from .solver import LevenbergMarquardt
 from .starts import starting_points
 
-#: MINPACK's ftol (``solver.py``): stop when a step lowers the cost by a relative 1e-10 or less and the linear
-#: model predicts no more. At the optimum of N residuals that leaves each parameter within ~sqrt(1e-10·N)
-#: standard errors of it: 0.002 σ for 10⁴ samples × 3 channels, 0.02 σ at MERL's 4.4·10⁶.
-FTOL = 1e-10
-#: MINPACK's gtol: stop when every Jacobian column makes a cosine ≤ 1e-8 with the residuals (parameters within
-#: ~1e-8·sqrt(N) σ of a stationary point).
-GTOL = 1e-8
-#: A residual norm below this is an exact fit (noise-free data, or all-zero data fitted by zero albedos).
-ATOL = 1e-8
+#: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
+#: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
+#: leaves each parameter within ~sqrt(1e-10·N) standard errors of the optimum (0.002 σ for 10⁴ samples × 3
+#: channels, 0.02 σ at MERL's 4.4·10⁶) and gtol 1e-8 within ~1e-8·sqrt(N) σ. A float32 model makes residuals
+#: that differ by 1% carry ~1e-4 relative rounding error, so its cost jitters at ~1e-5 and only loose tests can
+#: pass; the float32 stage merely has to land near the optimum, which float64 then refines.
+TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
 MAX_STEPS = 256
 N_STARTS = 3
 #: Starts are searched on at most this many samples (a seeded random subset); the winner is refined on all.
@@ -60,7 +58,9 @@ def fit(
     ``start``: parameters (SPEC section 5 dictionary) to start from instead of
     the data-driven starts. ``n_starts``: how many of the best grid starts to
     run Levenberg-Marquardt from; the lowest cost wins. ``dtype``: ``float32``
-    evaluates the model in single precision (sums and the solve stay float64).
+    runs the solve with the model in single precision (sums stay float64) and
+    then refines the optimum in float64 (mixed-precision iterative refinement,
+    usually one or two steps), so the result is float64's.
     ``seed``: the subsample the starts are searched on, for more than
     :data:`SEARCH_SAMPLES` samples. ``model_options``: ``fresnel=`` for
     cook-torrance, ``lobes=`` for lafortune.
@@ -69,7 +69,7 @@ def fit(
     n_starts = whole_number("--starts", n_starts)
     max_steps = whole_number("--max-steps", max_steps)
     full = build_problem(loss, samples, dtype)
-    solve = compiled_solver(model, loss, max_steps)
+    solve = compiled_solver(model, loss, max_steps, dtype)
     if start is not None:
         starts = [start_vector(model, start, samples.n_channels)]
     else:
@@ -80,8 +80,12 @@ def fit(
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
             starts = [_best([solve(jnp.asarray(theta), search) for theta in starts])[0]]
-    runs = [solve(jnp.asarray(theta), full) for theta in starts]
-    return result_of(model, loss, samples, full, *_best(runs), max_steps)
+    theta, cost, n_steps, result = _best([solve(jnp.asarray(theta), full) for theta in starts])
+    if dtype == "float32":
+        full = build_problem(loss, samples, "float64")
+        theta, cost, refinement_steps, result = compiled_solver(model, loss, max_steps)(theta, full)
+        n_steps = n_steps + refinement_steps
+    return result_of(model, loss, samples, full, theta, cost, n_steps, result, max_steps, dtype)
 
 
 def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
@@ -115,7 +119,9 @@ def _best(runs):
     return min(runs, key=lambda run: float(run[1]))
 
 
-def result_of(model: Model, loss: Loss, samples: Samples, problem: Problem, theta, cost, n_steps, result, max_steps):
+def result_of(
+    model: Model, loss: Loss, samples: Samples, problem: Problem, theta, cost, n_steps, result, max_steps, dtype
+):
     """The :class:`FitResult` of a solve, with the rmse over the real (unpadded) samples."""
     params = model.from_unconstrained(jnp.asarray(theta), samples.n_channels)
     converged = bool(result == optx.RESULTS.successful)
@@ -131,6 +137,7 @@ def result_of(model: Model, loss: Loss, samples: Samples, problem: Problem, thet
         n_steps=int(n_steps),
         converged=converged,
         message="" if converged else _failure_message(result, max_steps),
+        dtype=dtype,
     )
 
 
@@ -154,11 +161,12 @@ def _failure_message(result, max_steps: int) -> str:
 
 
 @cache
-def compiled_solver(model: Model, loss: Loss, max_steps: int):
-    """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per problem size and dtype."""
+def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
+    """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per problem size."""
+    ftol, gtol, atol = TOLERANCES[dtype]
     residual_fn = partial(residuals, model, loss)
     solver = LevenbergMarquardt(
-        normal_equations=partial(normal_equations, model, loss), rtol=FTOL, atol=ATOL, gtol=GTOL
+        normal_equations=partial(normal_equations, model, loss), rtol=ftol, atol=atol, gtol=gtol
     )
 
     @jax.jit

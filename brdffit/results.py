@@ -24,7 +24,9 @@ class FitResult:
     ``rmse`` the root-mean-square of ``f - y`` over the fitted samples and
     channels, in 1/sr, whatever the loss. ``n_steps`` counts Levenberg-Marquardt
     steps of the winning start; ``converged`` is False when the solver stopped
-    without meeting its tolerances, and ``message`` then says why.
+    without meeting its tolerances, and ``message`` then says why. ``dtype`` is
+    the precision the model was evaluated in (``float32``: solved in single
+    precision, then refined in double, so the optimum is float64's).
     """
 
     model: str
@@ -38,6 +40,7 @@ class FitResult:
     n_steps: int
     converged: bool
     message: str = ""
+    dtype: str = "float64"
     uncertainty: dict[str, Any] | None = None
     brdffit_version: str = field(default=__version__)
 
@@ -62,6 +65,7 @@ class FitResult:
                 "n_steps": self.n_steps,
                 "converged": self.converged,
                 "message": self.message,
+                "dtype": self.dtype,
             },
         }
         if self.uncertainty is not None:
@@ -92,6 +96,7 @@ class FitResult:
                 n_steps=int(fit["n_steps"]),
                 converged=bool(fit["converged"]),
                 message=str(fit.get("message", "")),
+                dtype=str(fit.get("dtype", "float64")),
                 uncertainty=content.get("uncertainty"),
                 brdffit_version=str(content.get("brdffit_version", "")),
             )
@@ -115,7 +120,8 @@ class FitResult:
             values = value if isinstance(value, list) else [value]
             lines.append("  " + label.ljust(label_width) + "".join(_number(v).rjust(cell) for v in values))
         status = "converged" if self.converged else f"NOT converged: {self.message}"
-        lines.append(f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps · {status}")
+        precision = " · float32, refined in float64" if self.dtype == "float32" else ""
+        lines.append(f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps{precision} · {status}")
         return "\n".join(lines)
 
     def __str__(self) -> str:

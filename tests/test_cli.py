@@ -139,6 +139,7 @@ def test_not_a_text_file(tmp_path, capsys):
         (["--starts", "0"], ["--starts 0 is not allowed; give a whole number ≥ 1"]),
         (["--start", "{bad json"], ["--start (inline JSON): not valid JSON"]),
         (["--start", '{"rho_d": [0.1]}'], ["ward: missing parameter 'rho_s'"]),
+        (["--dtype", "float16"], ["--dtype 'float16' is not allowed; choose one of: float64, float32"]),
         (["--bogus"], ["unrecognized arguments: --bogus"]),
     ],
 )
@@ -181,7 +182,7 @@ def test_fit_prints_a_table_and_writes_the_result(tmp_path, capsys):
     assert list(content) == ["brdffit_version", "model", "model_options", "channels", "params", "fit"]
     assert content["model"] == "ward" and content["model_options"] == {} and content["channels"] == ["r", "g", "b"]
     assert list(content["params"]) == ["rho_d", "rho_s", "alpha"]
-    assert list(content["fit"]) == ["loss", "cost", "rmse", "n_samples", "n_steps", "converged", "message"]
+    assert list(content["fit"]) == ["loss", "cost", "rmse", "n_samples", "n_steps", "converged", "message", "dtype"]
     assert content["fit"]["converged"] is True and content["fit"]["n_samples"] == 10368
     # The example was made from these parameters with 1% noise (Makefile target `examples`).
     truth = json.loads((ROOT / "examples" / "ward-pickled-oak.params.json").read_text())

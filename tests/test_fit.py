@@ -1,6 +1,7 @@
 """The fit: recovery of every model from the default start, losses, sigma, weights, starts, results."""
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -151,3 +152,31 @@ def test_bad_calls():
         fit(samples, "ward", max_steps=0)
     with pytest.raises(BrdfInputError, match="not a brdffit result file"):
         FitResult.from_dict({"model": "ward"})
+
+
+def test_float32_is_refined_to_the_float64_optimum():
+    """float32 solves, then float64 refines: the optimum is float64's (to its tolerances, ~1e-8 relative)."""
+    model, options, params = CASES[4]
+    samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=6, **options)
+    double = fit(samples, model, **options)
+    single = fit(samples, model, dtype="float32", **options)
+    assert single.converged and single.dtype == "float32" and double.dtype == "float64"
+    fitted, expected = flat_parameters(single.params), flat_parameters(double.params)
+    for name, value in expected.items():
+        assert fitted[name] == pytest.approx(value, rel=1e-8), name
+    assert "float32, refined in float64" in single.table()
+
+
+def test_large_data_searches_starts_on_a_subsample(monkeypatch):
+    """Above SEARCH_SAMPLES the starts are searched on a seeded subsample and the winner refined on all:
+    the optimum is the same as searching on everything."""
+    fit_module = sys.modules["brdffit.fit"]
+    model, options, params = CASES[1]
+    samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=8, **options)
+    everything = fit(samples, model)
+    monkeypatch.setattr(fit_module, "SEARCH_SAMPLES", 2000)
+    subsampled = fit(samples, model, seed=1)
+    assert subsampled.converged and subsampled.cost == pytest.approx(everything.cost, rel=1e-10)
+    fitted, expected = flat_parameters(subsampled.params), flat_parameters(everything.params)
+    for name, value in expected.items():
+        assert fitted[name] == pytest.approx(value, rel=1e-6), name

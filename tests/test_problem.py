@@ -1,0 +1,59 @@
+"""Padding, chunks and the one-pass normal equations against a directly formed Jacobian."""
+
+import sys
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from catalogue import CASES, parametrize_cases
+
+import data_synth
+from brdffit import get_model
+from brdffit.losses import LOSSES, get_loss
+from brdffit.problem import CHUNK, build_problem, chunk_size, cost, normal_equations, padded_size, residuals
+
+problem_module = sys.modules["brdffit.problem"]
+
+
+@pytest.mark.parametrize("n", [1, 7, 8, 15, 16, 17, 100, 1000, 10368, 65537, 1_458_000])
+def test_bucketed_sizes(n):
+    """At most 1/8 padding (beyond 16 samples), and chunks of at most CHUNK rows that divide the size."""
+    size = padded_size(n)
+    assert n <= size <= max(16, n * 9 / 8)
+    chunk = chunk_size(size)
+    assert size % chunk == 0 and chunk <= max(CHUNK, size if size <= CHUNK else 0)
+
+
+def assert_normal_equations_match(model, options, params, loss_name):
+    """rᵀr, Jᵀr and JᵀJ from the chunked basis form equal those of jax.jacfwd over the padded residual vector.
+
+    3000 samples pad to 3072 rows; with chunks of 256 rows (set by the callers) the pass runs over 12 chunks,
+    and the 72 padded rows must add nothing. Tolerance: sums of ~10⁴ terms in another order, a few ulp each."""
+    built, loss = get_model(model, **options), get_loss(loss_name)
+    wi, wo = data_synth.uniform_random(3000, seed=2)
+    samples = data_synth.synthesize(model, params, wi, wo, noise=0.02, seed=3, **options)
+    theta = jnp.asarray(built.to_unconstrained(built.params_from_dict(params))) * 1.01
+    problem = build_problem(loss, samples)
+    assert problem.wi.shape[0] == 3072 and chunk_size(3072) == 256
+    squares, gradient, gram = jax.jit(partial(normal_equations, built, loss))(theta, problem)
+    residual_fn = partial(residuals, built, loss)
+    r = residual_fn(theta, problem).ravel()
+    jacobian = jax.jit(jax.jacfwd(lambda t: residual_fn(t, problem).ravel()))(theta)
+    np.testing.assert_allclose(squares, r @ r, rtol=1e-11)
+    np.testing.assert_allclose(cost(residual_fn, theta, problem), r @ r, rtol=1e-11)
+    for got, expected in ((gradient, jacobian.T @ r), (gram, jacobian.T @ jacobian)):
+        np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-12 * float(jnp.max(jnp.abs(expected))))
+
+
+@parametrize_cases()
+def test_normal_equations_of_every_model(model, options, params, monkeypatch):
+    monkeypatch.setattr(problem_module, "CHUNK", 256)
+    assert_normal_equations_match(model, options, params, "log")
+
+
+@pytest.mark.parametrize("loss_name", list(LOSSES))
+def test_normal_equations_of_every_loss(loss_name, monkeypatch):
+    monkeypatch.setattr(problem_module, "CHUNK", 256)
+    assert_normal_equations_match(*CASES[4], loss_name)
