@@ -16,6 +16,7 @@ import jax
 jax.config.update("jax_enable_x64", True)
 
 from ._version import __version__ as __version__  # noqa: E402
+from .batch import fit_batch as fit_batch  # noqa: E402
 from .errors import BrdfInputError as BrdfInputError  # noqa: E402
 from .evaluate import evaluate as evaluate  # noqa: E402
 from .fit import fit as fit  # noqa: E402

@@ -81,7 +81,7 @@ def _build_parser() -> argparse.ArgumentParser:
         command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
 
     fit = commands.add_parser("fit", help="fit a model to a samples file", allow_abbrev=False)
-    fit.add_argument("samples", metavar="SAMPLES", help="samples file (CSV, SPEC section 4)")
+    fit.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s) (CSV, SPEC section 4)")
     model_options(fit, "ward")
     fit.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
     fit.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
@@ -116,7 +116,11 @@ def _build_parser() -> argparse.ArgumentParser:
         help="float64 (default), or float32: solve in single precision, then refine in double",
     )
     fit.add_argument(
-        "-o", "--output", metavar="FILE", help="result file (default: SAMPLES-stem.MODEL.json in the current folder)"
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="result file, or a folder (OUTDIR/) for several samples files"
+        " (default: SAMPLES-stem.MODEL.json in the current folder)",
     )
     fit.set_defaults(command=_fit)
 
@@ -165,20 +169,20 @@ def _build_parser() -> argparse.ArgumentParser:
 
 # ------------------------------------------------------------------ commands
 def _fit(args: argparse.Namespace) -> int:
-    from .fit import fit
+    from .batch import fit_batch
     from .losses import get_loss
     from .models import get_model
     from .samples import load_samples
 
     model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
     get_loss(args.loss)
-    output = Path(args.output) if args.output else Path(f"{Path(args.samples).stem}.{model.name}.json")
-    _check_output(output, "-o")
+    outputs = _fit_outputs(args.samples, args.output, model.name)
     start = _json_argument(args.start, "--start") if args.start else None
     if isinstance(start, dict) and "params" in start:  # a result file
         start = start["params"]
-    samples = load_samples(args.samples, angles=args.angles, quantity=args.quantity)
-    result = fit(
+    # Every input is read and checked before any fit runs or any file is written.
+    samples = [load_samples(path, angles=args.angles, quantity=args.quantity) for path in args.samples]
+    results = fit_batch(
         samples,
         model,
         args.loss,
@@ -188,16 +192,59 @@ def _fit(args: argparse.Namespace) -> int:
         max_steps=args.max_steps,
         dtype=args.dtype,
     )
-    result.save(output)
-    print(result.table(source=args.samples))
-    print(f"wrote {output}")
-    if not result.converged:
+    outputs[0].parent.mkdir(parents=True, exist_ok=True)
+    for result, output in zip(results, outputs, strict=True):
+        result.save(output)
+    if len(results) == 1:
+        print(results[0].table(source=args.samples[0]))
+        print(f"wrote {outputs[0]}")
+    else:
+        print(_summary(args.samples, results, outputs))
+    failed = [(path, result) for path, result in zip(args.samples, results, strict=True) if not result.converged]
+    for path, result in failed:
         print(
-            f"brdffit: warning: the fit did not converge ({result.message}); written with converged: false",
+            f"brdffit: warning: {path}: the fit did not converge ({result.message}); written with converged: false",
             file=sys.stderr,
         )
-        return EXIT_NOT_CONVERGED
-    return EXIT_OK
+    return EXIT_NOT_CONVERGED if failed else EXIT_OK
+
+
+def _fit_outputs(inputs: list[str], output: str | None, model_name: str) -> list[Path]:
+    """The result file of each input: ``-o FILE`` for one input, else ``OUTDIR/<stem>.<model>.json``.
+
+    ``-o`` is a folder when several inputs are given, when it ends with ``/`` or
+    when it is an existing folder; it is created (after every check) if missing.
+    """
+    as_folder = len(inputs) > 1 or (output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir()))
+    if not as_folder:
+        path = Path(output) if output else Path(f"{Path(inputs[0]).stem}.{model_name}.json")
+        _check_output(path, "-o")
+        return [path]
+    folder = Path(output) if output else Path(".")
+    if folder.exists() and not folder.is_dir():
+        raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
+    existing = next((parent for parent in (folder, *folder.parents) if parent.exists()), Path("."))
+    if not os.access(existing, os.W_OK):
+        raise BrdfInputError(f"-o {folder}: folder {existing} is not writable")
+    outputs = [folder / f"{Path(path).stem}.{model_name}.json" for path in inputs]
+    seen: dict[Path, str] = {}
+    for path, out in zip(inputs, outputs, strict=True):
+        if out in seen:
+            raise BrdfInputError(f"{seen[out]} and {path} would both write {out}; give them different names")
+        seen[out] = path
+    return outputs
+
+
+def _summary(inputs: list[str], results, outputs) -> str:
+    """One line per input: steps, cost, rmse, convergence and the file written."""
+    width = max(len(path) for path in inputs)
+    lines = [f"{'samples'.ljust(width)}  steps  {'cost':>12}  {'rmse (1/sr)':>12}  status     result"]
+    for path, result, output in zip(inputs, results, outputs, strict=True):
+        status = "converged" if result.converged else "NOT conv."
+        lines.append(
+            f"{path.ljust(width)}  {result.n_steps:5d}  {result.cost:12.6g}  {result.rmse:12.4g}  {status:9s}  {output}"
+        )
+    return "\n".join(lines)
 
 
 def _synth(args: argparse.Namespace) -> int:

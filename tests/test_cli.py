@@ -208,7 +208,7 @@ def test_not_converged_exits_1_and_still_writes(tmp_path, capsys):
     output = tmp_path / "result.json"
     status, out, err = run(["fit", EXAMPLE, "--model", "cook-torrance", "--max-steps", "2", "-o", output], capsys)
     assert status == 1
-    assert "NOT converged" in out and err.startswith("brdffit: warning: the fit did not converge")
+    assert "NOT converged" in out and err.startswith(f"brdffit: warning: {EXAMPLE}: the fit did not converge")
     result = load_result(output)
     assert result.converged is False and result.message
 

@@ -1,0 +1,147 @@
+"""Fit one model to many datasets: a scanned material library, the texels of a spatially varying BRDF.
+
+Two strategies, chosen by the backend unless asked:
+
+* ``loop`` (CPU): one fit after another. Sizes are bucketed
+  (``problem.padded_size``), so every dataset of a bucket reuses one compiled
+  solver; a vmapped while-loop would instead run every fit in lockstep until
+  the slowest one ends, which on a CPU costs more than it saves.
+* ``vmap`` (GPU): datasets of one bucket are stacked and solved together, one
+  start search per dataset, then every Levenberg-Marquardt run of the bucket
+  at once.
+"""
+
+from collections.abc import Sequence
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._checks import whole_number
+from .errors import BrdfInputError
+from .fit import MAX_STEPS, N_STARTS, SEARCH_SAMPLES, _checked, compiled_solver, fit, result_of, start_vector
+from .problem import build_problem, padded_size
+from .results import FitResult
+from .samples import Samples
+from .starts import starting_points
+
+STRATEGIES = ("auto", "loop", "vmap")
+
+
+def default_strategy() -> str:
+    """``vmap`` on a GPU, ``loop`` elsewhere."""
+    return "vmap" if jax.default_backend() in ("gpu", "cuda", "rocm") else "loop"
+
+
+def fit_batch(
+    samples: Sequence[Samples],
+    model: str = "ward",
+    loss: str = "log",
+    *,
+    strategy: str = "auto",
+    progress: bool | None = None,
+    max_theta: float | None = None,
+    start: dict[str, Any] | None = None,
+    n_starts: int = N_STARTS,
+    max_steps: int = MAX_STEPS,
+    dtype: str = "float64",
+    seed: int = 0,
+    **model_options: Any,
+) -> list[FitResult]:
+    """Fit ``model`` to each of ``samples``; the results come in the same order.
+
+    The options are those of :func:`brdffit.fit`, applied to every dataset.
+    ``strategy``: ``auto`` (``vmap`` on a GPU, ``loop`` otherwise), ``loop`` or
+    ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
+    terminal).
+    """
+    if strategy not in STRATEGIES:
+        raise BrdfInputError(f"strategy {strategy!r} is not allowed; choose one of: {', '.join(STRATEGIES)}")
+    samples = list(samples)
+    if not samples:
+        raise BrdfInputError("fit_batch needs at least one dataset")
+    options = dict(max_theta=max_theta, start=start, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
+    strategy = default_strategy() if strategy == "auto" else strategy
+    bar = _progress_bar(len(samples), progress)
+    try:
+        if strategy == "loop":
+            results = []
+            for one in samples:
+                results.append(fit(one, model, loss, **options, **model_options))
+                bar.update(1)
+            return results
+        return _fit_vmapped(samples, model, loss, bar, **options, **model_options)
+    finally:
+        bar.close()
+
+
+def _progress_bar(total: int, enabled: bool | None):
+    from tqdm.auto import tqdm
+
+    # disable=None: tqdm shows the bar only when its stream (stderr) is a terminal.
+    return tqdm(total=total, unit="fit", disable=None if enabled is None else not enabled, leave=False)
+
+
+def _fit_vmapped(samples, model, loss, bar, *, max_theta, start, n_starts, max_steps, dtype, seed, **model_options):
+    """Every dataset of a bucket (same padded size and channel count) solved at once, each start in parallel."""
+    checked = [_checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
+    model, loss = checked[0][0], checked[0][1]
+    kept = [one for _, _, one in checked]
+    n_starts = whole_number("--starts", n_starts)
+    max_steps = whole_number("--max-steps", max_steps)
+    solve = jax.vmap(compiled_solver(model, loss, max_steps, dtype))
+    results: list[FitResult | None] = [None] * len(kept)
+    buckets: dict[tuple[int, int], list[int]] = {}
+    for index, one in enumerate(kept):
+        buckets.setdefault((padded_size(one.n_samples), one.n_channels), []).append(index)
+    for indices in buckets.values():
+        problems = [build_problem(loss, kept[i], dtype) for i in indices]
+        if start is not None:
+            thetas = np.stack([start_vector(model, start, kept[i].n_channels) for i in indices])
+        else:
+            thetas = _best_starts(model, loss, [kept[i] for i in indices], problems, n_starts, solve, dtype, seed)
+        stacked = jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)
+        theta, cost, n_steps, result = solve(jnp.asarray(thetas), stacked)
+        if dtype == "float32":
+            problems = [build_problem(loss, kept[i]) for i in indices]
+            stacked = jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)
+            theta, cost, more_steps, result = jax.vmap(compiled_solver(model, loss, max_steps))(theta, stacked)
+            n_steps = n_steps + more_steps
+        for position, index in enumerate(indices):
+            one_result = jax.tree.map(lambda leaf, p=position: leaf[p], result)
+            results[index] = result_of(
+                model,
+                loss,
+                kept[index],
+                problems[position],
+                theta[position],
+                cost[position],
+                n_steps[position],
+                one_result,
+                max_steps,
+                dtype,
+            )
+        bar.update(len(indices))
+    return results
+
+
+def _best_starts(model, loss, samples, problems, n_starts, solve, dtype, seed):
+    """For each dataset, the best of its ``n_starts`` grid starts after a solve on its search subsample."""
+    searches = []
+    for one, problem in zip(samples, problems, strict=True):
+        if one.n_samples > SEARCH_SAMPLES:
+            chosen = np.sort(np.random.default_rng(seed).choice(one.n_samples, SEARCH_SAMPLES, replace=False))
+            problem = build_problem(loss, one.select(chosen), dtype)
+        searches.append(problem)
+    starts = [starting_points(model, loss, search, n_starts) for search in searches]
+    if all(len(s) == 1 for s in starts):
+        return np.stack([s[0] for s in starts])
+    # Every start of every dataset in one vmapped solve (datasets repeated once per start).
+    width = max(len(s) for s in starts)
+    padded = [s + [s[0]] * (width - len(s)) for s in starts]
+    thetas = jnp.asarray(np.stack([theta for s in padded for theta in s]))
+    repeated = jax.tree.map(lambda *leaves: jnp.repeat(jnp.stack(leaves), width, axis=0), *searches)
+    theta, cost, _, _ = solve(thetas, repeated)
+    best = np.argmin(np.asarray(cost).reshape(len(starts), width), axis=1)
+    return np.asarray(theta).reshape(len(starts), width, -1)[np.arange(len(starts)), best]
