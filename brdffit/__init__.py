@@ -6,26 +6,44 @@ The public API (SPEC section 6)::
     result = brdffit.fit(samples, model="ward", loss="log")
     result.params, result.to_json(), result.predict(wi, wo)
     values = brdffit.evaluate("cook-torrance", params, wi, wo, fresnel="schlick")
+    results = brdffit.fit_batch([samples_a, samples_b], model="ward")
 
-Importing brdffit switches JAX to 64-bit floats (``jax_enable_x64``): every
-computation is float64 unless asked otherwise.
+Names are imported on first use (PEP 562), so ``import brdffit`` does no work;
+the modules that use JAX switch it to float64 (``_jax.py``).
 """
 
-import jax
+import importlib
 
-jax.config.update("jax_enable_x64", True)
+from ._version import __version__ as __version__
 
-from ._version import __version__ as __version__  # noqa: E402
-from .batch import fit_batch as fit_batch  # noqa: E402
-from .errors import BrdfInputError as BrdfInputError  # noqa: E402
-from .evaluate import evaluate as evaluate  # noqa: E402
-from .fit import fit as fit  # noqa: E402
-from .losses import LOSSES as LOSSES  # noqa: E402
-from .models import MODELS as MODELS  # noqa: E402
-from .models import Model as Model  # noqa: E402
-from .models import get_model as get_model  # noqa: E402
-from .results import FitResult as FitResult  # noqa: E402
-from .results import load_result as load_result  # noqa: E402
-from .samples import Samples as Samples  # noqa: E402
-from .samples import load_samples as load_samples  # noqa: E402
-from .samples import save_samples as save_samples  # noqa: E402
+_EXPORTS = {
+    "BrdfInputError": ".errors",
+    "FitResult": ".results",
+    "LOSSES": ".losses",
+    "MODELS": ".models",
+    "Model": ".models",
+    "Samples": ".samples",
+    "enable_compilation_cache": ".cache",
+    "evaluate": ".evaluation",
+    "fit": ".fitting",
+    "fit_batch": ".batch",
+    "get_model": ".models",
+    "load_result": ".results",
+    "load_samples": ".samples",
+    "save_samples": ".samples",
+}
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'brdffit' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])
+
+
+__all__ = ["__version__", *_EXPORTS]

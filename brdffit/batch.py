@@ -18,9 +18,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from .errors import BrdfInputError
-from .fit import MAX_STEPS, N_STARTS, SEARCH_SAMPLES, _checked, compiled_solver, fit, result_of, start_vector
+from .fitting import MAX_STEPS, N_STARTS, SEARCH_SAMPLES, _checked, compiled_solver, fit, result_of, start_vector
 from .problem import build_problem, padded_size
 from .results import FitResult
 from .samples import Samples

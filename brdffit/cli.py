@@ -33,6 +33,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = _build_parser()
     try:
         args = parser.parse_args(argv)
+        if args.command in (_fit, _synth):
+            from .cache import enable_compilation_cache
+
+            enable_compilation_cache()
         return args.command(args)
     except (BrdfInputError, _UsageError) as error:
         print(f"brdffit: error: {error}", file=sys.stderr)

@@ -13,6 +13,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _jax  # noqa: F401  (float64 before any array)
+
 #: Boundary values are moved this far inside the domain before inverting.
 BOUNDARY_OFFSET = 1e-12
 

@@ -7,6 +7,8 @@ have finite derivatives for ``cos β ∈ (0, 1]``.
 
 import jax.numpy as jnp
 
+from . import _jax  # noqa: F401  (float64 before any array)
+
 
 def fresnel_schlick(cos_beta, f0):
     """Schlick 1994: ``F = f0 + (1 - f0)(1 - cos β)⁵``, ``f0 ∈ [0, 1]`` the normal-incidence reflectance."""

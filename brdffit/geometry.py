@@ -11,6 +11,8 @@ which accepts both) and broadcast over leading axes; the last axis holds
 
 import jax.numpy as jnp
 
+from . import _jax  # noqa: F401  (float64 before any array)
+
 #: The surface normal, used to stand in for directions the models must ignore.
 NORMAL = (0.0, 0.0, 1.0)
 

@@ -19,6 +19,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
+from . import _jax  # noqa: F401  (float64 before any array)
 from .losses import Loss, residual_scale
 from .models import Model
 from .samples import Samples

@@ -12,7 +12,7 @@ import numpy as np
 from ._files import write_text_atomic
 from ._version import __version__
 from .errors import BrdfInputError
-from .evaluate import evaluate
+from .evaluation import evaluate
 
 
 @dataclass(frozen=True)

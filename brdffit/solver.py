@@ -39,6 +39,8 @@ import lineax as lx
 import optimistix as optx
 from optimistix import RESULTS
 
+from . import _jax  # noqa: F401  (float64 before any array)
+
 
 class _DescentState(eqx.Module):
     gram: Any  # JᵀJ, (k, k)

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.optimize
 
+from . import _jax  # noqa: F401  (float64 before any array)
 from .losses import Loss, linearised_weight
 from .models import Model, Params
 from .problem import Problem, residuals

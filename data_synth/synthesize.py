@@ -5,7 +5,7 @@ from typing import Any
 import numpy as np
 
 from brdffit.errors import BrdfInputError
-from brdffit.evaluate import evaluate
+from brdffit.evaluation import evaluate
 from brdffit.samples import Samples
 
 from .noise import add_noise

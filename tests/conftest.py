@@ -1,9 +1,15 @@
-"""Shared test set-up: float64 JAX (brdffit switches it on at import), warnings as errors (pyproject)."""
+"""Shared test set-up: float64 JAX, warnings as errors (pyproject), a private compilation cache."""
+
+import os
+import tempfile
 
 import numpy as np
 import pytest
 
-import brdffit  # noqa: F401  (enables jax_enable_x64 before any test builds an array)
+from brdffit import _jax  # noqa: F401  (float64 before any test builds an array)
+
+# The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own.
+os.environ.setdefault("BRDFFIT_CACHE_DIR", tempfile.mkdtemp(prefix="brdffit-test-cache-"))
 
 
 @pytest.fixture

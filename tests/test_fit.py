@@ -170,7 +170,7 @@ def test_float32_is_refined_to_the_float64_optimum():
 def test_large_data_searches_starts_on_a_subsample(monkeypatch):
     """Above SEARCH_SAMPLES the starts are searched on a seeded subsample and the winner refined on all:
     the optimum is the same as searching on everything."""
-    fit_module = sys.modules["brdffit.fit"]
+    fit_module = sys.modules["brdffit.fitting"]
     model, options, params = CASES[1]
     samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=8, **options)
     everything = fit(samples, model)

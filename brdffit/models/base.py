@@ -26,6 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import _jax  # noqa: F401  (float64 before any array)
 from ..domains import NON_NEGATIVE
 from ..errors import BrdfInputError
 from ..geometry import NORMAL

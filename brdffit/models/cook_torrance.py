@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
+from .. import _jax  # noqa: F401  (float64 before any array)
 from ..domains import POSITIVE, UNIT_INTERVAL, GreaterThan, Positive
 from ..errors import BrdfInputError
 from ..fresnel import fresnel_conductor, fresnel_dielectric, fresnel_schlick

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
+from .. import _jax  # noqa: F401  (float64 before any array)
 from .._checks import whole_number
 from ..domains import POSITIVE
 from ..errors import BrdfInputError

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
+from .. import _jax  # noqa: F401  (float64 before any array)
 from ..domains import POSITIVE
 from ..geometry import half_vector, mirror_direction, safe_power
 from .base import Lobe, Model

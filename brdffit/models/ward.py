@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import jax.numpy as jnp
 
+from .. import _jax  # noqa: F401  (float64 before any array)
 from ..domains import POSITIVE
 from ..geometry import half_vector, tan2_from_cos
 from .base import Lobe, Model

@@ -6,6 +6,7 @@ from typing import Any
 import jax
 import numpy as np
 
+from . import _jax  # noqa: F401  (float64 before any array)
 from .errors import BrdfInputError
 from .models import Model, Params, get_model
 

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from .errors import BrdfInputError
 from .losses import Loss, get_loss

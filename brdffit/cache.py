@@ -1,0 +1,43 @@
+"""JAX's persistent compilation cache: compile a solver once per machine, not once per process.
+
+A ``brdffit fit`` spends most of its time compiling the solver for its model
+and data size; with the cache a later run loads the compiled program instead.
+The command line enables it; Python users call :func:`enable_compilation_cache`.
+"""
+
+import os
+from pathlib import Path
+
+#: The environment variable that moves the cache; set it to an empty string to turn the cache off.
+CACHE_VARIABLE = "BRDFFIT_CACHE_DIR"
+
+
+def default_cache_dir() -> Path | None:
+    """``$BRDFFIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/brdffit/jax``, else ``~/.cache/brdffit/jax``; None if off."""
+    configured = os.environ.get(CACHE_VARIABLE)
+    if configured is not None:
+        return Path(configured) if configured else None
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "brdffit" / "jax"
+
+
+def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | None:
+    """Keep compiled programs in ``path`` (default :func:`default_cache_dir`) across processes.
+
+    Every program is cached, however quickly it compiled (JAX's default keeps
+    only those over a second). Returns the folder, or None when the cache is
+    off or the folder cannot be created (a read-only home): fits then compile
+    as usual.
+    """
+    folder = Path(path) if path is not None else default_cache_dir()
+    if folder is None:
+        return None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    import jax
+
+    jax.config.update("jax_compilation_cache_dir", str(folder))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    return folder

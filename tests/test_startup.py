@@ -1,0 +1,75 @@
+"""Start-up: no work at import time, and a compilation cache that later runs reuse."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import brdffit
+from brdffit.cache import CACHE_VARIABLE, default_cache_dir, enable_compilation_cache
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_import_loads_no_jax():
+    code = "import sys, brdffit; brdffit.__version__; assert 'jax' not in sys.modules, 'jax imported'"
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_public_names_resolve_lazily():
+    assert set(brdffit.__all__) <= set(dir(brdffit))
+    for name in brdffit.__all__:
+        assert getattr(brdffit, name) is not None
+    try:
+        brdffit.no_such_name  # noqa: B018
+    except AttributeError as error:
+        assert "has no attribute 'no_such_name'" in str(error)
+
+
+def test_no_submodule_shadows_a_public_name():
+    """Importing a submodule binds it as a package attribute; none may be called like a public name
+    (``brdffit.fit`` must stay the function however the modules were imported)."""
+    code = (
+        "import importlib, pkgutil, types, brdffit\n"
+        "for module in pkgutil.walk_packages(brdffit.__path__, 'brdffit.'):\n"
+        "    importlib.import_module(module.name)\n"
+        "bad = [n for n in brdffit.__all__ if isinstance(getattr(brdffit, n), types.ModuleType)]\n"
+        "assert not bad, bad\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_cache_folder_rules(monkeypatch, tmp_path):
+    monkeypatch.setenv(CACHE_VARIABLE, str(tmp_path / "here"))
+    assert default_cache_dir() == tmp_path / "here"
+    monkeypatch.setenv(CACHE_VARIABLE, "")
+    assert default_cache_dir() is None and enable_compilation_cache() is None
+    monkeypatch.delenv(CACHE_VARIABLE)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert default_cache_dir() == tmp_path / "xdg" / "brdffit" / "jax"
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert enable_compilation_cache(blocker / "below") is None  # cannot be created: fits compile as usual
+
+
+def test_command_line_fills_and_reuses_the_cache(tmp_path):
+    """A first `brdffit fit` stores compiled programs; a second run in a new process finds them."""
+    environment = {**os.environ, CACHE_VARIABLE: str(tmp_path / "cache")}
+    command = [
+        sys.executable,
+        str(ROOT / "cli.py"),
+        "fit",
+        str(ROOT / "examples" / "ward-pickled-oak.csv"),
+        "--model",
+        "lambert",
+    ]
+    for run in range(2):
+        done = subprocess.run(
+            [*command, "-o", str(tmp_path / f"r{run}.json")], env=environment, capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr
+        entries = sorted(os.listdir(tmp_path / "cache"))
+        assert entries, "the first run must store compiled programs"
+        if run == 0:
+            first = entries
+    assert entries == first, "the second run compiles nothing new"
