@@ -21,7 +21,7 @@ import numpy as np
 from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from .errors import BrdfInputError
-from .fitting import MAX_STEPS, N_STARTS, SEARCH_SAMPLES, _checked, compiled_solver, fit, result_of, start_vector
+from .fitting import MAX_STEPS, N_STARTS, _checked, compiled_solver, fit, result_of, search_problem, start_vector
 from .problem import build_problem, padded_size
 from .results import FitResult
 from .samples import Samples
@@ -129,12 +129,7 @@ def _fit_vmapped(samples, model, loss, bar, *, max_theta, start, n_starts, max_s
 
 def _best_starts(model, loss, samples, problems, n_starts, solve, dtype, seed):
     """For each dataset, the best of its ``n_starts`` grid starts after a solve on its search subsample."""
-    searches = []
-    for one, problem in zip(samples, problems, strict=True):
-        if one.n_samples > SEARCH_SAMPLES:
-            chosen = np.sort(np.random.default_rng(seed).choice(one.n_samples, SEARCH_SAMPLES, replace=False))
-            problem = build_problem(loss, one.select(chosen), dtype)
-        searches.append(problem)
+    searches = [search_problem(loss, one, problem, dtype, seed) for one, problem in zip(samples, problems, strict=True)]
     starts = [starting_points(model, loss, search, n_starts) for search in searches]
     if all(len(s) == 1 for s in starts):
         return np.stack([s[0] for s in starts])

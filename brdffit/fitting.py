@@ -4,8 +4,8 @@ The parameters move in unconstrained coordinates (``domains.py``), so every
 step is physically valid. The solver (``solver.py``) is compiled once per
 model, loss and bucketed data size (``problem.padded_size``) and reused for
 every start and every dataset of that size. On large data the starts are
-searched on a seeded subsample of :data:`SEARCH_SAMPLES` samples and only the
-winner is refined on all of them.
+searched on a subset (``starts.search_subset``) and only the winner is refined
+on all of them.
 """
 
 from functools import cache, partial
@@ -25,7 +25,7 @@ from .problem import DTYPES, Problem, build_problem, normal_equations, residuals
 from .results import FitResult
 from .samples import Samples
 from .solver import LevenbergMarquardt
-from .starts import starting_points
+from .starts import search_subset, starting_points
 
 #: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -36,8 +36,6 @@ from .starts import starting_points
 TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
 MAX_STEPS = 256
 N_STARTS = 3
-#: Starts are searched on at most this many samples (a seeded random subset); the winner is refined on all.
-SEARCH_SAMPLES = 2**16
 
 
 def fit(
@@ -62,8 +60,8 @@ def fit(
     runs the solve with the model in single precision (sums stay float64) and
     then refines the optimum in float64 (mixed-precision iterative refinement,
     usually one or two steps), so the result is float64's.
-    ``seed``: the subsample the starts are searched on, for more than
-    :data:`SEARCH_SAMPLES` samples. ``model_options``: ``fresnel=`` for
+    ``seed``: the random part of the subset the starts are searched on (for
+    more than ``starts.SEARCH_SAMPLES`` samples). ``model_options``: ``fresnel=`` for
     cook-torrance, ``lobes=`` for lafortune.
     """
     model, loss, samples = _checked(samples, model, loss, max_theta, dtype, **model_options)
@@ -74,10 +72,7 @@ def fit(
     if start is not None:
         starts = [start_vector(model, start, samples.n_channels)]
     else:
-        search = full
-        if samples.n_samples > SEARCH_SAMPLES:
-            chosen = np.sort(np.random.default_rng(seed).choice(samples.n_samples, SEARCH_SAMPLES, replace=False))
-            search = build_problem(loss, samples.select(chosen), dtype)
+        search = search_problem(loss, samples, full, dtype, seed)
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
             starts = [_best([solve(jnp.asarray(theta), search) for theta in starts])[0]]
@@ -87,6 +82,12 @@ def fit(
         theta, cost, refinement_steps, result = compiled_solver(model, loss, max_steps)(theta, full)
         n_steps = n_steps + refinement_steps
     return result_of(model, loss, samples, full, theta, cost, n_steps, result, max_steps, dtype)
+
+
+def search_problem(loss: Loss, samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
+    """The problem the starts are searched on: ``full``, or that of the subset ``starts.search_subset`` picks."""
+    subset = search_subset(samples, seed)
+    return full if subset is None else build_problem(loss, samples.select(subset), dtype)
 
 
 def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:

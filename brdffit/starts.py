@@ -23,9 +23,38 @@ from . import _jax  # noqa: F401  (float64 before any array)
 from .losses import Loss, linearised_weight
 from .models import Model, Params
 from .problem import Problem, residuals
+from .samples import Samples
 
 #: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
 ALBEDO_FLOOR = 1e-3
+#: Starts are searched on at most this many samples; the winner is then refined on all of them.
+SEARCH_SAMPLES = 2**13
+#: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
+#: that a few samples see is still seen.
+BRIGHT_SHARE = 0.25
+
+
+def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
+    """Indices of the samples the starts are searched on, or None for all of them.
+
+    Above :data:`SEARCH_SAMPLES` samples: the brightest quarter of the subset
+    (by each sample's largest value relative to its channel's median, so a
+    specular peak is kept) and the rest drawn at random with ``seed``. An
+    all-zero channel would overflow the ratio; each channel's scale is at
+    least a thousandth of its largest value.
+    """
+    n = samples.n_samples
+    if n <= SEARCH_SAMPLES:
+        return None
+    # A channel that is 0 almost everywhere (an albedo of 0) is scaled by a thousandth of its largest value.
+    values = samples.values
+    scale = np.maximum(np.median(values, axis=0), 1e-3 * np.max(values, axis=0))
+    brightness = np.max(values / np.maximum(scale, np.finfo(float).tiny), axis=1)
+    n_bright = int(SEARCH_SAMPLES * BRIGHT_SHARE)
+    bright = np.argpartition(-brightness, n_bright)[:n_bright]
+    others = np.setdiff1d(np.arange(n), bright, assume_unique=True)
+    rest = np.random.default_rng(seed).choice(others, SEARCH_SAMPLES - n_bright, replace=False)
+    return np.sort(np.concatenate([bright, rest]))
 
 
 def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -> list[np.ndarray]:

@@ -170,11 +170,11 @@ def test_float32_is_refined_to_the_float64_optimum():
 def test_large_data_searches_starts_on_a_subsample(monkeypatch):
     """Above SEARCH_SAMPLES the starts are searched on a seeded subsample and the winner refined on all:
     the optimum is the same as searching on everything."""
-    fit_module = sys.modules["brdffit.fitting"]
+    starts_module = sys.modules["brdffit.starts"]
     model, options, params = CASES[1]
     samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=8, **options)
     everything = fit(samples, model)
-    monkeypatch.setattr(fit_module, "SEARCH_SAMPLES", 2000)
+    monkeypatch.setattr(starts_module, "SEARCH_SAMPLES", 2000)
     subsampled = fit(samples, model, seed=1)
     assert subsampled.converged and subsampled.cost == pytest.approx(everything.cost, rel=1e-10)
     fitted, expected = flat_parameters(subsampled.params), flat_parameters(everything.params)
