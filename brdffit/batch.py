@@ -43,7 +43,7 @@ def fit_batch(
     strategy: str = "auto",
     progress: bool | None = None,
     max_theta: float | None = None,
-    start: dict[str, Any] | None = None,
+    start: dict[str, Any] | Sequence[dict[str, Any]] | None = None,
     n_starts: int = N_STARTS,
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
@@ -52,7 +52,8 @@ def fit_batch(
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the results come in the same order.
 
-    The options are those of :func:`brdffit.fit`, applied to every dataset.
+    The options are those of :func:`brdffit.fit`, applied to every dataset;
+    ``start`` may also be a list with one parameter dictionary per dataset.
     ``strategy``: ``auto`` (``vmap`` on a GPU, ``loop`` otherwise), ``loop`` or
     ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
     terminal).
@@ -62,17 +63,20 @@ def fit_batch(
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
-    options = dict(max_theta=max_theta, start=start, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
+    starts = list(start) if isinstance(start, Sequence) else [start] * len(samples)
+    if len(starts) != len(samples):
+        raise BrdfInputError(f"{len(starts)} starts for {len(samples)} datasets; give one per dataset or one for all")
+    options = dict(max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
     strategy = default_strategy() if strategy == "auto" else strategy
     bar = _progress_bar(len(samples), progress)
     try:
         if strategy == "loop":
             results = []
-            for one in samples:
-                results.append(fit(one, model, loss, **options, **model_options))
+            for one, one_start in zip(samples, starts, strict=True):
+                results.append(fit(one, model, loss, start=one_start, **options, **model_options))
                 bar.update(1)
             return results
-        return _fit_vmapped(samples, model, loss, bar, **options, **model_options)
+        return _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
     finally:
         bar.close()
 
@@ -84,7 +88,7 @@ def _progress_bar(total: int, enabled: bool | None):
     return tqdm(total=total, unit="fit", disable=None if enabled is None else not enabled, leave=False)
 
 
-def _fit_vmapped(samples, model, loss, bar, *, max_theta, start, n_starts, max_steps, dtype, seed, **model_options):
+def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_steps, dtype, seed, **model_options):
     """Every dataset of a bucket (same padded size and channel count) solved at once, each start in parallel."""
     checked = [_checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
     model, loss = checked[0][0], checked[0][1]
@@ -98,10 +102,13 @@ def _fit_vmapped(samples, model, loss, bar, *, max_theta, start, n_starts, max_s
         buckets.setdefault((padded_size(one.n_samples), one.n_channels), []).append(index)
     for indices in buckets.values():
         problems = [build_problem(loss, kept[i], dtype) for i in indices]
-        if start is not None:
-            thetas = np.stack([start_vector(model, start, kept[i].n_channels) for i in indices])
-        else:
+        if any(starts[i] is None for i in indices):
             thetas = _best_starts(model, loss, [kept[i] for i in indices], problems, n_starts, solve, dtype, seed)
+        else:
+            thetas = np.zeros((len(indices), model.n_parameters(kept[indices[0]].n_channels)))
+        for position, index in enumerate(indices):
+            if starts[index] is not None:  # a given start replaces the searched one
+                thetas[position] = start_vector(model, starts[index], kept[index].n_channels)
         stacked = jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)
         theta, cost, n_steps, result = solve(jnp.asarray(thetas), stacked)
         if dtype == "float32":

@@ -49,6 +49,18 @@ def test_vmap_with_float32_and_a_start():
     assert all(r.converged and r.dtype == "float32" for r in results)
 
 
+def test_one_start_per_dataset():
+    samples = datasets()[:3]
+    for strategy in ("loop", "vmap"):
+        results = fit_batch(samples, "ward", strategy=strategy, start=WARD[:3])
+        assert all(r.converged for r in results)
+    mixed = fit_batch(samples, "ward", strategy="vmap", start=[WARD[0], None, WARD[2]])
+    looped = fit_batch(samples, "ward", strategy="loop", start=[WARD[0], None, WARD[2]])
+    assert [r.cost for r in mixed] == pytest.approx([r.cost for r in looped], rel=1e-10)
+    with pytest.raises(BrdfInputError, match="2 starts for 3 datasets; give one per dataset or one for all"):
+        fit_batch(samples, "ward", start=WARD[:2])
+
+
 def test_strategy_and_arguments_are_checked():
     assert default_strategy() == "loop"  # the test machine is a CPU
     with pytest.raises(BrdfInputError, match="strategy 'gpu' is not allowed; choose one of: auto, loop, vmap"):
