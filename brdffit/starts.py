@@ -28,7 +28,7 @@ from .samples import Samples
 #: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
 ALBEDO_FLOOR = 1e-3
 #: Starts are searched on at most this many samples; the winner is then refined on all of them.
-SEARCH_SAMPLES = 2**13
+SEARCH_SAMPLES = 2**14
 #: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
 #: that a few samples see is still seen.
 BRIGHT_SHARE = 0.25
@@ -63,7 +63,7 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
     n_channels = problem.measured.shape[1]
     diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
     if not model.n_lobes:
-        diffuse = _albedos(*_gram(diffuse_basis, weight, problem.measured))[0]
+        diffuse = _albedos(*(np.asarray(x) for x in _gram(diffuse_basis, weight, problem.measured)))[0]
         return [model.to_unconstrained(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
 
     grid = model.lobe.grid
@@ -73,10 +73,10 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
     fixed = diffuse_basis
     for placed in range(model.n_lobes):
         partial_model = replace(model, n_lobes=placed + 1)
-        grams, rhs = _grid_grams(fixed, lobes, weight, problem.measured)
+        grams, rhs = (np.asarray(x) for x in _grid_grams(fixed, lobes, weight, problem.measured))
         thetas = []
         for index, shape in enumerate(grid):
-            albedos = _floored(_albedos(np.asarray(grams[index]), np.asarray(rhs[index])))
+            albedos = _floored(_albedos(grams[index], rhs[index]))
             shapes = [*chosen, shape]
             shape_arrays = {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
             thetas.append(partial_model.to_unconstrained(Params(albedos[0], albedos[1:], shape_arrays)))

@@ -1,0 +1,271 @@
+"""brdffit's benchmarks: measured, printed, compared with scipy.optimize.least_squares in one run.
+
+    make bench                    # or: .venv/bin/python benchmarks/run.py [--quick] [--repeats 3]
+
+Sections (issue 3):
+
+(a) MERL-size fits (1,458,000 direction pairs × RGB, 1% noise), Cook-Torrance and
+    Ward: brdffit against least_squares ``trf`` and ``lm`` with finite
+    differences and ``lm`` with the exact Jacobian, on the same data, start
+    (brdffit's data-driven one) and loss (log), with final costs. brdffit is
+    timed with compilation: from an empty persistent cache (a first run) and
+    with a filled one (every later run), and on its default path (its own
+    start search included).
+(b) 100 Cook-Torrance materials × 100,000 samples: fit_batch against a loop of
+    least_squares ``lm`` (exact Jacobian, compiled once) from the same starts,
+    and fit_batch on its default path.
+(c) ``brdffit fit`` of the shipped 10k-sample example, process start to result written.
+(d) Peak resident memory of the MERL-size Cook-Torrance fit (the process that loads the samples and fits).
+(e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step).
+
+Every timing is a median over ``--repeats`` runs, each in a fresh process;
+the machine is shared, so compare ratios from one run. Writes
+``benchmarks/results/latest.json`` and ``latest.md`` and prints the table.
+"""
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import data_synth  # noqa: E402
+from brdffit import get_model  # noqa: E402
+from brdffit.losses import get_loss  # noqa: E402
+
+WORKER = Path(__file__).with_name("worker.py")
+RESULTS = Path(__file__).with_name("results")
+MATERIALS = {
+    # Ngan et al. 2005's fits of MERL special-walnut-224 (Cook-Torrance, ks = 4·albedo/π) and pickled-oak-260 (Ward).
+    "cook-torrance": {"kd": [0.0187, 0.0145, 0.00961], "ks": [0.3209, 0.2725, 0.1821], "m": 0.258, "f0": 0.0688},
+    "ward": {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146},
+}
+SCIPY_SOLVERS = ("scipy-trf", "scipy-lm", "scipy-lm-exact")
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def worker(*arguments: str, cache: str = "") -> dict:
+    """One measurement in a fresh process; ``cache`` is its BRDFFIT_CACHE_DIR ("" = no persistent cache)."""
+    environment = {**os.environ, "BRDFFIT_CACHE_DIR": cache}
+    done = subprocess.run(
+        [sys.executable, str(WORKER), *arguments], env=environment, capture_output=True, text=True, check=False
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"worker {' '.join(arguments)} failed:\n{done.stderr[-3000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def repeated(repeats: int, *arguments: str, cache: str = "") -> dict:
+    runs = [worker(*arguments, cache=cache) for _ in range(repeats)]
+    result = {key: runs[-1][key] for key in runs[-1]}
+    result["seconds"] = statistics.median(run["seconds"] for run in runs)
+    result["all_seconds"] = [run["seconds"] for run in runs]
+    if "peak_rss_mb" in runs[-1]:
+        result["peak_rss_mb"] = statistics.median(run["peak_rss_mb"] for run in runs)
+    return result
+
+
+def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict:
+    """(a), (d) and (e) for one model."""
+    model, loss = get_model(model_name), get_loss("log")
+    wi, wo = data_synth.uniform_random(size, seed=1)
+    samples = data_synth.synthesize(model_name, MATERIALS[model_name], wi, wo, noise=0.01, seed=2)
+    data = folder / f"{model_name}.npz"
+    np.savez(data, wi=samples.wi, wo=samples.wo, values=samples.values)
+    from brdffit.fitting import search_problem
+    from brdffit.problem import build_problem
+    from brdffit.starts import starting_points
+
+    search = search_problem(loss, samples, build_problem(loss, samples), "float64", seed=0)
+    theta = starting_points(model, loss, search, 1)[0]
+    start = folder / f"{model_name}-start.json"
+    start.write_text(json.dumps(model.params_to_dict(model.from_unconstrained(theta, 3))))
+    common = ("merl", "--model", model_name, "--data", str(data), "--start", str(start))
+
+    section: dict = {"n_samples": size}
+    log(f"(a) {model_name}: brdffit, empty compilation cache")
+    section["brdffit_cold"] = repeated(repeats, *common, "--solver", "brdffit")
+    cache = str(folder / f"cache-{model_name}")
+    worker(*common, "--solver", "brdffit", cache=cache)  # fills the persistent cache
+    log(f"(a) {model_name}: brdffit, filled compilation cache")
+    section["brdffit_cached"] = repeated(repeats, *common, "--solver", "brdffit", cache=cache)
+    log(f"(a) {model_name}: brdffit default path (own start search), empty cache")
+    section["brdffit_default"] = repeated(repeats, *common, "--solver", "brdffit-default")
+    for solver in SCIPY_SOLVERS:
+        log(f"(a) {model_name}: {solver}")
+        section[solver] = repeated(repeats, *common, "--solver", solver)
+    log(f"(e) {model_name}: time per step")
+    section["per_step"] = worker("steps", "--model", model_name, "--data", str(data), "--start", str(start))
+    return section
+
+
+def batch_section(materials: int, size: int, repeats: int) -> dict:
+    arguments = ("batch", "--materials", str(materials), "--size", str(size))
+    section: dict = {"materials": materials, "n_samples": size}
+    for solver in ("brdffit", "brdffit-default", "scipy-lm-exact"):
+        log(f"(b) {materials} × {size}: {solver}")
+        section[solver] = repeated(repeats, *arguments, "--solver", solver)
+    return section
+
+
+def cli_section(repeats: int, folder: Path) -> dict:
+    """(c): wall time of `brdffit fit` on the shipped example, from process start to the result written."""
+    import time
+
+    script = Path(sys.executable).with_name("brdffit")
+    example = ROOT / "examples" / "ward-pickled-oak.csv"
+    cache = str(folder / "cli-cache")
+
+    def once() -> float:
+        clock = time.perf_counter()
+        subprocess.run(
+            [str(script), "fit", str(example), "-o", str(folder / "cli.json")],
+            env={**os.environ, "BRDFFIT_CACHE_DIR": cache},
+            capture_output=True,
+            check=True,
+        )
+        return time.perf_counter() - clock
+
+    log("(c) command line, first run (empty compilation cache)")
+    first = once()
+    log("(c) command line, later runs")
+    later = [once() for _ in range(max(repeats, 5))]
+    return {"first_run_seconds": first, "seconds": statistics.median(later), "all_seconds": later, "n_samples": 10368}
+
+
+def machine() -> dict:
+    import jax
+    import optimistix
+    import scipy
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        cpu = next(line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return {
+        "date": datetime.date.today().isoformat(),
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "backend": jax.default_backend(),
+        "python": platform.python_version(),
+        "jax": jax.__version__,
+        "optimistix": optimistix.__version__,
+        "scipy": scipy.__version__,
+        "numpy": np.__version__,
+    }
+
+
+def table(results: dict) -> str:
+    """The markdown summary the README shows."""
+    info = results["machine"]
+    lines = [
+        f"Measured {info['date']} on {info['cpu']}, {info['cores']} cores, {info['backend']} "
+        f"(jax {info['jax']}, optimistix {info['optimistix']}, scipy {info['scipy']}); medians of "
+        f"{results['repeats']} runs, each in a fresh process.",
+        "",
+        "| (a) MERL-size fit, 1,458,000 × RGB | Cook-Torrance | cost | Ward | cost |",
+        "|---|---|---|---|---|",
+    ]
+    rows = [
+        ("brdffit, compile included (empty cache)", "brdffit_cold"),
+        ("brdffit, compile cached (later runs)", "brdffit_cached"),
+        ("brdffit default path (own start search, empty cache)", "brdffit_default"),
+        ("scipy least_squares trf, finite differences", "scipy-trf"),
+        ("scipy least_squares lm, finite differences", "scipy-lm"),
+        ("scipy least_squares lm, exact Jacobian", "scipy-lm-exact"),
+    ]
+    merl = {name: results[name] for name in ("cook-torrance", "ward") if name in results}
+    for label, key in rows:
+        cells = []
+        for section in merl.values():
+            run = section[key]
+            count = f", {run['steps']} steps" if "steps" in run else f", {run['nfev']} evaluations"
+            cells += [f"{run['seconds']:.2f} s{count}", f"{run['cost']:.10g}"]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    for baseline in SCIPY_SOLVERS:
+        cells = []
+        for section in merl.values():
+            cold = section[baseline]["seconds"] / section["brdffit_cold"]["seconds"]
+            cached = section[baseline]["seconds"] / section["brdffit_cached"]["seconds"]
+            cells += [f"{cold:.1f}× / {cached:.1f}×", ""]
+        lines.append(f"| speed-up over {baseline} (empty / filled cache) | " + " | ".join(cells) + " |")
+    batch = results.get("batch")
+    if batch:
+        scipy_run = batch["scipy-lm-exact"]
+        lines += [
+            "",
+            f"| (b) {batch['materials']} Cook-Torrance materials × {batch['n_samples']:,} samples"
+            " | time | converged | speed-up |",
+            "|---|---|---|---|",
+        ]
+        for label, key in (
+            ("brdffit fit_batch, same starts as scipy", "brdffit"),
+            ("brdffit fit_batch, default path (own start search)", "brdffit-default"),
+            ("scipy least_squares lm (exact Jacobian) loop", "scipy-lm-exact"),
+        ):
+            run = batch[key]
+            ratio = scipy_run["seconds"] / run["seconds"]
+            lines.append(
+                f"| {label} | {run['seconds']:.1f} s | {run['converged']}/{batch['materials']} | {ratio:.1f}× |"
+            )
+    cli = results.get("cli")
+    if cli:
+        lines += [
+            "",
+            f"(c) `brdffit fit` of the 10,368-sample example, process start to result written: median "
+            f"{cli['seconds']:.2f} s (first run, compiling: {cli['first_run_seconds']:.2f} s).",
+        ]
+    if "cook-torrance" in results:
+        section = results["cook-torrance"]
+        lines.append(
+            "(d) Peak resident memory of the MERL-size Cook-Torrance fit:"
+            f" {section['brdffit_cold']['peak_rss_mb']:.0f} MB."
+        )
+        lines.append("(e) Time per Levenberg-Marquardt step / one fused normal-equation pass:")
+        for name, section in merl.items():
+            step = section["per_step"]
+            per_step = step["solve_seconds"] / step["steps"]
+            lines.append(
+                f"    {name}: {1000 * per_step:.0f} ms / {1000 * step['pass_seconds']:.0f} ms"
+                f" = {per_step / step['pass_seconds']:.2f}× ({step['steps']} steps)"
+            )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeats", type=int, default=3, help="runs per timing (default 3)")
+    parser.add_argument("--quick", action="store_true", help="small sizes, to check that the benchmarks run")
+    parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
+    args = parser.parse_args()
+    merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
+    results: dict = {"machine": machine(), "repeats": args.repeats, "quick": args.quick}
+    with tempfile.TemporaryDirectory(prefix="brdffit-bench-") as temporary:
+        folder = Path(temporary)
+        for model_name in MATERIALS:
+            results[model_name] = merl_section(model_name, merl_size, args.repeats, folder)
+        results["batch"] = batch_section(materials, batch_size, args.repeats)
+        results["cli"] = cli_section(args.repeats, folder)
+    text = table(results)
+    args.output.mkdir(parents=True, exist_ok=True)
+    (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")
+    (args.output / "latest.md").write_text(text + "\n")
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

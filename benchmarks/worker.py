@@ -1,0 +1,209 @@
+"""One benchmark measurement in a fresh process; prints one JSON line. Run by ``benchmarks/run.py``.
+
+Every measurement runs in its own process so that nothing compiled by an
+earlier one is reused: "compile included" means what it says. The data are
+made (or loaded) before the clock starts; the clock covers the fit from the
+samples in memory to the result (parameters and cost) in hand.
+
+    python benchmarks/worker.py merl --model cook-torrance --solver brdffit --data D.npz --start S.json
+    python benchmarks/worker.py steps --model cook-torrance --data D.npz --start S.json
+    python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000
+"""
+
+import argparse
+import functools
+import json
+import os
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import data_synth
+from brdffit import Samples, enable_compilation_cache, fit, fit_batch, get_model
+from brdffit.losses import get_loss
+
+LOSS = "log"
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def load(path) -> Samples:
+    arrays = np.load(path)
+    return Samples.from_arrays(arrays["wi"], arrays["wo"], arrays["values"], channels=("r", "g", "b"))
+
+
+@functools.cache
+def scipy_functions(model_name: str):
+    """The residual vector and its Jacobian, jitted once per model with the data as an argument, as a
+    competent scipy user would write them (compiled on first call, inside the clock)."""
+    import jax
+
+    from brdffit.problem import residuals
+
+    model, loss = get_model(model_name), get_loss(LOSS)
+
+    def flat(theta, data):
+        return residuals(model, loss, theta, data).ravel()
+
+    return jax.jit(flat), jax.jit(jax.jacfwd(flat))
+
+
+def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str, exact: bool):
+    """scipy.optimize.least_squares on the same residuals, from the same start."""
+    import jax
+    import jax.numpy as jnp
+    import scipy.optimize
+
+    from brdffit.problem import build_problem
+
+    n = samples.n_samples
+    problem = jax.tree.map(lambda a: a[:n], build_problem(get_loss(LOSS), samples))  # exactly the samples, no padding
+    residual, jacobian = scipy_functions(model_name)
+    out = scipy.optimize.least_squares(
+        lambda th: np.asarray(residual(jnp.asarray(th), problem)),
+        theta0,
+        method=method,
+        jac=(lambda th: np.asarray(jacobian(jnp.asarray(th), problem))) if exact else "2-point",
+    )
+    return {"cost": 2.0 * float(out.cost), "nfev": int(out.nfev), "converged": bool(out.status > 0)}
+
+
+SCIPY = {"scipy-trf": ("trf", False), "scipy-lm": ("lm", False), "scipy-lm-exact": ("lm", True)}
+
+
+def merl(args) -> dict:
+    enable_compilation_cache()  # BRDFFIT_CACHE_DIR="" (set by run.py) keeps it off
+    samples = load(args.data)
+    start = json.loads(Path(args.start).read_text())
+    model = get_model(args.model)
+    clock = time.perf_counter()
+    if args.solver == "brdffit":
+        result = fit(samples, args.model, start=start, n_starts=1)
+        out = {"cost": result.cost, "steps": result.n_steps, "converged": result.converged}
+    elif args.solver == "brdffit-default":
+        result = fit(samples, args.model)
+        out = {"cost": result.cost, "steps": result.n_steps, "converged": result.converged}
+    else:
+        theta0 = model.to_unconstrained(model.params_from_dict(start))
+        out = scipy_fit(args.model, samples, theta0, *SCIPY[args.solver])
+    return out | {"seconds": time.perf_counter() - clock, "peak_rss_mb": peak_rss_mb(), "n_samples": samples.n_samples}
+
+
+def steps(args) -> dict:
+    """(e): time per Levenberg-Marquardt step against one fused normal-equation pass (both compiled, warm)."""
+    import jax
+    import jax.numpy as jnp
+
+    from brdffit.fitting import compiled_solver
+    from brdffit.problem import build_problem, normal_equations
+
+    samples = load(args.data)
+    model, loss = get_model(args.model), get_loss(LOSS)
+    problem = build_problem(loss, samples)
+    theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(json.loads(Path(args.start).read_text()))))
+    sums = jax.jit(lambda t, p: normal_equations(model, loss, t, p))
+    solve = compiled_solver(model, loss, 256)
+
+    def median_seconds(call, repeats):
+        jax.block_until_ready(call())
+        times = []
+        for _ in range(repeats):
+            clock = time.perf_counter()
+            output = jax.block_until_ready(call())
+            times.append(time.perf_counter() - clock)
+        return float(np.median(times)), output
+
+    pass_seconds, _ = median_seconds(lambda: sums(theta, problem), 7)
+    solve_seconds, output = median_seconds(lambda: solve(theta, problem), 3)
+    n_steps = int(output[2])
+    return {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps}
+
+
+def batch_data(materials: int, size: int):
+    """``materials`` Cook-Torrance materials (seeded, realistic ranges) on one random geometry of ``size`` pairs."""
+    rng = np.random.default_rng(2024)
+    wi, wo = data_synth.uniform_random(size, seed=7)
+    datasets = []
+    for index in range(materials):
+        params = {
+            "kd": rng.uniform(0.01, 0.4, 3).tolist(),
+            "ks": rng.uniform(0.05, 0.6, 3).tolist(),
+            "m": float(np.exp(rng.uniform(np.log(0.05), np.log(0.5)))),
+            "f0": float(rng.uniform(0.02, 0.9)),
+        }
+        datasets.append(data_synth.synthesize("cook-torrance", params, wi, wo, noise=0.01, seed=100 + index))
+    return datasets
+
+
+def batch_starts(datasets) -> list[dict]:
+    """brdffit's data-driven start of each dataset, given to both solvers (computed before the clock)."""
+    from brdffit.fitting import search_problem
+    from brdffit.problem import build_problem
+    from brdffit.starts import starting_points
+
+    model, loss = get_model("cook-torrance"), get_loss(LOSS)
+    starts = []
+    for samples in datasets:
+        search = search_problem(loss, samples, build_problem(loss, samples), "float64", seed=0)
+        theta = starting_points(model, loss, search, 1)[0]
+        starts.append(model.params_to_dict(model.from_unconstrained(theta, samples.n_channels)))
+    return starts
+
+
+def batch(args) -> dict:
+    import jax
+
+    datasets = batch_data(args.materials, args.size)
+    starts = batch_starts(datasets) if args.solver != "brdffit-default" else None
+    model = get_model("cook-torrance")
+    jax.clear_caches()  # the start search above compiled things the clock must not get for free
+    clock = time.perf_counter()
+    if args.solver.startswith("brdffit"):
+        results = fit_batch(datasets, "cook-torrance", start=starts, progress=False)
+        costs = [r.cost for r in results]
+        converged = sum(r.converged for r in results)
+        steps = [r.n_steps for r in results]
+    else:
+        method, exact = SCIPY[args.solver]
+        outs = [
+            scipy_fit("cook-torrance", samples, model.to_unconstrained(model.params_from_dict(start)), method, exact)
+            for samples, start in zip(datasets, starts, strict=True)
+        ]
+        costs = [o["cost"] for o in outs]
+        converged = sum(o["converged"] for o in outs)
+        steps = [o["nfev"] for o in outs]
+    seconds = time.perf_counter() - clock
+    return {"seconds": seconds, "converged": converged, "costs": costs, "steps": steps, "peak_rss_mb": peak_rss_mb()}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+    one = commands.add_parser("merl")
+    one.add_argument("--model", required=True)
+    one.add_argument("--solver", required=True, choices=["brdffit", "brdffit-default", *SCIPY])
+    one.add_argument("--data", required=True)
+    one.add_argument("--start", required=True)
+    per_step = commands.add_parser("steps")
+    per_step.add_argument("--model", required=True)
+    per_step.add_argument("--data", required=True)
+    per_step.add_argument("--start", required=True)
+    many = commands.add_parser("batch")
+    many.add_argument("--solver", required=True, choices=["brdffit", "brdffit-default", *SCIPY])
+    many.add_argument("--materials", type=int, default=100)
+    many.add_argument("--size", type=int, default=100_000)
+    args = parser.parse_args()
+    output = {"merl": merl, "steps": steps, "batch": batch}[args.command](args)
+    print(json.dumps(output))
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("BRDFFIT_CACHE_DIR", "")
+    main()
