@@ -189,14 +189,16 @@ def table(results: dict) -> str:
         ("scipy least_squares lm, exact Jacobian", "scipy-lm-exact"),
     ]
     merl = {name: results[name] for name in ("cook-torrance", "ward") if name in results}
-    for label, key in rows:
+    if not merl:
+        lines = lines[:2]
+    for label, key in rows if merl else ():
         cells = []
         for section in merl.values():
             run = section[key]
             count = f", {run['steps']} steps" if "steps" in run else f", {run['nfev']} evaluations"
             cells += [f"{run['seconds']:.2f} s{count}", f"{run['cost']:.10g}"]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    for baseline in SCIPY_SOLVERS:
+    for baseline in SCIPY_SOLVERS if merl else ():
         cells = []
         for section in merl.values():
             cold = section[baseline]["seconds"] / section["brdffit_cold"]["seconds"]
@@ -251,15 +253,23 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs per timing (default 3)")
     parser.add_argument("--quick", action="store_true", help="small sizes, to check that the benchmarks run")
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
+    parser.add_argument(
+        "--sections",
+        default="abc",
+        help="which to run: a (with d, e), b, c; default abc (the README's table needs all)",
+    )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
     results: dict = {"machine": machine(), "repeats": args.repeats, "quick": args.quick}
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-") as temporary:
         folder = Path(temporary)
-        for model_name in MATERIALS:
-            results[model_name] = merl_section(model_name, merl_size, args.repeats, folder)
-        results["batch"] = batch_section(materials, batch_size, args.repeats)
-        results["cli"] = cli_section(args.repeats, folder)
+        if "a" in args.sections:
+            for model_name in MATERIALS:
+                results[model_name] = merl_section(model_name, merl_size, args.repeats, folder)
+        if "b" in args.sections:
+            results["batch"] = batch_section(materials, batch_size, args.repeats)
+        if "c" in args.sections:
+            results["cli"] = cli_section(args.repeats, folder)
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -109,27 +109,14 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
         for position, index in enumerate(indices):
             if starts[index] is not None:  # a given start replaces the searched one
                 thetas[position] = start_vector(model, starts[index], kept[index].n_channels)
-        stacked = jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)
-        theta, cost, n_steps, result = solve(jnp.asarray(thetas), stacked)
+        solved = solve(jnp.asarray(thetas), _stacked(problems))
         if dtype == "float32":
-            problems = [build_problem(loss, kept[i]) for i in indices]
-            stacked = jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)
-            theta, cost, more_steps, result = jax.vmap(compiled_solver(model, loss, max_steps))(theta, stacked)
-            n_steps = n_steps + more_steps
+            stacked = _stacked([build_problem(loss, kept[i]) for i in indices])
+            refined = jax.vmap(compiled_solver(model, loss, max_steps))(solved.theta, stacked)
+            solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
         for position, index in enumerate(indices):
-            one_result = jax.tree.map(lambda leaf, p=position: leaf[p], result)
-            results[index] = result_of(
-                model,
-                loss,
-                kept[index],
-                problems[position],
-                theta[position],
-                cost[position],
-                n_steps[position],
-                one_result,
-                max_steps,
-                dtype,
-            )
+            one = jax.tree.map(lambda leaf, p=position: leaf[p], solved)
+            results[index] = result_of(model, loss, kept[index], one, max_steps, dtype)
         bar.update(len(indices))
     return results
 
@@ -144,7 +131,12 @@ def _best_starts(model, loss, samples, problems, n_starts, solve, dtype, seed):
     width = max(len(s) for s in starts)
     padded = [s + [s[0]] * (width - len(s)) for s in starts]
     thetas = jnp.asarray(np.stack([theta for s in padded for theta in s]))
-    repeated = jax.tree.map(lambda *leaves: jnp.repeat(jnp.stack(leaves), width, axis=0), *searches)
-    theta, cost, _, _ = solve(thetas, repeated)
-    best = np.argmin(np.asarray(cost).reshape(len(starts), width), axis=1)
-    return np.asarray(theta).reshape(len(starts), width, -1)[np.arange(len(starts)), best]
+    repeated = jax.tree.map(lambda leaf: jnp.repeat(leaf, width, axis=0), _stacked(searches))
+    solved = solve(thetas, repeated)
+    best = np.argmin(np.asarray(solved.cost).reshape(len(starts), width), axis=1)
+    return np.asarray(solved.theta).reshape(len(starts), width, -1)[np.arange(len(starts)), best]
+
+
+def _stacked(problems):
+    """Problems of one bucket as one problem with a leading batch axis."""
+    return jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)

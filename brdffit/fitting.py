@@ -9,7 +9,7 @@ on all of them.
 """
 
 from functools import cache, partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -20,7 +20,7 @@ from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
-from .models import Model, get_model
+from .models import Model, Params, get_model
 from .problem import DTYPES, Problem, build_problem, normal_equations, residuals
 from .results import FitResult
 from .samples import Samples
@@ -75,13 +75,12 @@ def fit(
         search = search_problem(loss, samples, full, dtype, seed)
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
-            starts = [_best([solve(jnp.asarray(theta), search) for theta in starts])[0]]
-    theta, cost, n_steps, result = _best([solve(jnp.asarray(theta), full) for theta in starts])
+            starts = [_best([solve(jnp.asarray(theta), search) for theta in starts]).theta]
+    solved = _best([solve(jnp.asarray(theta), full) for theta in starts])
     if dtype == "float32":
-        full = build_problem(loss, samples, "float64")
-        theta, cost, refinement_steps, result = compiled_solver(model, loss, max_steps)(theta, full)
-        n_steps = n_steps + refinement_steps
-    return result_of(model, loss, samples, full, theta, cost, n_steps, result, max_steps, dtype)
+        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(loss, samples))
+        solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
+    return result_of(model, loss, samples, solved, max_steps, dtype)
 
 
 def search_problem(loss: Loss, samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
@@ -117,40 +116,45 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
     return model.to_unconstrained(params)
 
 
-def _best(runs):
-    return min(runs, key=lambda run: float(run[1]))
+class Solved(NamedTuple):
+    """What a compiled solve returns: the optimum in both forms and how the solve went."""
+
+    theta: Any  # the unconstrained optimum
+    cost: Any  # rᵀr there
+    n_steps: Any
+    result: Any  # optimistix.RESULTS
+    params: Params  # the optimum as physical parameters
+    rmse: Any  # sqrt(mean((f - y)²)) over the real samples, 1/sr
 
 
-def result_of(
-    model: Model, loss: Loss, samples: Samples, problem: Problem, theta, cost, n_steps, result, max_steps, dtype
-):
-    """The :class:`FitResult` of a solve, with the rmse over the real (unpadded) samples."""
-    params = model.from_unconstrained(jnp.asarray(theta), samples.n_channels)
-    converged = bool(result == optx.RESULTS.successful)
+def _best(runs: list[Solved]) -> Solved:
+    return min(runs, key=lambda run: float(run.cost))
+
+
+def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_steps: int, dtype: str) -> FitResult:
+    """The :class:`FitResult` of a solve."""
+    converged = bool(solved.result == optx.RESULTS.successful)
     return FitResult(
         model=model.name,
         model_options=model.model_options,
         channels=samples.channels,
-        params=model.params_to_dict(jax.tree.map(np.asarray, params)),
+        params=model.params_to_dict(jax.tree.map(np.asarray, solved.params)),
         loss=loss.name,
-        cost=float(cost),
-        rmse=float(_rmse(model, jnp.asarray(theta), problem, samples.n_samples)),
+        cost=float(solved.cost),
+        rmse=float(solved.rmse),
         n_samples=samples.n_samples,
-        n_steps=int(n_steps),
+        n_steps=int(solved.n_steps),
         converged=converged,
-        message="" if converged else _failure_message(result, max_steps),
+        message="" if converged else _failure_message(solved.result, max_steps),
         dtype=dtype,
     )
 
 
-@partial(jax.jit, static_argnums=0)
-def _rmse(model: Model, theta, problem: Problem, n_samples):
-    """``sqrt(mean((f - y)²))`` in 1/sr over the first ``n_samples`` rows (the rest is padding)."""
-    params = model.from_unconstrained(theta, problem.measured.shape[1])
+def rmse(model: Model, params: Params, problem: Problem):
+    """``sqrt(mean((f - y)²))`` in 1/sr over the real rows of ``problem`` (not its padding)."""
     predicted = model.evaluate(jax.tree.map(lambda x: x.astype(problem.wi.dtype), params), problem.wi, problem.wo)
-    real = (jnp.arange(problem.wi.shape[0]) < n_samples)[:, None]
-    squared = jnp.where(real, (predicted - problem.measured).astype(jnp.float64) ** 2, 0.0)
-    return jnp.sqrt(jnp.sum(squared) / (n_samples * problem.measured.shape[1]))
+    squared = jnp.where(problem.real[:, None], (predicted - problem.measured).astype(jnp.float64) ** 2, 0.0)
+    return jnp.sqrt(jnp.sum(squared) / (jnp.sum(problem.real) * problem.measured.shape[1]))
 
 
 def _failure_message(result, max_steps: int) -> str:
@@ -164,7 +168,7 @@ def _failure_message(result, max_steps: int) -> str:
 
 @cache
 def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
-    """``solve(theta0, problem) -> (theta, cost, n_steps, result)``, compiled once per problem size."""
+    """``solve(theta0, problem) -> Solved``, compiled once per problem size."""
     ftol, gtol, atol = TOLERANCES[dtype]
     residual_fn = partial(residuals, model, loss)
     solver = LevenbergMarquardt(
@@ -174,7 +178,9 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
     @jax.jit
     def solve(theta0, problem: Problem):
         solution = optx.least_squares(residual_fn, solver, theta0, args=problem, max_steps=max_steps, throw=False)
+        theta = solution.value
+        params = model.from_unconstrained(theta, problem.measured.shape[1])
         cost = 2.0 * solution.state.f_info.f
-        return solution.value, cost, solution.stats["num_steps"], solution.result
+        return Solved(theta, cost, solution.stats["num_steps"], solution.result, params, rmse(model, params, problem))
 
     return solve

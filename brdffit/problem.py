@@ -32,7 +32,7 @@ DTYPES = ("float64", "float32")
 class Problem(NamedTuple):
     """The data of one fit, as arrays (a JAX pytree, so one compiled solver serves every dataset of a shape).
 
-    Rows beyond the samples' count are padding with ``scale = 0``.
+    Rows beyond the samples' count are padding, with ``scale = 0`` and ``real`` False.
     """
 
     wi: Any  # (N, 3)
@@ -40,6 +40,7 @@ class Problem(NamedTuple):
     measured: Any  # (N, C) BRDF, 1/sr
     target: Any  # (N, C) T(measured)
     scale: Any  # (N, C)
+    real: Any  # (N,) bool: a sample, not padding
 
 
 def padded_size(n: int) -> int:
@@ -85,6 +86,7 @@ def _padded_problem(loss: Loss, size: int, dtype: str, wi, wo, measured, sigma, 
         pad(measured),
         pad(target),
         pad(scale),
+        jnp.arange(size) < wi.shape[0],
     )
 
 
