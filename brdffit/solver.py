@@ -15,11 +15,16 @@ implementation and theory", 1978):
   trust region sees them as ``FunctionInfo.EvalGradHessian(½rᵀr, Jᵀr, JᵀJ)``,
   whose predicted reduction is exactly the Gauss-Newton model's. A step costs
   one fused Jacobian evaluation and memory does not grow with the data.
-* **Scaled damping.** optimistix damps with ``λ I`` (Levenberg 1944), which is
-  not invariant to the scale of a parameter: a log-albedo whose albedo tends
-  to 0 has a vanishing Jacobian column, gets a vanishing step and crawls for
-  hundreds of steps. :class:`ScaledDampedNewtonDescent` solves
-  ``(JᵀJ + λ D²) δ = -Jᵀr`` with ``D² = diag(JᵀJ)`` (Marquardt 1963).
+* **A trust region on the scaled step.** optimistix damps with ``λ I``
+  (Levenberg 1944), which is not invariant to the scale of a parameter: a
+  log-albedo whose albedo tends to 0 has a vanishing Jacobian column, gets a
+  vanishing step and crawls for hundreds of steps. Here the step lives in
+  Marquardt's scaled variables ``z = D δ`` (``D² = diag JᵀJ``) and its length is
+  a fraction of the Gauss-Newton step (:class:`ScaledTrustRegionDescent`), so
+  that a rejected step is followed by one four times shorter; with the trust
+  region's thresholds set to MINPACK's (grow at ρ ≥ 0.75), step counts match
+  MINPACK's (7.5 against 7.1 on 30 random Cook-Torrance materials; with ``λ``
+  damping it took 8.4, and up to 35 where MINPACK took 17).
 * **MINPACK's stopping tests**, in place of optimistix's Cauchy test (every
   parameter step and every residual change below ``atol + rtol·|value|``),
   which a parameter heading to a bound never passes and which needs the
@@ -43,44 +48,67 @@ from . import _jax  # noqa: F401  (float64 before any array)
 
 
 class _DescentState(eqx.Module):
-    gram: Any  # JᵀJ, (k, k)
-    gradient: Any  # Jᵀr, (k,)
+    scale: Any  # D = sqrt(diag JᵀJ), (k,)
+    eigenvalues: Any  # σ of D⁻¹JᵀJD⁻¹, (k,)
+    eigenvectors: Any  # V, (k, k)
+    projected: Any  # c = Vᵀ D⁻¹ Jᵀr, (k,)
+    newton_norm: Any  # |z_GN| = |c / σ|
 
 
-class ScaledDampedNewtonDescent(optx.AbstractDescent):
-    """Damped Newton step ``δ = -(JᵀJ + λ diag(JᵀJ))⁻¹ Jᵀr`` with ``λ = initial_damping / step_size``.
+class ScaledTrustRegionDescent(optx.AbstractDescent):
+    """Levenberg-Marquardt step in Marquardt's scaled variables with a trust radius relative to Gauss-Newton.
 
-    The trust region starts at step size 1; ``initial_damping = 1e-3`` makes
-    the first step nearly a full Gauss-Newton step, as MINPACK's initial radius
-    of 100·|Dx| does (optimistix's λ = 1 halves it, and the 3.5× growth per
-    good step then costs three or four extra steps). Solved by Cholesky in the
-    variables ``z = D δ``, where the matrix has a unit diagonal (Jacobi
-    preconditioning of the normal equations).
+    In ``z = D δ`` (``D² = diag JᵀJ``, Marquardt 1963) the step is
+    ``z(λ) = -(D⁻¹JᵀJD⁻¹ + λ I)⁻¹ D⁻¹Jᵀr``. A step size ``s ≥ 1`` takes the
+    Gauss-Newton step ``z(0)``; ``s < 1`` takes the ``λ`` with
+    ``|z(λ)| = s·|z(0)|`` (Moré 1978's trust-region form; optimistix's
+    ``IndirectDampedNewtonDescent`` makes the same choice of scale), found
+    from the eigen-decomposition of the k×k scaled matrix, where
+    ``|z(λ)|² = Σ cᵢ² / (σᵢ + λ)²`` is monotone in ``λ``, by bisection in
+    ``log λ``. So each rejection shortens the step by the trust region's
+    factor, where damping ``λ I`` from a small ``λ`` barely shortens it.
     """
-
-    initial_damping: float = 1e-3
 
     def init(self, y, f_info_struct):
         k = y.size
-        return _DescentState(jnp.zeros((k, k), y.dtype), jnp.zeros(k, y.dtype))
+        zeros = jnp.zeros(k, y.dtype)
+        return _DescentState(zeros, zeros, jnp.zeros((k, k), y.dtype), zeros, jnp.zeros((), y.dtype))
 
     def query(self, y, f_info, state):
-        return _DescentState(f_info.hessian.as_matrix(), f_info.grad)
-
-    def step(self, step_size, state):
-        gram, gradient = state.gram, state.gradient
+        gram, gradient = f_info.hessian.as_matrix(), f_info.grad
+        tiny = jnp.finfo(gram.dtype).tiny
         eps = jnp.finfo(gram.dtype).eps
         # A column that no residual sees (D = 0) is scaled as if it had the smallest nonzero norm.
         diagonal = jnp.diag(gram)
-        diagonal = jnp.maximum(diagonal, eps * jnp.max(diagonal) + jnp.finfo(gram.dtype).tiny)
-        scale = 1.0 / jnp.sqrt(diagonal)
-        damping = self.initial_damping * jnp.where(
-            step_size > eps, 1.0 / jnp.where(step_size > eps, step_size, 1.0), 1.0 / eps
-        )
-        # eps·I keeps the factorisation defined when J is rank-deficient.
-        scaled = gram * scale[:, None] * scale[None, :] + (damping + eps) * jnp.eye(gram.shape[0], dtype=gram.dtype)
-        z = jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(scaled), -gradient * scale)
-        delta = z * scale
+        scale = jnp.sqrt(jnp.maximum(diagonal, eps * jnp.max(diagonal) + tiny))
+        eigenvalues, eigenvectors = jnp.linalg.eigh(gram / scale[:, None] / scale[None, :])
+        # Directions J cannot see get the curvature eps·σ_max: finite, and long enough that the radius decides.
+        eigenvalues = jnp.maximum(eigenvalues, eps * jnp.max(eigenvalues) + tiny)
+        projected = eigenvectors.T @ (gradient / scale)
+        newton_norm = jnp.sqrt(jnp.sum((projected / eigenvalues) ** 2))
+        return _DescentState(scale, eigenvalues, eigenvectors, projected, newton_norm)
+
+    def step(self, step_size, state):
+        sigma, c = state.eigenvalues, state.projected
+        radius = jnp.minimum(step_size, 1.0) * state.newton_norm
+
+        def length(log_lambda):
+            return jnp.sqrt(jnp.sum((c / (sigma + jnp.exp(log_lambda))) ** 2))
+
+        # |z(λ)| ≤ |c|/λ, so at λ_hi = |c|/radius the step is inside the radius; at λ_hi·1e-20 it is not.
+        high = jnp.log(jnp.sqrt(jnp.sum(c * c)) / jnp.maximum(radius, jnp.finfo(c.dtype).tiny))
+        low = high - 46.0
+
+        def bisect(_, bounds):
+            lo, hi = bounds
+            middle = 0.5 * (lo + hi)
+            outside = length(middle) > radius
+            return jnp.where(outside, middle, lo), jnp.where(outside, hi, middle)
+
+        _, log_lambda = jax.lax.fori_loop(0, 60, bisect, (low, high))
+        damping = jnp.where(step_size >= 1.0, 0.0, jnp.exp(log_lambda))
+        z = -state.eigenvectors @ (c / (sigma + damping))
+        delta = z / state.scale
         finite = jnp.all(jnp.isfinite(delta))
         return jnp.where(finite, delta, 0.0), RESULTS.where(finite, RESULTS.successful, RESULTS.singular)
 
@@ -114,8 +142,12 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
     atol: float
     gtol: float
     norm: Callable = eqx.field(static=True, default=optx.max_norm)
-    descent: ScaledDampedNewtonDescent = ScaledDampedNewtonDescent()
-    search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion()
+    descent: ScaledTrustRegionDescent = ScaledTrustRegionDescent()
+    #: MINPACK's thresholds: accept when the actual reduction is ≥ 1e-4 of the predicted one, enlarge the
+    #: trust region when ≥ 0.75 (optimistix's defaults, 0.01 and 0.99, rarely enlarge it and the fit crawls).
+    search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion(
+        high_cutoff=0.75, low_cutoff=1e-4, high_constant=4.0, low_constant=0.25
+    )
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
         k = y.size
@@ -136,6 +168,10 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         step_size, accept, search_result, search_state = self.search.step(
             state.first_step, y, state.y_eval, state.f_info, f_eval_info, state.search_state
         )
+        # A step size of 1 is the Gauss-Newton step; beyond it the trust region would only need extra
+        # rejections to come back, so it stops there (MINPACK bounds its radius by the step taken).
+        step_size = jnp.minimum(step_size, 1.0)
+        search_state = eqx.tree_at(lambda s: s.step_size, search_state, step_size)
         new_y = jnp.where(accept, state.y_eval, y)
         f_info = jax.tree.map(lambda new, old: jnp.where(accept, new, old), f_eval_info, state.f_info)
         descent_state = self.descent.query(new_y, f_info, state.descent_state)
