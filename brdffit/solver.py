@@ -28,7 +28,7 @@ implementation and theory", 1978):
 * **MINPACK's stopping tests**, in place of optimistix's Cauchy test (every
   parameter step and every residual change below ``atol + rtol·|value|``),
   which a parameter heading to a bound never passes and which needs the
-  residual vector: stop when the last accepted step lowered the sum of squares
+  residual vector: stop when the step just tried changed the sum of squares
   by a relative ``≤ rtol`` that the linear model predicted (``ftol``); when
   every Jacobian column is orthogonal to the residuals to within ``gtol``
   (the cosine test); or when the sum of squares is below ``atol²`` (an exact fit).
@@ -48,6 +48,7 @@ from . import _jax  # noqa: F401  (float64 before any array)
 
 
 class _DescentState(eqx.Module):
+    live: Any  # (k,) bool: columns of J that can change the residuals
     scale: Any  # D = sqrt(diag JᵀJ), (k,)
     eigenvalues: Any  # σ of D⁻¹JᵀJD⁻¹, (k,)
     eigenvectors: Any  # V, (k, k)
@@ -67,26 +68,35 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
     ``|z(λ)|² = Σ cᵢ² / (σᵢ + λ)²`` is monotone in ``λ``, by bisection in
     ``log λ``. So each rejection shortens the step by the trust region's
     factor, where damping ``λ I`` from a small ``λ`` barely shortens it.
+
+    A column whose squared norm is below ``ε·max`` (an albedo that has gone to
+    0 in log space) cannot change the residuals at float precision; it is left
+    out of the step, whose length would otherwise be all its own and leave the
+    other parameters a vanishing radius.
     """
 
     def init(self, y, f_info_struct):
         k = y.size
         zeros = jnp.zeros(k, y.dtype)
-        return _DescentState(zeros, zeros, jnp.zeros((k, k), y.dtype), zeros, jnp.zeros((), y.dtype))
+        live = jnp.ones(k, bool)
+        return _DescentState(live, zeros, zeros, jnp.zeros((k, k), y.dtype), zeros, jnp.zeros((), y.dtype))
 
     def query(self, y, f_info, state):
         gram, gradient = f_info.hessian.as_matrix(), f_info.grad
         tiny = jnp.finfo(gram.dtype).tiny
         eps = jnp.finfo(gram.dtype).eps
-        # A column that no residual sees (D = 0) is scaled as if it had the smallest nonzero norm.
         diagonal = jnp.diag(gram)
-        scale = jnp.sqrt(jnp.maximum(diagonal, eps * jnp.max(diagonal) + tiny))
-        eigenvalues, eigenvectors = jnp.linalg.eigh(gram / scale[:, None] / scale[None, :])
+        live = diagonal > eps * jnp.max(diagonal)
+        scale = jnp.where(live, jnp.sqrt(jnp.where(live, diagonal, 1.0)), 1.0)
+        # Dead columns become an identity block with no gradient: no step and no length there.
+        live_pair = live[:, None] & live[None, :]
+        scaled = jnp.where(live_pair, gram / scale[:, None] / scale[None, :], jnp.eye(gram.shape[0], dtype=gram.dtype))
+        eigenvalues, eigenvectors = jnp.linalg.eigh(scaled)
         # Directions J cannot see get the curvature eps·σ_max: finite, and long enough that the radius decides.
         eigenvalues = jnp.maximum(eigenvalues, eps * jnp.max(eigenvalues) + tiny)
-        projected = eigenvectors.T @ (gradient / scale)
+        projected = eigenvectors.T @ jnp.where(live, gradient / scale, 0.0)
         newton_norm = jnp.sqrt(jnp.sum((projected / eigenvalues) ** 2))
-        return _DescentState(scale, eigenvalues, eigenvectors, projected, newton_norm)
+        return _DescentState(live, scale, eigenvalues, eigenvectors, projected, newton_norm)
 
     def step(self, step_size, state):
         sigma, c = state.eigenvalues, state.projected
@@ -108,7 +118,7 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         _, log_lambda = jax.lax.fori_loop(0, 60, bisect, (low, high))
         damping = jnp.where(step_size >= 1.0, 0.0, jnp.exp(log_lambda))
         z = -state.eigenvectors @ (c / (sigma + damping))
-        delta = z / state.scale
+        delta = jnp.where(state.live, z / state.scale, 0.0)
         finite = jnp.all(jnp.isfinite(delta))
         return jnp.where(finite, delta, 0.0), RESULTS.where(finite, RESULTS.successful, RESULTS.singular)
 
@@ -176,23 +186,28 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         f_info = jax.tree.map(lambda new, old: jnp.where(accept, new, old), f_eval_info, state.f_info)
         descent_state = self.descent.query(new_y, f_info, state.descent_state)
 
+        # MINPACK's ftol, judged on the step just tried whether accepted or not (lmder does the same): at the
+        # optimum a step predicted to gain ~1e-16 is rejected or accepted by rounding alone, and waiting for an
+        # acceptance would shrink the region pass after pass for nothing.
         cost_before = 2.0 * state.f_info.f
+        cost_tried = 2.0 * f_eval_info.f
         cost_after = 2.0 * f_info.f
         # predict_reduction is the model's change of ½rᵀr for the step just tried, gᵀδ + ½δᵀGδ.
         predicted = -2.0 * self.search.predict_reduction(state.y_eval - y, state.f_info)
         safe_before = jnp.where(cost_before > 0, cost_before, 1.0)
-        actual_relative = (cost_before - cost_after) / safe_before
+        actual_relative = (cost_before - cost_tried) / safe_before
         predicted_relative = predicted / safe_before
         ftol = (
-            accept
-            & ~state.first_step
+            ~state.first_step
             & (jnp.abs(actual_relative) <= self.rtol)
             & (predicted_relative <= self.rtol)
             & (actual_relative <= 2.0 * predicted_relative)
         )
         # MINPACK's gtol: the largest cosine between a Jacobian column and the residual vector.
-        column_norms = jnp.sqrt(jnp.diag(f_info.hessian.as_matrix()))
-        cosine = jnp.abs(f_info.grad) / jnp.where(column_norms > 0, column_norms, 1.0)
+        # Columns the descent leaves out as dead (below ε·max) are left out here too.
+        squared_norms = jnp.diag(f_info.hessian.as_matrix())
+        live = squared_norms > jnp.finfo(squared_norms.dtype).eps * jnp.max(squared_norms)
+        cosine = jnp.where(live, jnp.abs(f_info.grad) / jnp.sqrt(jnp.where(live, squared_norms, 1.0)), 0.0)
         gtol = jnp.max(cosine) <= self.gtol * jnp.sqrt(cost_after)
         exact = cost_after <= self.atol**2
         terminate = ftol | gtol | exact
