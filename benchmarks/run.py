@@ -17,6 +17,10 @@ Sections (issue 3):
 (c) ``brdffit fit`` of the shipped 10k-sample example, process start to result written.
 (d) Peak resident memory of the MERL-size Cook-Torrance fit (the process that loads the samples and fits).
 (e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step).
+(f) MCMC (issue 4): emcee, 32 walkers × 2000 steps on the 10k-sample example, compile included.
+
+``--sections`` runs some of them; the others keep their results from the last
+run in ``latest.json`` (each section records its date).
 
 Every timing is a median over ``--repeats`` runs, each in a fresh process;
 the machine is shared, so compare ratios from one run. Writes
@@ -146,6 +150,11 @@ def cli_section(repeats: int, folder: Path) -> dict:
     return {"first_run_seconds": first, "seconds": statistics.median(later), "all_seconds": later, "n_samples": 10368}
 
 
+def mcmc_section(repeats: int) -> dict:
+    log("(f) mcmc: 32 walkers × 2000 steps on the example")
+    return repeated(repeats, "mcmc", "--walkers", "32", "--steps", "2000")
+
+
 def machine() -> dict:
     import jax
     import optimistix
@@ -245,6 +254,14 @@ def table(results: dict) -> str:
                 f"    {name}: {1000 * per_step:.0f} ms / {1000 * step['pass_seconds']:.0f} ms"
                 f" = {per_step / step['pass_seconds']:.2f}× ({step['steps']} steps)"
             )
+    posterior = results.get("mcmc")
+    if posterior:
+        lines.append(
+            f"(f) MCMC, emcee {posterior['walkers']} walkers × {posterior['steps']} steps on the"
+            f" {posterior['n_samples']:,}-sample example, compile included: median {posterior['seconds']:.1f} s"
+            f" ({posterior['evaluations_per_second']:.0f} walker evaluations/s; acceptance"
+            f" {posterior['acceptance']:.2f}, τ ≤ {posterior['max_autocorr_time']:.0f} steps)."
+        )
     return "\n".join(lines)
 
 
@@ -255,21 +272,28 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abc",
-        help="which to run: a (with d, e), b, c; default abc (the README's table needs all)",
+        default="abcf",
+        help="which to run: a (with d, e), b, c, f; default abcf (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
-    results: dict = {"machine": machine(), "repeats": args.repeats, "quick": args.quick}
+    previous = args.output / "latest.json"
+    results: dict = json.loads(previous.read_text()) if previous.exists() and not args.quick else {}
+    if results.get("quick"):
+        results = {}
+    results |= {"machine": machine(), "repeats": args.repeats, "quick": args.quick}
+    today = datetime.date.today().isoformat()
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-") as temporary:
         folder = Path(temporary)
         if "a" in args.sections:
             for model_name in MATERIALS:
-                results[model_name] = merl_section(model_name, merl_size, args.repeats, folder)
+                results[model_name] = merl_section(model_name, merl_size, args.repeats, folder) | {"date": today}
         if "b" in args.sections:
-            results["batch"] = batch_section(materials, batch_size, args.repeats)
+            results["batch"] = batch_section(materials, batch_size, args.repeats) | {"date": today}
         if "c" in args.sections:
-            results["cli"] = cli_section(args.repeats, folder)
+            results["cli"] = cli_section(args.repeats, folder) | {"date": today}
+        if "f" in args.sections:
+            results["mcmc"] = mcmc_section(args.repeats) | {"date": today}
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -8,6 +8,7 @@ samples in memory to the result (parameters and cost) in hand.
     python benchmarks/worker.py merl --model cook-torrance --solver brdffit --data D.npz --start S.json
     python benchmarks/worker.py steps --model cook-torrance --data D.npz --start S.json
     python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000
+    python benchmarks/worker.py mcmc --walkers 32 --steps 2000
 """
 
 import argparse
@@ -183,6 +184,31 @@ def batch(args) -> dict:
     return {"seconds": seconds, "converged": converged, "costs": costs, "steps": steps, "peak_rss_mb": peak_rss_mb()}
 
 
+def mcmc(args) -> dict:
+    """(f): ``brdffit.sample_posterior`` of the shipped example (fitted first, outside the clock), compile included."""
+    import warnings
+
+    from brdffit import MCMC, load_samples, sample_posterior
+
+    samples = load_samples(Path(__file__).resolve().parents[1] / "examples" / "ward-pickled-oak.csv")
+    result = fit(samples, "ward")
+    clock = time.perf_counter()
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        sampled = sample_posterior(result, samples, MCMC(walkers=args.walkers, steps=args.steps, burn=args.steps // 4))
+    seconds = time.perf_counter() - clock
+    diagnostics = sampled.uncertainty["diagnostics"]
+    return {
+        "seconds": seconds,
+        "n_samples": samples.n_samples,
+        "walkers": args.walkers,
+        "steps": args.steps,
+        "acceptance": diagnostics["acceptance"],
+        "max_autocorr_time": max(diagnostics["autocorr_time"]),
+        "evaluations_per_second": args.walkers * args.steps / seconds,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -199,8 +225,11 @@ def main() -> None:
     many.add_argument("--solver", required=True, choices=["brdffit", "brdffit-default", *SCIPY])
     many.add_argument("--materials", type=int, default=100)
     many.add_argument("--size", type=int, default=100_000)
+    posterior = commands.add_parser("mcmc")
+    posterior.add_argument("--walkers", type=int, default=32)
+    posterior.add_argument("--steps", type=int, default=2000)
     args = parser.parse_args()
-    output = {"merl": merl, "steps": steps, "batch": batch}[args.command](args)
+    output = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc}[args.command](args)
     print(json.dumps(output))
 
 

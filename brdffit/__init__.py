@@ -7,6 +7,10 @@ The public API (SPEC section 6)::
     result.params, result.to_json(), result.predict(wi, wo)
     values = brdffit.evaluate("cook-torrance", params, wi, wo, fresnel="schlick")
     results = brdffit.fit_batch([samples_a, samples_b], model="ward")
+    result = brdffit.fit(samples, uncertainty="laplace")        # or "mcmc", mcmc=brdffit.MCMC(steps=5000)
+    result.uncertainty["stderr"], print(result)                  # errors; the table shows value ± error
+    posterior = brdffit.sample_posterior(result, samples)        # MCMC for an existing result
+    brdffit.corner_plot(posterior, "corner.png")
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work;
 the modules that use JAX switch it to float64 (``_jax.py``).
@@ -18,6 +22,11 @@ from ._version import __version__ as __version__
 
 _EXPORTS = {
     "BrdfInputError": ".errors",
+    "MCMC": ".mcmc",
+    "UncertaintyWarning": ".laplace",
+    "corner_plot": ".figures",
+    "laplace_uncertainty": ".laplace",
+    "sample_posterior": ".mcmc",
     "FitResult": ".results",
     "LOSSES": ".losses",
     "MODELS": ".models",

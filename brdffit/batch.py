@@ -12,7 +12,7 @@ Two strategies, chosen by the backend unless asked:
 """
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import jax
 import jax.numpy as jnp
@@ -26,6 +26,9 @@ from .problem import build_problem, padded_size
 from .results import FitResult
 from .samples import Samples
 from .starts import starting_points
+
+if TYPE_CHECKING:
+    from .mcmc import MCMC
 
 STRATEGIES = ("auto", "loop", "vmap")
 
@@ -48,6 +51,8 @@ def fit_batch(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    uncertainty: str | None = None,
+    mcmc: "MCMC | None" = None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the results come in the same order.
@@ -56,8 +61,15 @@ def fit_batch(
     ``start`` may also be a list with one parameter dictionary per dataset.
     ``strategy``: ``auto`` (``vmap`` on a GPU, ``loop`` otherwise), ``loop`` or
     ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
-    terminal).
+    terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
+    settings) adds each result's ``uncertainty`` block after the fits.
     """
+    if uncertainty is not None:
+        from .uncertainty import check_method, with_uncertainty
+
+        check_method(uncertainty)
+    if uncertainty != "mcmc" and mcmc is not None:
+        raise BrdfInputError("mcmc settings apply only to uncertainty='mcmc'")
     if strategy not in STRATEGIES:
         raise BrdfInputError(f"strategy {strategy!r} is not allowed; choose one of: {', '.join(STRATEGIES)}")
     samples = list(samples)
@@ -75,10 +87,16 @@ def fit_batch(
             for one, one_start in zip(samples, starts, strict=True):
                 results.append(fit(one, model, loss, start=one_start, **options, **model_options))
                 bar.update(1)
-            return results
-        return _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
+        else:
+            results = _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
     finally:
         bar.close()
+    if uncertainty is None:
+        return results
+    return [
+        with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
+        for result, one in zip(results, samples, strict=True)
+    ]
 
 
 def _progress_bar(total: int, enabled: bool | None):

@@ -126,6 +126,21 @@ def _build_parser() -> argparse.ArgumentParser:
         help="result file, or a folder (OUTDIR/) for several samples files"
         " (default: SAMPLES-stem.MODEL.json in the current folder)",
     )
+    errors = fit.add_argument_group("uncertainty")
+    errors.add_argument(
+        "--uncertainty",
+        metavar="METHOD",
+        help="laplace (Gauss-Newton covariance at the optimum) or mcmc (emcee posterior)",
+    )
+    errors.add_argument("--walkers", type=int, metavar="N", help="mcmc: walkers (default 32)")
+    errors.add_argument("--steps", type=int, metavar="N", help="mcmc: steps per walker (default 2000)")
+    errors.add_argument("--burn", type=int, metavar="N", help="mcmc: steps discarded as burn-in (default 500)")
+    errors.add_argument("--thin", type=int, metavar="N", help="mcmc: keep every N-th step (default 1)")
+    errors.add_argument(
+        "--seed", type=int, default=0, help="seed of the mcmc walkers and of the start search's subset (default 0)"
+    )
+    errors.add_argument("--chain", metavar="FILE", help="mcmc: save the whole chain (.npz, or .h5 with h5py)")
+    errors.add_argument("--corner", metavar="FILE", help="corner plot of the posterior (.png, .pdf or .svg)")
     fit.set_defaults(command=_fit)
 
     synth = commands.add_parser("synth", help="write synthetic samples of a model", allow_abbrev=False)
@@ -180,12 +195,18 @@ def _fit(args: argparse.Namespace) -> int:
 
     model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
     get_loss(args.loss)
+    mcmc = _uncertainty_options(args)
     outputs = _fit_outputs(args.samples, args.output, model.name)
     start = _json_argument(args.start, "--start") if args.start else None
     if isinstance(start, dict) and "params" in start:  # a result file
         start = start["params"]
     # Every input is read and checked before any fit runs or any file is written.
     samples = [load_samples(path, angles=args.angles, quantity=args.quantity) for path in args.samples]
+    if mcmc is not None:
+        from .mcmc import check_walkers
+
+        for one in samples:
+            check_walkers(mcmc, model, one)
     results = fit_batch(
         samples,
         model,
@@ -195,13 +216,23 @@ def _fit(args: argparse.Namespace) -> int:
         n_starts=args.starts,
         max_steps=args.max_steps,
         dtype=args.dtype,
+        seed=args.seed,
     )
+    if args.uncertainty:
+        results = [
+            _with_uncertainty(args, result, one.within(args.max_theta), path, mcmc)
+            for result, one, path in zip(results, samples, args.samples, strict=True)
+        ]
     outputs[0].parent.mkdir(parents=True, exist_ok=True)
     for result, output in zip(results, outputs, strict=True):
         result.save(output)
+    if args.corner:
+        from .figures import corner_plot
+
+        corner_plot(results[0], args.corner)
     if len(results) == 1:
         print(results[0].table(source=args.samples[0]))
-        print(f"wrote {outputs[0]}")
+        print(f"wrote {', '.join(str(p) for p in (outputs[0], args.chain, args.corner) if p)}")
     else:
         print(_summary(args.samples, results, outputs))
     failed = [(path, result) for path, result in zip(args.samples, results, strict=True) if not result.converged]
@@ -211,6 +242,48 @@ def _fit(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     return EXIT_NOT_CONVERGED if failed else EXIT_OK
+
+
+def _uncertainty_options(args: argparse.Namespace):
+    """The MCMC settings (None unless ``--uncertainty mcmc``), after every check of the uncertainty options."""
+    from .figures import check_figure_path
+    from .mcmc import MCMC, check_chain_path
+    from .uncertainty import check_method
+
+    method = check_method(args.uncertainty)
+    given = {
+        name: getattr(args, name) for name in ("walkers", "steps", "burn", "thin") if getattr(args, name) is not None
+    }
+    if method != "mcmc":
+        for option in [*given, *(name for name in ("chain",) if getattr(args, name))]:
+            raise BrdfInputError(f"--{option} applies only to --uncertainty mcmc")
+    if args.corner and not method:
+        raise BrdfInputError("--corner needs --uncertainty mcmc (or laplace)")
+    if (args.chain or args.corner) and len(args.samples) > 1:
+        raise BrdfInputError(f"--chain and --corner take one samples file; got {len(args.samples)}")
+    if args.chain:
+        check_chain_path(args.chain)
+    if args.corner:
+        check_figure_path(args.corner)
+        _check_output(Path(args.corner), "--corner")
+        os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
+    return MCMC(**given, seed=args.seed) if method == "mcmc" else None
+
+
+def _with_uncertainty(args: argparse.Namespace, result, samples, path: str, mcmc):
+    """``result`` with its uncertainty block; the estimate's warnings printed on stderr, naming ``path``."""
+    import warnings
+
+    from .uncertainty import with_uncertainty
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = with_uncertainty(
+            result, samples, args.uncertainty, mcmc=mcmc, chain=args.chain, progress=sys.stderr.isatty()
+        )
+    for warning in caught:
+        print(f"brdffit: warning: {path}: {warning.message}", file=sys.stderr)
+    return result
 
 
 def _fit_outputs(inputs: list[str], output: str | None, model_name: str) -> list[Path]:

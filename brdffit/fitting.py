@@ -9,7 +9,7 @@ on all of them.
 """
 
 from functools import cache, partial
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -26,6 +26,9 @@ from .results import FitResult
 from .samples import Samples
 from .solver import LevenbergMarquardt
 from .starts import search_subset, starting_points
+
+if TYPE_CHECKING:
+    from .mcmc import MCMC
 
 #: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -49,6 +52,10 @@ def fit(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    uncertainty: str | None = None,
+    mcmc: "MCMC | None" = None,
+    chain: str | None = None,
+    progress: bool = False,
     **model_options: Any,
 ) -> FitResult:
     """Fit ``model`` to ``samples`` by minimising ``loss`` (SPEC section 3).
@@ -61,10 +68,25 @@ def fit(
     then refines the optimum in float64 (mixed-precision iterative refinement,
     usually one or two steps), so the result is float64's.
     ``seed``: the random part of the subset the starts are searched on (for
-    more than ``starts.SEARCH_SAMPLES`` samples). ``model_options``: ``fresnel=`` for
+    more than ``starts.SEARCH_SAMPLES`` samples). ``uncertainty``: ``"laplace"``
+    or ``"mcmc"`` adds the result's ``uncertainty`` block (``laplace.py``,
+    ``mcmc.py``); ``mcmc`` (:class:`brdffit.MCMC`: walkers, steps, burn, thin,
+    seed), ``chain`` (a ``.npz`` or ``.h5`` file for the chain) and ``progress``
+    (a progress bar) apply to ``"mcmc"``. ``model_options``: ``fresnel=`` for
     cook-torrance, ``lobes=`` for lafortune.
     """
+    if uncertainty is not None:  # imported only when asked for: the plain fit's start-up stays lean
+        from .mcmc import MCMC, check_chain_path, check_walkers
+        from .uncertainty import check_method, with_uncertainty
+
+        check_method(uncertainty)
+    if uncertainty != "mcmc" and (mcmc is not None or chain is not None):
+        raise BrdfInputError("mcmc settings and chain apply only to uncertainty='mcmc'")
+    if chain is not None:
+        check_chain_path(chain)
     model, loss, samples = _checked(samples, model, loss, max_theta, dtype, **model_options)
+    if uncertainty == "mcmc":
+        check_walkers(mcmc or MCMC(), model, samples)
     n_starts = whole_number("--starts", n_starts)
     max_steps = whole_number("--max-steps", max_steps)
     full = build_problem(loss, samples, dtype)
@@ -80,7 +102,10 @@ def fit(
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(loss, samples))
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
-    return result_of(model, loss, samples, solved, max_steps, dtype)
+    result = result_of(model, loss, samples, solved, max_steps, dtype)
+    if uncertainty is None:
+        return result
+    return with_uncertainty(result, samples, uncertainty, mcmc=mcmc, chain=chain, progress=progress)
 
 
 def search_problem(loss: Loss, samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:

@@ -92,7 +92,11 @@ def _padded_problem(loss: Loss, size: int, dtype: str, wi, wo, measured, sigma, 
 
 def residuals(model: Model, loss: Loss, theta, problem: Problem):
     """Residuals (N, C) at the unconstrained parameters ``theta``, computed in the problem's dtype."""
-    params = model.from_unconstrained(theta, problem.measured.shape[1])
+    return residuals_at(model, loss, model.from_unconstrained(theta, problem.measured.shape[1]), problem)
+
+
+def residuals_at(model: Model, loss: Loss, params, problem: Problem):
+    """Residuals (N, C) at the parameters ``params`` (:class:`~brdffit.models.Params`), in the problem's dtype."""
     params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
     predicted = model.evaluate(params, problem.wi, problem.wo)
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
@@ -110,7 +114,8 @@ def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):
     return (transformed - problem.target) * problem.scale, slope * problem.scale, basis
 
 
-def _chunks(problem: Problem) -> Problem:
+def chunks(problem: Problem) -> Problem:
+    """``problem`` reshaped to (chunks, chunk_size, …), for a ``lax.scan`` over its rows."""
     n = problem.wi.shape[0]
     size = chunk_size(n)
     return jax.tree.map(lambda a: a.reshape(n // size, size, *a.shape[1:]), problem)
@@ -140,7 +145,7 @@ def normal_equations(model: Model, loss: Loss, theta, problem: Problem):
     coefficients = model.jacobian_coefficients(theta, c)
     m = coefficients.shape[1]
     start = (jnp.zeros((), jnp.float64), jnp.zeros((c, m), jnp.float64), jnp.zeros((c, m, m), jnp.float64))
-    (cost, projected, gram), _ = jax.lax.scan(accumulate, start, _chunks(problem))
+    (cost, projected, gram), _ = jax.lax.scan(accumulate, start, chunks(problem))
     gradient = jnp.einsum("cmp,cm->p", coefficients, projected)
     return cost, gradient, jnp.einsum("cmp,cml,clq->pq", coefficients, gram, coefficients)
 
@@ -152,5 +157,5 @@ def cost(residual_fn, theta, problem: Problem):
         r = residual_fn(theta, chunk).astype(jnp.float64)
         return total + jnp.sum(r * r), None
 
-    total, _ = jax.lax.scan(accumulate, jnp.zeros((), jnp.float64), _chunks(problem))
+    total, _ = jax.lax.scan(accumulate, jnp.zeros((), jnp.float64), chunks(problem))
     return total

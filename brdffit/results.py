@@ -3,7 +3,7 @@
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,10 @@ class FitResult:
     without meeting its tolerances, and ``message`` then says why. ``dtype`` is
     the precision the model was evaluated in (``float32``: solved in single
     precision, then refined in double, so the optimum is float64's).
+    ``uncertainty`` is the SPEC-section-5 block when one was asked for
+    (``laplace.py``, ``mcmc.py``); ``posterior`` the MCMC draws of the physical
+    parameters (S, p), in the order of ``uncertainty["covariance"]["names"]``,
+    kept in memory only.
     """
 
     model: str
@@ -43,6 +47,11 @@ class FitResult:
     dtype: str = "float64"
     uncertainty: dict[str, Any] | None = None
     brdffit_version: str = field(default=__version__)
+    posterior: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def with_posterior(self, draws: np.ndarray) -> "FitResult":
+        """This result carrying the posterior ``draws`` (S, p)."""
+        return replace(self, posterior=draws)
 
     def predict(self, wi, wo) -> np.ndarray:
         """The fitted model's BRDF (N, C) in 1/sr at directions ``wi``, ``wo`` (N, 3)."""
@@ -112,16 +121,27 @@ class FitResult:
         size = f"{self.n_samples} samples × {len(self.channels)} channel(s)"
         lines = [f"{self.model}{options} fit{what}: {size}, loss {self.loss}"]
         rows = list(_parameter_rows(self.params))
+        errors = dict(_parameter_rows(self.uncertainty["stderr"])) if self.uncertainty else {}
         label_width = max(len("parameter"), *(len(label) for label, _ in rows))
         columns = [str(c) for c in self.channels]
-        cell = max(12, *(len(c) + 2 for c in columns))
+        cells = {
+            label: [
+                _number(v, e, bool(errors))
+                for v, e in zip(
+                    _as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True
+                )
+            ]
+            for label, value in rows
+        }
+        cell = max(12, *(len(c) + 2 for c in columns), *(len(text) + 2 for texts in cells.values() for text in texts))
         lines.append("  " + "parameter".ljust(label_width) + "".join(c.rjust(cell) for c in columns))
-        for label, value in rows:
-            values = value if isinstance(value, list) else [value]
-            lines.append("  " + label.ljust(label_width) + "".join(_number(v).rjust(cell) for v in values))
+        for label, texts in cells.items():
+            lines.append("  " + label.ljust(label_width) + "".join(text.rjust(cell) for text in texts))
         status = "converged" if self.converged else f"NOT converged: {self.message}"
         precision = " · float32, refined in float64" if self.dtype == "float32" else ""
         lines.append(f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps{precision} · {status}")
+        if self.uncertainty:
+            lines.append("  " + _uncertainty_line(self.uncertainty))
         return "\n".join(lines)
 
     def __str__(self) -> str:
@@ -165,7 +185,39 @@ def _parameter_rows(params: dict[str, Any]):
             yield name, value
 
 
-def _number(value: float) -> str:
+def _as_list(value) -> list:
+    return value if isinstance(value, list) else [value]
+
+
+def _number(value: float, error: float | None = None, has_error: bool = False) -> str:
+    """``value`` to 6 significant digits, or ``value ± error`` with the error to 2 digits and the value to match.
+
+    ``has_error`` with ``error`` None (undetermined) gives ``value ± ?``.
+    """
     if not math.isfinite(value):
         return str(value)
-    return f"{value:.6g}"
+    if error is None or not math.isfinite(error) or error <= 0:
+        return f"{value:.6g}" + (" ± ?" if has_error and error is None else "")
+    decimals = max(0, 1 - math.floor(math.log10(error)))
+    if decimals > 12 or abs(value) >= 1e6:
+        return f"{value:.6g} ± {error:.2g}"
+    return f"{value:.{decimals}f} ± {error:.{decimals}f}"
+
+
+def _uncertainty_line(block: dict[str, Any]) -> str:
+    """One line on how the errors were found."""
+    diagnostics = block.get("diagnostics", {})
+    if block.get("method") == "mcmc":
+        tau = max((t for t in diagnostics.get("autocorr_time", []) if t is not None), default=float("nan"))
+        ess = min((e for e in diagnostics.get("effective_samples", []) if e is not None), default=float("nan"))
+        return (
+            f"± posterior standard deviation (emcee: {diagnostics.get('n_walkers')} walkers × "
+            f"{diagnostics.get('n_steps')} steps, {diagnostics.get('burn')} burn-in; acceptance "
+            f"{diagnostics.get('acceptance', float('nan')):.2f}, τ ≤ {tau:.0f} steps, ≥ {ess:.0f} effective samples)"
+        )
+    noise, chi2 = diagnostics.get("noise_scale"), diagnostics.get("reduced_chi2")
+    if noise is not None:
+        how = f"no sigma: scaled by the residuals' scatter, {noise:.3g} in the loss's units"
+    else:
+        how = f"sigma given; reduced χ² {chi2:.4g}" if isinstance(chi2, float) else "sigma given"
+    return f"± Laplace standard error (Gauss-Newton covariance at the optimum; {how})"

@@ -15,7 +15,11 @@ Parameters exist in three forms:
   users read and write;
 * :class:`Params`, arrays ``diffuse (C,)``, ``specular (K, C)`` and
   ``shape[name] (K,)``, what :meth:`Model.evaluate` takes;
-* a flat *unconstrained* vector, what the solver moves (see ``domains.py``).
+* a flat *unconstrained* vector, what the solver moves (see ``domains.py``);
+* a flat *sampling* vector, what the MCMC walkers move (``posterior.py``): the
+  physical values themselves, except a Lafortune lobe's direction, which is its
+  angle ``psi``; and the flat *physical* vector (labels ``rho_d[r]``, ``alpha``,
+  ``lobes[0].cxy``) in which covariances are reported.
 """
 
 from collections.abc import Mapping
@@ -87,6 +91,17 @@ class Lobe:
 
     def shape_from_unconstrained(self, u) -> dict[str, Any]:
         return {name: domain.to_physical(u[i]) for i, (name, domain) in enumerate(self.parameters)}
+
+    # -- the sampling coordinates (MCMC): the physical parameters unless a subclass says otherwise
+    @property
+    def sampling_parameters(self) -> tuple[tuple[str, Any], ...]:
+        return self.parameters
+
+    def shape_to_sampling(self, shape: Mapping[str, float]) -> np.ndarray:
+        return np.array([float(shape[name]) for name, _ in self.sampling_parameters])
+
+    def shape_from_sampling(self, values) -> dict[str, Any]:
+        return {name: values[i] for i, (name, _) in enumerate(self.sampling_parameters)}
 
     def checked_shape(self, shape: Mapping[str, float], where: str) -> dict[str, float]:
         """The shape with each value checked against its domain; ``where`` prefixes errors."""
@@ -308,13 +323,63 @@ class Model:
         return Params(diffuse, specular, shape)
 
     def unconstrained_labels(self, channels: tuple[str, ...]) -> list[str]:
-        """A name for each entry of the unconstrained vector, e.g. ``log rho_d[r]``, ``log alpha``."""
-        labels = [f"{self.diffuse_name}[{c}]" for c in channels]
+        """A name for each entry of the unconstrained vector, e.g. ``rho_d[r]``, ``alpha``, ``lobes[0].psi``."""
+        return self._labels(channels, self.lobe.unconstrained_names if self.n_lobes else ())
+
+    # ------------------------------------------------------------ sampling vector
+    def sampling_domains(self, n_channels: int) -> list[Any]:
+        """The domain (with its prior, ``domains.py``) of each entry of the sampling vector."""
+        domains = [NON_NEGATIVE] * ((1 + self.n_lobes) * n_channels)
         if self.n_lobes:
-            lobe_prefix = [f"lobes[{k}]." if self.lobes_as_list else "" for k in range(self.n_lobes)]
-            labels += [f"{prefix}{self.specular_name}[{c}]" for prefix in lobe_prefix for c in channels]
-            labels += [f"{prefix}{name}" for prefix in lobe_prefix for name in self.lobe.unconstrained_names]
-        return labels
+            domains += [domain for _ in range(self.n_lobes) for _, domain in self.lobe.sampling_parameters]
+        return domains
+
+    def sampling_labels(self, channels: tuple[str, ...]) -> list[str]:
+        """A name for each entry of the sampling vector, e.g. ``rho_d[r]``, ``alpha``, ``lobes[0].psi``."""
+        return self._labels(channels, [name for name, _ in self.lobe.sampling_parameters] if self.n_lobes else ())
+
+    def to_sampling(self, params: Params) -> np.ndarray:
+        """Flat vector ``[diffuse (C), specular (K·C), sampling shape (K·S')]``."""
+        pieces = [np.asarray(params.diffuse, dtype=float).ravel(), np.asarray(params.specular, dtype=float).ravel()]
+        for k in range(self.n_lobes):
+            pieces.append(self.lobe.shape_to_sampling({name: float(params.shape[name][k]) for name in self.lobe.names}))
+        return np.concatenate(pieces)
+
+    def from_sampling(self, v, n_channels: int) -> Params:
+        """Inverse of :meth:`to_sampling`, traceable by JAX."""
+        n_albedos = (1 + self.n_lobes) * n_channels
+        diffuse, specular = v[:n_channels], v[n_channels:n_albedos].reshape(self.n_lobes, n_channels)
+        if not self.n_lobes:
+            return Params(diffuse, specular, {})
+        per_lobe = v[n_albedos:].reshape(self.n_lobes, len(self.lobe.sampling_parameters))
+        return Params(diffuse, specular, jax.vmap(self.lobe.shape_from_sampling)(per_lobe))
+
+    # ------------------------------------------------------------ physical vector
+    def physical_labels(self, channels: tuple[str, ...]) -> list[str]:
+        """A name for each physical parameter, flat, in SPEC order: ``rho_d[r]``, …, ``lobes[0].cxy``."""
+        return self._labels(channels, self.lobe.names if self.n_lobes else ())
+
+    def to_physical_vector(self, params: Params):
+        """The physical parameters as one flat vector in the order of :meth:`physical_labels` (JAX)."""
+        shape = [jnp.stack([params.shape[name][k] for name in self.lobe.names]) for k in range(self.n_lobes)]
+        return jnp.concatenate([jnp.ravel(params.diffuse), jnp.ravel(params.specular), *shape])
+
+    def dict_from_physical_vector(self, values, n_channels: int) -> dict[str, Any]:
+        """The SPEC-section-5 dictionary layout filled from a flat physical vector (standard errors, quantiles)."""
+        values = np.asarray(values, dtype=float)
+        n_albedos = (1 + self.n_lobes) * n_channels
+        specular = values[n_channels:n_albedos].reshape(self.n_lobes, n_channels)
+        names = self.lobe.names if self.n_lobes else ()
+        per_lobe = values[n_albedos:].reshape(self.n_lobes, len(names))
+        shape = {name: per_lobe[:, i] for i, name in enumerate(names)}
+        return self.params_to_dict(Params(values[:n_channels], specular, shape))
+
+    def _labels(self, channels: tuple[str, ...], shape_names) -> list[str]:
+        """Labels of a flat ``[diffuse (C), specular (K·C), shape (K·S)]`` vector."""
+        labels = [f"{self.diffuse_name}[{c}]" for c in channels]
+        prefixes = [f"lobes[{k}]." if self.lobes_as_list else "" for k in range(self.n_lobes)]
+        labels += [f"{prefix}{self.specular_name}[{c}]" for prefix in prefixes for c in channels]
+        return labels + [f"{prefix}{name}" for prefix in prefixes for name in shape_names]
 
     def describe_parameters(self) -> list[str]:
         """One line per parameter with its shape and domain, for ``brdffit models``."""

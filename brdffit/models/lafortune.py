@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import _jax  # noqa: F401  (float64 before any array)
 from .._checks import whole_number
-from ..domains import POSITIVE
+from ..domains import POSITIVE, Interval
 from ..errors import BrdfInputError
 from ..geometry import safe_power
 from .base import Lobe, Model
@@ -76,6 +76,18 @@ class LafortuneLobe(Lobe):
     def shape_from_unconstrained(self, u):
         cxy, cz = direction_from_angle(u[0])
         return {"cxy": cxy, "cz": cz, "n": POSITIVE.to_physical(u[1])}
+
+    @property
+    def sampling_parameters(self):
+        # The walkers move the direction's angle, so every proposal satisfies 2 cxy² + cz² = 1.
+        return (("psi", Interval(-np.pi, np.pi)), ("n", POSITIVE))
+
+    def shape_to_sampling(self, shape):
+        return np.array([np.arctan2(np.sqrt(2.0) * shape["cxy"], shape["cz"]), float(shape["n"])])
+
+    def shape_from_sampling(self, values):
+        cxy, cz = direction_from_angle(values[0])
+        return {"cxy": cxy, "cz": cz, "n": values[1]}
 
     def checked_shape(self, shape, where):
         """Check ``n`` and ``2 cxy² + cz² = 1`` (within 1%), and rescale ``(cxy, cz)`` onto it exactly."""

@@ -1,0 +1,181 @@
+"""Laplace (Gauss-Newton) covariance of a fit's parameters.
+
+At the optimum ``v̂`` the posterior is approximated by a Gaussian with
+covariance ``s² (JᵀJ)⁻¹``, with ``J`` the exact Jacobian of the residuals
+(``posterior.py``) and ``s² = Σ r² / (n - k)`` (the reduced χ², n fitted
+values, k parameters) when the samples carry no ``sigma``; ``s² = 1`` when
+they do, since the residuals are then already in units of σ (Bard 1974,
+*Nonlinear Parameter Estimation*, ch. 7; Press et al., *Numerical Recipes*,
+§15.5).
+
+``J`` is taken in the sampling coordinates (physical values, Lafortune
+directions as the angle ψ), chunk by chunk in forward mode. Since the solver's
+coordinates ``u`` map to these by ``v = g(u)`` elementwise,
+``(J_vᵀJ_v)⁻¹ = G (J_uᵀJ_u)⁻¹ Gᵀ`` with ``G = dv/du``: this *is* the delta
+method, evaluated where it stays finite when an albedo sits at 0 (``G → 0``
+there). Lafortune's ``(cxy, cz)`` then follow from ψ by the delta method
+proper. The inverse is taken in correlation scaling, so parameters of any
+units are treated alike; a parameter whose Jacobian column is zero, or a
+direction in which ``JᵀJ`` is singular, is *undetermined*: its error is
+reported as null and a warning names it. Correlations of |ρ| ≥
+:data:`DEGENERATE_CORRELATION` are reported as a degenerate pair.
+"""
+
+import warnings
+from functools import cache
+from statistics import NormalDist
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import _jax  # noqa: F401  (float64 before any array)
+from .losses import Loss
+from .models import Model
+from .posterior import Setup, compiled_chi_squared, setup
+from .problem import Problem, chunks, residuals_at
+from .report import (
+    QUANTILES,
+    correlation,
+    matrix_block,
+    quantile_dict,
+    stderr_dict,
+    strongest_correlation,
+    with_block,
+)
+from .results import FitResult
+from .samples import Samples
+
+#: |correlation| from which a pair of parameters is reported as degenerate (the data fix a combination of them).
+DEGENERATE_CORRELATION = 0.99
+#: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
+SINGULAR = 1e-12
+
+
+class UncertaintyWarning(UserWarning):
+    """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""
+
+
+def gauss_newton_matrix(posterior: Setup, v) -> np.ndarray:
+    """``JᵀJ`` (k, k) of the residuals with respect to the sampling vector, exact (forward mode), chunk by chunk."""
+    return np.asarray(compiled_gauss_newton(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem))
+
+
+@cache
+def compiled_gauss_newton(model: Model, loss: Loss):
+    """``(v, problem) -> JᵀJ``, compiled once per model and loss (and problem shape)."""
+
+    @jax.jit
+    def gauss_newton(v, problem: Problem):
+        c = problem.measured.shape[1]
+
+        def accumulate(total, chunk):
+            jacobian = jax.jacfwd(lambda w: residuals_at(model, loss, model.from_sampling(w, c), chunk).ravel())(v)
+            jacobian = jacobian.astype(jnp.float64)
+            return total + jacobian.T @ jacobian, None
+
+        total, _ = jax.lax.scan(accumulate, jnp.zeros((v.shape[0], v.shape[0]), jnp.float64), chunks(problem))
+        return total
+
+    return gauss_newton
+
+
+def inverse_with_null_space(matrix: np.ndarray, labels: list[str]) -> tuple[np.ndarray, list[str], float]:
+    """``matrix⁻¹`` in correlation scaling, NaN in the rows and columns of undetermined parameters.
+
+    Returns the inverse, the labels of the undetermined parameters and the
+    condition number of the scaled matrix (over the determined ones).
+    """
+    k = matrix.shape[0]
+    scale = np.sqrt(np.diag(matrix))
+    determined = np.isfinite(scale) & (scale > 0)
+    index = np.flatnonzero(determined)
+    inverse = np.full((k, k), np.nan)
+    condition = float("inf")
+    if index.size:
+        scaled = matrix[np.ix_(index, index)] / np.outer(scale[index], scale[index])
+        eigenvalues, vectors = np.linalg.eigh(scaled)
+        null = eigenvalues <= SINGULAR * eigenvalues[-1]
+        condition = float(eigenvalues[-1] / eigenvalues[0]) if eigenvalues[0] > 0 else float("inf")
+        kept = ~null
+        scaled_inverse = (vectors[:, kept] / eigenvalues[kept]) @ vectors[:, kept].T
+        inverse[np.ix_(index, index)] = scaled_inverse / np.outer(scale[index], scale[index])
+        # A parameter with weight in a null direction has unbounded variance.
+        in_null = np.any(np.abs(vectors[:, null]) > 1e-6, axis=1) if null.any() else np.zeros(index.size, bool)
+        determined[index[in_null]] = False
+    inverse[~determined, :] = np.nan
+    inverse[:, ~determined] = np.nan
+    return inverse, [label for label, ok in zip(labels, determined, strict=True) if not ok], condition
+
+
+def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
+    """``result`` with the Laplace ``uncertainty`` block (SPEC section 5); ``samples`` are those it was fitted to.
+
+    Warns (:class:`UncertaintyWarning`) about degenerate pairs, undetermined
+    parameters and a fit that did not converge; the warnings are also written
+    to the block.
+    """
+    posterior = setup(result, samples)
+    block = laplace_block(result, posterior)
+    for message in block["warnings"]:
+        warnings.warn(message, UncertaintyWarning, stacklevel=2)
+    return with_block(result, block)
+
+
+def laplace_block(result: FitResult, posterior: Setup) -> dict:
+    model, c, labels = posterior.model, posterior.n_channels, posterior.labels
+    v = jnp.asarray(posterior.optimum)
+    k = v.shape[0]
+    chi2 = float(compiled_chi_squared(model, posterior.loss)(v, posterior.problem))
+    dof = posterior.n_values - k
+    reduced = chi2 / dof if dof > 0 else float("nan")
+    variance_scale = 1.0 if posterior.has_sigma else reduced
+    inverse, undetermined, condition = inverse_with_null_space(gauss_newton_matrix(posterior, v), labels)
+    covariance_v = variance_scale * inverse
+
+    # The delta method from the sampling coordinates to the physical ones (a no-op except for Lafortune's ψ).
+    to_physical = lambda w: model.to_physical_vector(model.from_sampling(w, c))
+    physical = np.asarray(to_physical(v))
+    gradient = np.asarray(jax.jacfwd(to_physical)(v))
+    unknown = np.isnan(np.diag(covariance_v))
+    covariance = gradient @ np.nan_to_num(covariance_v) @ gradient.T
+    affected = np.any((gradient != 0) & unknown[None, :], axis=1)
+    covariance[affected, :] = np.nan
+    covariance[:, affected] = np.nan
+    stderr = np.sqrt(np.diag(covariance))
+
+    messages = []
+    if not result.converged:
+        messages.append("the fit did not converge: the uncertainty describes the point where it stopped")
+    if dof <= 0 and not posterior.has_sigma:
+        messages.append(f"{posterior.n_values} values cannot estimate the noise of {k} parameters; give a sigma column")
+    if undetermined:
+        messages.append(
+            f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
+            " its error is reported as null"
+        )
+    pair = strongest_correlation(labels, correlation(covariance_v))
+    if pair is not None and abs(pair[2]) >= DEGENERATE_CORRELATION:
+        messages.append(
+            f"{pair[0]} and {pair[1]} are nearly degenerate (correlation {pair[2]:+.4f}): the samples fix a"
+            " combination of them, so their errors are large and shared; samples at other angles would separate"
+            " them"
+        )
+    names = model.physical_labels(tuple(result.channels))
+    z = np.array([NormalDist().inv_cdf(q) for q in QUANTILES])
+    quantiles = physical[None, :] + z[:, None] * stderr[None, :]
+    return {
+        "method": "laplace",
+        "stderr": stderr_dict(model, stderr, c),
+        "quantiles": quantile_dict(model, quantiles, c),
+        "covariance": matrix_block(names, covariance),
+        "correlation": matrix_block(names, correlation(covariance)),
+        "diagnostics": {
+            "reduced_chi2": reduced,
+            "dof": dof,
+            "noise_scale": None if posterior.has_sigma else float(np.sqrt(reduced)),
+            "condition_number": condition,
+            "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
+        },
+        "warnings": messages,
+    }

@@ -1,0 +1,39 @@
+"""Uncertainty of a fit, by either method: ``laplace`` (``laplace.py``) or ``mcmc`` (``mcmc.py``)."""
+
+import os
+
+from .errors import BrdfInputError
+from .laplace import laplace_uncertainty
+from .mcmc import MCMC, sample_posterior
+from .results import FitResult
+from .samples import Samples
+
+METHODS = ("laplace", "mcmc")
+
+
+def check_method(method: str | None) -> str | None:
+    if method is not None and method not in METHODS:
+        raise BrdfInputError(f"--uncertainty {method!r} is not allowed; choose one of: {', '.join(METHODS)}")
+    return method
+
+
+def with_uncertainty(
+    result: FitResult,
+    samples: Samples,
+    method: str,
+    *,
+    mcmc: MCMC | None = None,
+    chain: str | os.PathLike | None = None,
+    progress: bool = False,
+) -> FitResult:
+    """``result`` with its ``uncertainty`` block by ``method``; ``samples`` are those it was fitted to.
+
+    ``mcmc``, ``chain`` and ``progress`` apply to ``method="mcmc"`` (see
+    :func:`brdffit.sample_posterior`).
+    """
+    check_method(method)
+    if method == "laplace":
+        if mcmc is not None or chain is not None:
+            raise BrdfInputError("MCMC settings and --chain apply only to --uncertainty mcmc")
+        return laplace_uncertainty(result, samples)
+    return sample_posterior(result, samples, mcmc, chain=chain, progress=progress)
