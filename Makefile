@@ -24,7 +24,7 @@ test: $(STAMP)
 test-heavy: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q -m heavy
 
-# The benchmarks of issue 3 (not tests): ~15 minutes, prints a table, writes benchmarks/results/latest.{json,md}.
+# The benchmarks of issues 3 and 4 (not tests): ~30 minutes, prints a table, writes benchmarks/results/latest.{json,md}.
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
