@@ -166,7 +166,7 @@ def mcmc_block(
     log_prob = log_probability_function(posterior)
 
     if chain_path is None:
-        sampler = run_sampler(settings, start, log_prob, progress)
+        chain, accepted = _chain_of(run_sampler(settings, start, log_prob, progress))
     else:
         with atomic_path(chain_path) as temporary:
             if chain_path.suffix.lower() == ".npz":
@@ -177,13 +177,14 @@ def mcmc_block(
                 backend = emcee.backends.HDFBackend(str(temporary))
                 backend.reset(settings.walkers, n_dimensions)
                 sampler = run_sampler(settings, start, log_prob, progress, backend)
+            chain, accepted = _chain_of(sampler)  # read before the file is renamed
 
-    kept = sampler.get_chain(discard=settings.burn, thin=settings.thin, flat=True)
-    draws = physical_draws(model, kept[:, : posterior.optimum.size], c)
-    tau = sampler.get_autocorr_time(discard=settings.burn, tol=0)
     after_burn = settings.steps - settings.burn
+    kept = chain[settings.burn + settings.thin - 1 :: settings.thin].reshape(-1, n_dimensions)  # as emcee's get_chain
+    draws = physical_draws(model, kept[:, : posterior.optimum.size], c)
+    tau = emcee.autocorr.integrated_time(chain[settings.burn :], tol=0)
     effective = settings.walkers * after_burn / tau
-    acceptance = float(np.mean(sampler.acceptance_fraction))
+    acceptance = float(np.mean(accepted))
 
     messages = []
     if not result.converged:
@@ -224,6 +225,11 @@ def mcmc_block(
         "warnings": messages,
     }
     return block, draws
+
+
+def _chain_of(sampler) -> tuple[np.ndarray, np.ndarray]:
+    """The whole chain (steps, walkers, D) and each walker's acceptance fraction, in memory."""
+    return sampler.get_chain(), np.asarray(sampler.acceptance_fraction)
 
 
 def run_sampler(settings: MCMC, start: np.ndarray, log_prob, progress: bool, backend=None):
