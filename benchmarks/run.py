@@ -18,6 +18,7 @@ Sections (issue 3):
 (d) Peak resident memory of the MERL-size Cook-Torrance fit (the process that loads the samples and fits).
 (e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step).
 (f) MCMC (issue 4): emcee, 32 walkers × 2000 steps on the 10k-sample example, compile included.
+(g) Reading a full MERL file (issue 5): 1,458,000 bins to direction pairs.
 
 ``--sections`` runs some of them; the others keep their results from the last
 run in ``latest.json`` (each section records its date).
@@ -155,6 +156,11 @@ def mcmc_section(repeats: int) -> dict:
     return repeated(repeats, "mcmc", "--walkers", "32", "--steps", "2000")
 
 
+def merl_load_section(repeats: int, folder: Path) -> dict:
+    log("(g) reading a full MERL file")
+    return repeated(repeats, "merl-load", "--data", str(folder / "ward.binary"))
+
+
 def machine() -> dict:
     import jax
     import optimistix
@@ -262,6 +268,12 @@ def table(results: dict) -> str:
             f" ({posterior['evaluations_per_second']:.0f} walker evaluations/s; acceptance"
             f" {posterior['acceptance']:.2f}, τ ≤ {posterior['max_autocorr_time']:.0f} steps)."
         )
+    loading = results.get("merl_load")
+    if loading:
+        lines.append(
+            f"(g) Reading a full MERL file ({loading['n_samples']:,} valid direction pairs × RGB): median"
+            f" {loading['seconds']:.2f} s, peak memory {loading['peak_rss_mb']:.0f} MB."
+        )
     return "\n".join(lines)
 
 
@@ -272,8 +284,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcf",
-        help="which to run: a (with d, e), b, c, f; default abcf (the README's table needs all)",
+        default="abcfg",
+        help="which to run: a (with d, e), b, c, f, g; default abcfg (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -294,6 +306,8 @@ def main() -> None:
             results["cli"] = cli_section(args.repeats, folder) | {"date": today}
         if "f" in args.sections:
             results["mcmc"] = mcmc_section(args.repeats) | {"date": today}
+        if "g" in args.sections:
+            results["merl_load"] = merl_load_section(args.repeats, folder) | {"date": today}
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

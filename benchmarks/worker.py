@@ -9,6 +9,7 @@ samples in memory to the result (parameters and cost) in hand.
     python benchmarks/worker.py steps --model cook-torrance --data D.npz --start S.json
     python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000
     python benchmarks/worker.py mcmc --walkers 32 --steps 2000
+    python benchmarks/worker.py merl-load --data FILE.binary
 """
 
 import argparse
@@ -209,6 +210,17 @@ def mcmc(args) -> dict:
     }
 
 
+def merl_load(args) -> dict:
+    """(g): ``brdffit.load_samples`` of a full MERL file (written first from a Ward model), fresh process."""
+    from brdffit import load_samples
+    from brdffit.formats.merl import write_merl
+
+    write_merl(args.data, "ward", {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146})
+    clock = time.perf_counter()
+    samples = load_samples(args.data)
+    return {"seconds": time.perf_counter() - clock, "n_samples": samples.n_samples, "peak_rss_mb": peak_rss_mb()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -228,8 +240,10 @@ def main() -> None:
     posterior = commands.add_parser("mcmc")
     posterior.add_argument("--walkers", type=int, default=32)
     posterior.add_argument("--steps", type=int, default=2000)
+    loading = commands.add_parser("merl-load")
+    loading.add_argument("--data", required=True)
     args = parser.parse_args()
-    output = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc}[args.command](args)
+    output = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc, "merl-load": merl_load}[args.command](args)
     print(json.dumps(output))
 
 

@@ -1,10 +1,12 @@
-"""Atomic file writes: readers never see a half-written file."""
+"""Atomic file writes (readers never see a half-written file) and one-line errors for files that cannot be read."""
 
 import os
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+from .errors import BrdfInputError
 
 
 def _default_mode() -> int:
@@ -34,3 +36,16 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
     with atomic_path(path) as temporary:
         temporary.write_text(text, encoding="utf-8", newline="")
+
+
+@contextmanager
+def reading(path: str | os.PathLike, what: str) -> Iterator[None]:
+    """Turn the operating system's failures to read ``path`` into one-line errors; ``what`` names the file kind."""
+    try:
+        yield
+    except FileNotFoundError:
+        raise BrdfInputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise BrdfInputError(f"{path}: is a folder, not {what}") from None
+    except OSError as error:
+        raise BrdfInputError(f"{path}: cannot be read ({error.strerror or error})") from None

@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = _build_parser()
     try:
         args = parser.parse_args(argv)
-        if args.command in (_fit, _synth):
+        if args.command in (_fit, _synth, _convert):
             from .cache import enable_compilation_cache
 
             enable_compilation_cache()
@@ -84,20 +84,49 @@ def _build_parser() -> argparse.ArgumentParser:
         )
         command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
 
+    def loading_options(command: argparse.ArgumentParser) -> None:
+        reading = command.add_argument_group("reading the samples")
+        reading.add_argument(
+            "--format", metavar="NAME", help="csv, merl, alta or astm (default: from the extension and first lines)"
+        )
+        reading.add_argument(
+            "--quantity",
+            default="brdf",
+            metavar="Q",
+            help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)",
+        )
+        reading.add_argument(
+            "--angles",
+            default="degrees",
+            metavar="UNIT",
+            help=f"CSV angle columns in {' or '.join(ANGLE_UNITS)} (default degrees)",
+        )
+        reading.add_argument(
+            "--spectral-to",
+            default="keep",
+            metavar="T",
+            help="value columns named by wavelength (nm): xyz, rgb (linear sRGB) or keep every band (default keep)",
+        )
+        reading.add_argument("--illuminant", default="D65", metavar="NAME", help="for --spectral-to (default D65)")
+        reading.add_argument(
+            "--observer",
+            default="CIE 1931 2 Degree Standard Observer",
+            metavar="NAME",
+            help="colour-matching functions for --spectral-to (default: CIE 1931 2 Degree Standard Observer)",
+        )
+        reading.add_argument("--subsample", type=int, metavar="N", help="MERL: keep N samples")
+        reading.add_argument(
+            "--subsample-method", default="random", metavar="M", help="MERL: random (default) or stratified (over θh)"
+        )
+
     fit = commands.add_parser("fit", help="fit a model to a samples file", allow_abbrev=False)
-    fit.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s) (CSV, SPEC section 4)")
+    fit.add_argument(
+        "samples", metavar="SAMPLES", nargs="+", help="samples file(s): CSV (SPEC section 4), MERL, ALTA, ASTM"
+    )
     model_options(fit, "ward")
     fit.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
     fit.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
-    fit.add_argument(
-        "--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)"
-    )
-    fit.add_argument(
-        "--angles",
-        default="degrees",
-        metavar="UNIT",
-        help=f"angle columns in {' or '.join(ANGLE_UNITS)} (default degrees)",
-    )
+    loading_options(fit)
     fit.add_argument(
         "--start",
         metavar="PARAMS",
@@ -183,6 +212,23 @@ def _build_parser() -> argparse.ArgumentParser:
 
     models = commands.add_parser("models", help="list the models, their parameters and domains", allow_abbrev=False)
     models.set_defaults(command=_models)
+
+    convert = commands.add_parser(
+        "convert", help="convert samples between formats, or tabulate a fit result as a MERL file", allow_abbrev=False
+    )
+    convert.add_argument("input", metavar="IN", help="samples file (any format), or a result file (.json) for .binary")
+    convert.add_argument(
+        "output", metavar="OUT", help="the format from the extension: .csv, .dat (ALTA), .astm, .binary"
+    )
+    loading_options(convert)
+    convert.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
+    convert.set_defaults(command=_convert)
+
+    info = commands.add_parser("info", help="what a samples file holds: count, channels, angular coverage")
+    info.add_argument("input", metavar="FILE", help="samples file (any format)")
+    loading_options(info)
+    info.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
+    info.set_defaults(command=_info)
     return parser
 
 
@@ -191,7 +237,6 @@ def _fit(args: argparse.Namespace) -> int:
     from .batch import fit_batch
     from .losses import get_loss
     from .models import get_model
-    from .samples import load_samples
 
     model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
     get_loss(args.loss)
@@ -201,7 +246,7 @@ def _fit(args: argparse.Namespace) -> int:
     if isinstance(start, dict) and "params" in start:  # a result file
         start = start["params"]
     # Every input is read and checked before any fit runs or any file is written.
-    samples = [load_samples(path, angles=args.angles, quantity=args.quantity) for path in args.samples]
+    samples = [_load(path, args) for path in args.samples]
     if mcmc is not None:
         from .mcmc import check_walkers
 
@@ -393,6 +438,72 @@ def _models(args: argparse.Namespace) -> int:
         else:
             print("  parameters: " + "; ".join(model.describe_parameters()))
     return EXIT_OK
+
+
+def _convert(args: argparse.Namespace) -> int:
+    from .formats import WRITABLE
+
+    output = Path(args.output)
+    kind = WRITABLE.get(output.suffix.lower())
+    if kind is None:
+        choices = ", ".join(f"{suffix} ({name})" for suffix, name in WRITABLE.items())
+        raise BrdfInputError(f"{output}: unknown output format; give one of: {choices}")
+    _check_output(output, "OUT")
+    if kind == "merl":
+        if Path(args.input).suffix.lower() != ".json":
+            raise BrdfInputError(
+                f"{output}: a MERL file tabulates a whole BRDF; convert a fit result (.json) to .binary, e.g."
+                " brdffit convert fit.json out.binary"
+            )
+        from .formats.merl import write_merl
+        from .results import load_result
+
+        result = load_result(args.input)
+        write_merl(output, result.model, result.params, **result.model_options)
+        print(f"wrote {output}: {result.model} tabulated on MERL's 90 × 90 × 180 grid")
+        return EXIT_OK
+    samples = _load(args.input, args)
+    if kind == "csv":
+        from .samples import save_samples
+
+        save_samples(samples, output)
+    elif kind == "alta":
+        from .formats.alta import write_alta
+
+        write_alta(samples, output)
+    else:
+        from .formats.astm import write_astm
+
+        write_astm(samples, output)
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {output} ({kind})")
+    return EXIT_OK
+
+
+def _info(args: argparse.Namespace) -> int:
+    from .formats import detect_format
+    from .formats.summary import describe
+
+    samples = _load(args.input, args)
+    print(describe(samples, detect_format(Path(args.input), args.format)))
+    return EXIT_OK
+
+
+def _load(path: str, args: argparse.Namespace):
+    """``path`` read with the loading options of ``args``."""
+    from .samples import load_samples
+
+    return load_samples(
+        path,
+        format=args.format,
+        angles=args.angles,
+        quantity=args.quantity,
+        spectral_to=args.spectral_to,
+        illuminant=args.illuminant,
+        observer=args.observer,
+        subsample=args.subsample,
+        subsample_method=args.subsample_method,
+        seed=args.seed,
+    )
 
 
 # ------------------------------------------------------------------ helpers

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._files import write_text_atomic
+from ._files import reading, write_text_atomic
 from .errors import BrdfInputError
 from .geometry import direction_to_spherical, spherical_to_direction
 
@@ -142,17 +142,65 @@ class Samples:
 
 
 # ---------------------------------------------------------------------- loading
-def load_samples(path: str | os.PathLike, *, angles: str = "degrees", quantity: str = "brdf") -> Samples:
-    """Read a samples file (SPEC section 4) into :class:`Samples` holding BRDF values in 1/sr.
+def load_samples(
+    path: str | os.PathLike,
+    *,
+    format: str | None = None,
+    angles: str = "degrees",
+    quantity: str = "brdf",
+    spectral_to: str = "keep",
+    illuminant: str = "D65",
+    observer: str = "CIE 1931 2 Degree Standard Observer",
+    subsample: int | None = None,
+    subsample_method: str = "random",
+    seed: int = 0,
+) -> Samples:
+    """Read a measurement file into :class:`Samples` holding BRDF values in 1/sr.
 
-    ``angles``: ``"degrees"`` (default) or ``"radians"`` for the angle columns.
-    ``quantity``: what the values are, one of ``brdf``, ``reflectance-factor``, ``cosine-weighted``.
+    ``format``: ``csv`` (SPEC section 4), ``merl``, ``alta`` or ``astm``
+    (``brdffit/formats``); default: from the file's extension and first lines.
+    ``angles``: ``"degrees"`` (default) or ``"radians"`` for a CSV file's angle
+    columns. ``quantity``: what the values are, one of ``brdf``,
+    ``reflectance-factor``, ``cosine-weighted``. ``spectral_to``: for value
+    columns named by wavelength in nm, ``xyz`` or ``rgb`` (linear sRGB) under
+    ``illuminant`` and ``observer`` (colour-science names), or ``keep`` every
+    band as a channel (default). ``subsample`` (MERL): keep that many samples,
+    ``subsample_method`` ``random`` or ``stratified`` over θh, seeded by ``seed``.
     """
     _check_choice("--angles", angles, ANGLE_UNITS)
     _check_choice("--quantity", quantity, QUANTITIES)
+    from .formats import detect_format
+
     path = Path(path)
-    text = _read_text(path)
-    return _parse_csv(text, str(path), angles, quantity)
+    kind = detect_format(path, format)
+    if kind != "csv" and angles != "degrees":
+        raise BrdfInputError(f"--angles applies to CSV files; {path} is {kind} (its angle units are fixed)")
+    if kind != "merl" and subsample is not None:
+        raise BrdfInputError(f"--subsample applies to MERL files; {path} is {kind}")
+    if kind == "csv":
+        samples = _parse_csv(_read_text(path), str(path), angles)
+    elif kind == "merl":
+        from .formats.merl import read_merl
+
+        samples = read_merl(path, subsample=subsample, subsample_method=subsample_method, seed=seed)
+    elif kind == "alta":
+        from .formats.alta import read_alta
+
+        samples = read_alta(path)
+    else:
+        from .formats.astm import read_astm
+
+        samples = read_astm(path)
+    if quantity != "brdf":
+        scale = _brdf_scale(quantity, samples.wi[:, 2])
+        samples = replace(
+            samples, values=samples.values * scale, sigma=None if samples.sigma is None else samples.sigma * scale
+        )
+    if spectral_to != "keep" or illuminant != "D65" or observer != "CIE 1931 2 Degree Standard Observer":
+        from .formats.spectral import spectral_to as convert
+
+        samples = convert(samples, spectral_to, illuminant=illuminant, observer=observer)
+    return samples
 
 
 def _check_choice(option: str, value: str, allowed: Sequence[str]) -> None:
@@ -161,19 +209,14 @@ def _check_choice(option: str, value: str, allowed: Sequence[str]) -> None:
 
 
 def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise BrdfInputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise BrdfInputError(f"{path}: is a folder, not a samples file") from None
-    except UnicodeDecodeError:
-        raise BrdfInputError(f"{path}: not a text file (not UTF-8); samples files are CSV text") from None
-    except OSError as error:
-        raise BrdfInputError(f"{path}: cannot be read ({error.strerror})") from None
+    with reading(path, "a samples file"):
+        try:
+            return path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise BrdfInputError(f"{path}: not a text file (not UTF-8); samples files are CSV text") from None
 
 
-def _parse_csv(text: str, source: str, angles: str, quantity: str) -> Samples:
+def _parse_csv(text: str, source: str, angles: str) -> Samples:
     lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1)]
     content = [(number, line) for number, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not content:
@@ -200,9 +243,7 @@ def _parse_csv(text: str, source: str, angles: str, quantity: str) -> Samples:
     values = table[:, layout.values]
     sigma = None if layout.sigma is None else np.broadcast_to(table[:, layout.sigma], values.shape)
     weight = None if layout.weight is None else table[:, layout.weight]
-    samples = checked.samples(wi, wo, values, layout.channels, sigma, weight, source, layout.sigma_names)
-    scale = _brdf_scale(quantity, samples.wi[:, 2])
-    return replace(samples, values=samples.values * scale, sigma=None if sigma is None else samples.sigma * scale)
+    return checked.samples(wi, wo, values, layout.channels, sigma, weight, source, layout.sigma_names)
 
 
 def _brdf_scale(quantity: str, cos_i: np.ndarray) -> np.ndarray:

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import atomic_path
+from .._files import atomic_path, reading
 from ..errors import BrdfInputError
 from ..samples import Samples
 
@@ -146,26 +146,19 @@ def _whole_number(value, minimum: int) -> bool:
 
 def _read_table(path: Path) -> np.ndarray:
     """The stored numbers (3, 1,458,000) of a MERL file, after checking its header and size."""
-    try:
-        with path.open("rb") as handle:
-            size = os.fstat(handle.fileno()).st_size
-            if size < HEADER_BYTES:
-                raise BrdfInputError(
-                    f"{path}: holds {size} bytes, shorter than the {HEADER_BYTES}-byte header of a MERL file"
-                )
-            header = handle.read(HEADER_BYTES)
-            dims = tuple(int(n) for n in np.frombuffer(header, dtype="<i4")) if len(header) == HEADER_BYTES else ()
-            if dims != SHAPE:
-                raise BrdfInputError(f"{path}: dimensions {dims}, expected {SHAPE}; not a MERL BRDF file")
-            if size != FILE_BYTES:
-                raise BrdfInputError(f"{path}: holds {size:,} bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
-            table = np.fromfile(handle, dtype="<f8", count=3 * N_BINS)
-    except FileNotFoundError:
-        raise BrdfInputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise BrdfInputError(f"{path}: is a folder, not a MERL file") from None
-    except OSError as error:
-        raise BrdfInputError(f"{path}: cannot be read ({error.strerror or error})") from None
+    with reading(path, "a MERL file"), path.open("rb") as handle:
+        size = os.fstat(handle.fileno()).st_size
+        if size < HEADER_BYTES:
+            raise BrdfInputError(
+                f"{path}: holds {size} bytes, shorter than the {HEADER_BYTES}-byte header of a MERL file"
+            )
+        header = handle.read(HEADER_BYTES)
+        dims = tuple(int(n) for n in np.frombuffer(header, dtype="<i4")) if len(header) == HEADER_BYTES else ()
+        if dims != SHAPE:
+            raise BrdfInputError(f"{path}: dimensions {dims}, expected {SHAPE}; not a MERL BRDF file")
+        if size != FILE_BYTES:
+            raise BrdfInputError(f"{path}: holds {size:,} bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
+        table = np.fromfile(handle, dtype="<f8", count=3 * N_BINS)
     if table.size != 3 * N_BINS:  # the file shrank while it was read
         raise BrdfInputError(f"{path}: holds too few bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
     return table.reshape(3, N_BINS).astype(np.float64, copy=False)
