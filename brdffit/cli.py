@@ -166,7 +166,10 @@ def _build_parser() -> argparse.ArgumentParser:
     errors.add_argument("--burn", type=int, metavar="N", help="mcmc: steps discarded as burn-in (default 500)")
     errors.add_argument("--thin", type=int, metavar="N", help="mcmc: keep every N-th step (default 1)")
     errors.add_argument(
-        "--seed", type=int, default=0, help="seed of the mcmc walkers and of the start search's subset (default 0)"
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the mcmc walkers, the start search's subset and --subsample (default 0)",
     )
     errors.add_argument("--chain", metavar="FILE", help="mcmc: save the whole chain (.npz, or .h5 with h5py)")
     errors.add_argument("--corner", metavar="FILE", help="corner plot of the posterior (.png, .pdf or .svg)")
