@@ -48,8 +48,20 @@ from .samples import Samples
 
 #: |correlation| from which a pair of parameters is reported as degenerate (the data fix a combination of them).
 DEGENERATE_CORRELATION = 0.99
+#: Without sigma, warn when a sandwich (robust) error exceeds the reported one by this factor.
+HETEROSCEDASTIC_RATIO = 2.0
 #: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
 SINGULAR = 1e-12
+
+
+def _mapped(gradient: np.ndarray, covariance_v: np.ndarray) -> np.ndarray:
+    """``G C Gᵀ``, with NaN for every physical parameter that depends on an undetermined one (NaN in ``C``)."""
+    unknown = np.isnan(np.diag(covariance_v))
+    covariance = gradient @ np.nan_to_num(covariance_v) @ gradient.T
+    affected = np.any((gradient != 0) & unknown[None, :], axis=1)
+    covariance[affected, :] = np.nan
+    covariance[:, affected] = np.nan
+    return covariance
 
 
 class UncertaintyWarning(UserWarning):
@@ -58,24 +70,35 @@ class UncertaintyWarning(UserWarning):
 
 def gauss_newton_matrix(posterior: Setup, v) -> np.ndarray:
     """``JᵀJ`` (k, k) of the residuals with respect to the sampling vector, exact (forward mode), chunk by chunk."""
-    return np.asarray(compiled_gauss_newton(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem))
+    return gauss_newton_and_meat(posterior, v)[0]
+
+
+def gauss_newton_and_meat(posterior: Setup, v) -> tuple[np.ndarray, np.ndarray]:
+    """``JᵀJ`` and ``Σ_i r_i² J_iᵀJ_i`` (the "meat" of the sandwich covariance), both (k, k)."""
+    hessian, meat = compiled_gauss_newton(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem)
+    return np.asarray(hessian), np.asarray(meat)
 
 
 @cache
 def compiled_gauss_newton(model: Model, loss: Loss):
-    """``(v, problem) -> JᵀJ``, compiled once per model and loss (and problem shape)."""
+    """``(v, problem) -> (JᵀJ, Σ r² JᵢᵀJᵢ)``, compiled once per model and loss (and problem shape)."""
 
     @jax.jit
     def gauss_newton(v, problem: Problem):
         c = problem.measured.shape[1]
 
-        def accumulate(total, chunk):
-            jacobian = jax.jacfwd(lambda w: residuals_at(model, loss, model.from_sampling(w, c), chunk).ravel())(v)
-            jacobian = jacobian.astype(jnp.float64)
-            return total + jacobian.T @ jacobian, None
+        def residual(w, chunk):
+            return residuals_at(model, loss, model.from_sampling(w, c), chunk).ravel().astype(jnp.float64)
 
-        total, _ = jax.lax.scan(accumulate, jnp.zeros((v.shape[0], v.shape[0]), jnp.float64), chunks(problem))
-        return total
+        def accumulate(totals, chunk):
+            r = residual(v, chunk)
+            jacobian = jax.jacfwd(residual)(v, chunk).astype(jnp.float64)
+            weighted = jacobian * r[:, None]
+            return (totals[0] + jacobian.T @ jacobian, totals[1] + weighted.T @ weighted), None
+
+        zeros = jnp.zeros((v.shape[0], v.shape[0]), jnp.float64)
+        totals, _ = jax.lax.scan(accumulate, (zeros, zeros), chunks(problem))
+        return totals
 
     return gauss_newton
 
@@ -130,19 +153,18 @@ def laplace_block(result: FitResult, posterior: Setup) -> dict:
     dof = posterior.n_values - k
     reduced = chi2 / dof if dof > 0 else float("nan")
     variance_scale = 1.0 if posterior.has_sigma else reduced
-    inverse, undetermined, condition = inverse_with_null_space(gauss_newton_matrix(posterior, v), labels)
+    hessian, meat = gauss_newton_and_meat(posterior, v)
+    inverse, undetermined, condition = inverse_with_null_space(hessian, labels)
     covariance_v = variance_scale * inverse
-
     # The delta method from the sampling coordinates to the physical ones (a no-op except for Lafortune's ψ).
     to_physical = lambda w: model.to_physical_vector(model.from_sampling(w, c))
     physical = np.asarray(to_physical(v))
     gradient = np.asarray(jax.jacfwd(to_physical)(v))
-    unknown = np.isnan(np.diag(covariance_v))
-    covariance = gradient @ np.nan_to_num(covariance_v) @ gradient.T
-    affected = np.any((gradient != 0) & unknown[None, :], axis=1)
-    covariance[affected, :] = np.nan
-    covariance[:, affected] = np.nan
+    covariance = _mapped(gradient, covariance_v)
     stderr = np.sqrt(np.diag(covariance))
+    # Without sigma, s² assumes one variance for every residual; the sandwich A⁻¹BA⁻¹ (White 1980) does not.
+    robust = np.sqrt(np.diag(_mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))))
+    robust[np.isnan(stderr)] = np.nan
 
     messages = []
     if not result.converged:
@@ -154,6 +176,17 @@ def laplace_block(result: FitResult, posterior: Setup) -> dict:
             f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
             " its error is reported as null"
         )
+    names = model.physical_labels(tuple(result.channels))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(np.isfinite(robust / stderr), robust / stderr, 0.0)
+    if not posterior.has_sigma and ratio.max(initial=0.0) > HETEROSCEDASTIC_RATIO:
+        worst = int(np.argmax(ratio))
+        messages.append(
+            f"without sigma the errors assume the same scatter for every residual, but the residuals' scatter varies"
+            f" (e.g. noise proportional to the signal): the heteroscedasticity-robust (sandwich) error of"
+            f" {names[worst]} is {ratio[worst]:.1f}× the reported one (diagnostics.robust_stderr); give a sigma column"
+            " for calibrated errors"
+        )
     pair = strongest_correlation(labels, correlation(covariance_v))
     if pair is not None and abs(pair[2]) >= DEGENERATE_CORRELATION:
         messages.append(
@@ -161,7 +194,6 @@ def laplace_block(result: FitResult, posterior: Setup) -> dict:
             " combination of them, so their errors are large and shared; samples at other angles would separate"
             " them"
         )
-    names = model.physical_labels(tuple(result.channels))
     z = np.array([NormalDist().inv_cdf(q) for q in QUANTILES])
     quantiles = physical[None, :] + z[:, None] * stderr[None, :]
     return {
@@ -175,6 +207,7 @@ def laplace_block(result: FitResult, posterior: Setup) -> dict:
             "dof": dof,
             "noise_scale": None if posterior.has_sigma else float(np.sqrt(reduced)),
             "condition_number": condition,
+            "robust_stderr": None if posterior.has_sigma else stderr_dict(model, robust, c),
             "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
         },
         "warnings": messages,

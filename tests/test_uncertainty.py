@@ -71,6 +71,23 @@ def test_without_sigma_the_errors_scale_with_the_residual_variance():
     s = np.std(values[:, 0], ddof=1)
     assert result.uncertainty["stderr"]["rho_d"][0] == pytest.approx(np.pi * s / np.sqrt(300), rel=1e-8)
     assert result.uncertainty["diagnostics"]["noise_scale"] == pytest.approx(s, rel=1e-8)
+    # The sandwich A⁻¹BA⁻¹ with A = n/π², B = Σr²/π² (by hand): π·sqrt(Σr²)/n; equal scatter, so no warning.
+    residuals = values[:, 0] - np.mean(values[:, 0])
+    robust = result.uncertainty["diagnostics"]["robust_stderr"]["rho_d"][0]
+    assert robust == pytest.approx(np.pi * np.sqrt(np.sum(residuals**2)) / 300, rel=1e-8)
+    assert result.uncertainty["warnings"] == []
+
+
+def test_without_sigma_a_varying_scatter_is_reported():
+    """2% multiplicative noise without sigma: the log-loss residuals' scatter follows the signal, so the s²-scaled
+    errors are too small; the sandwich errors are larger, and a warning says so (the issue's method is kept)."""
+    samples = data_synth.synthesize("ward", OAK, *SMALL_GRID, noise=0.02, seed=13)
+    with pytest.warns(UncertaintyWarning, match="heteroscedasticity-robust"):
+        result = fit(samples, "ward", uncertainty="laplace")
+    robust = flat(result.uncertainty["diagnostics"]["robust_stderr"])
+    assert np.max(robust / flat(result.uncertainty["stderr"])) > 2
+    with_sigma = fit(oak_samples(seed=13), "ward", uncertainty="laplace")
+    assert with_sigma.uncertainty["diagnostics"]["robust_stderr"] is None
 
 
 def test_gauss_newton_matrix_matches_finite_differences():
@@ -110,7 +127,9 @@ def test_inverse_reports_undetermined_parameters():
 
 def test_zero_specular_albedo_leaves_the_roughness_undetermined():
     """With rho_s = 0 exactly, alpha has no effect: its error is null (JSON), with a warning naming it."""
-    samples = data_synth.synthesize("ward", OAK | {"rho_s": [0.0, 0.0, 0.0]}, *SMALL_GRID, noise=0.01, seed=2)
+    samples = data_synth.synthesize(
+        "ward", OAK | {"rho_s": [0.0, 0.0, 0.0]}, *SMALL_GRID, noise=0.01, seed=2, with_sigma=True
+    )
     result = fit(samples, "ward", start=OAK | {"rho_s": [0.0, 0.0, 0.0]}, max_steps=1)
     result = replace(result, params=OAK | {"rho_s": [0.0, 0.0, 0.0]}, converged=True)
     with pytest.warns(UncertaintyWarning, match="not determined by these samples: alpha"):
