@@ -348,6 +348,8 @@ def _fit_outputs(inputs: list[str], output: str | None, model_name: str) -> list
     folder = Path(output) if output else Path(".")
     if folder.exists() and not folder.is_dir():
         raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
+    if not folder.exists() and folder.suffix.lower() == ".json" and not output.endswith(("/", os.sep)):
+        raise BrdfInputError(f"-o {output}: looks like a file; with several samples files give a folder (OUTDIR/)")
     existing = next((parent for parent in (folder, *folder.parents) if parent.exists()), Path("."))
     if not os.access(existing, os.W_OK):
         raise BrdfInputError(f"-o {folder}: folder {existing} is not writable")
@@ -465,7 +467,14 @@ def _convert(args: argparse.Namespace) -> int:
         write_merl(output, result.model, result.params, **result.model_options)
         print(f"wrote {output}: {result.model} tabulated on MERL's 90 × 90 × 180 grid")
         return EXIT_OK
+    if Path(args.input).suffix.lower() == ".json":
+        raise BrdfInputError(f"{args.input}: a result file converts only to a MERL file (.binary), not to {kind}")
     samples = _load(args.input, args)
+    if kind != "csv" and (samples.sigma is not None or samples.weight is not None):
+        print(
+            f"brdffit: warning: {output}: {kind} files hold no sigma or weight columns; they are not written",
+            file=sys.stderr,
+        )
     if kind == "csv":
         from .samples import save_samples
 

@@ -1,5 +1,6 @@
 """Figures: the corner plot of a fit's posterior (Foreman-Mackey 2016, the ``corner`` package)."""
 
+import logging
 import os
 from pathlib import Path
 
@@ -55,22 +56,46 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
     if keep.sum() < 1:
         raise BrdfInputError("no parameter has a posterior spread to plot")
     marked = optimum if truths is None else np.asarray(truths, dtype=float)
-    figure = corner.corner(
-        draws[:, keep],
-        labels=[name for name, k in zip(names, keep, strict=True) if k],
-        truths=marked[keep],
-        quantiles=(0.16, 0.5, 0.84),
-        show_titles=True,
-        title_fmt=".5g",
-        label_kwargs={"fontsize": 9},
-        title_kwargs={"fontsize": 8},
-    )
+    labels = [name for name, k in zip(names, keep, strict=True) if k]
+    if keep.sum() == 1:  # corner draws a grid of at least 2 × 2
+        figure = _histogram(draws[:, keep][:, 0], labels[0], marked[keep][0])
+    else:
+        root = logging.getLogger()
+        level = root.level
+        root.setLevel(logging.ERROR)  # corner logs "too few points to create valid contours" on the root logger
+        try:
+            figure = corner.corner(
+                draws[:, keep],
+                labels=labels,
+                truths=marked[keep],
+                quantiles=(0.16, 0.5, 0.84),
+                show_titles=True,
+                title_fmt=".4g",
+                label_kwargs={"fontsize": 9},
+                title_kwargs={"fontsize": 7},
+            )
+        finally:
+            root.setLevel(level)
     method = result.uncertainty.get("method", "")
     what = "MCMC posterior" if result.posterior is not None else f"{method} Gaussian"
     figure.suptitle(f"{result.model}: {what} (lines: fitted optimum)", y=1.02)
     if path is not None:
         with atomic_path(path) as temporary:
             figure.savefig(temporary, format=path.suffix[1:].lower(), dpi=110, bbox_inches="tight")
+    return figure
+
+
+def _histogram(draws: np.ndarray, label: str, marked: float):
+    """The one-parameter "corner plot": a histogram with the 16/50/84% quantiles and the optimum."""
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(4, 3))
+    axis.hist(draws, bins=40, histtype="step", color="k")
+    for q in np.quantile(draws, (0.16, 0.5, 0.84)):
+        axis.axvline(q, color="k", linestyle="--", linewidth=1)
+    axis.axvline(marked, color="#4682b4")
+    axis.set_xlabel(label)
+    axis.set_yticks([])
     return figure
 
 

@@ -196,6 +196,9 @@ def laplace_block(result: FitResult, posterior: Setup) -> dict:
         )
     z = np.array([NormalDist().inv_cdf(q) for q in QUANTILES])
     quantiles = physical[None, :] + z[:, None] * stderr[None, :]
+    # The Gaussian knows no bounds; its quantiles are clipped to each parameter's domain (an albedo stays ≥ 0).
+    bounds = np.array([domain.bounds for domain in model.physical_domains(c)])
+    quantiles = np.clip(quantiles, bounds[:, 0], bounds[:, 1])
     return {
         "method": "laplace",
         "stderr": stderr_dict(model, stderr, c),

@@ -25,7 +25,7 @@ from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from ._files import atomic_path
 from .errors import BrdfInputError
-from .laplace import UncertaintyWarning, gauss_newton_matrix, inverse_with_null_space
+from .laplace import UncertaintyWarning, gauss_newton_matrix, inverse_with_null_space, laplace_block
 from .posterior import LOG_NOISE, Setup, compiled_chi_squared, log_probability_function, physical_draws, setup
 from .report import (
     QUANTILES,
@@ -131,26 +131,35 @@ def sample_posterior(
     return with_block(result, block).with_posterior(draws)
 
 
-def start_ball(posterior: Setup, settings: MCMC, n_dimensions: int, rng: np.random.Generator) -> np.ndarray:
-    """Walker starts (W, D): the optimum plus Gaussian offsets of :data:`BALL` Laplace standard errors."""
+def start_ball(posterior: Setup, settings: MCMC, n_dimensions: int, rng: np.random.Generator, log_prob) -> np.ndarray:
+    """Walker starts (W, D) with finite posterior density: the optimum plus Gaussian offsets of :data:`BALL`
+    Laplace standard errors, no wider than a tenth of a bounded domain or of a positive value's magnitude.
+
+    A walker that still lands outside the prior's support (an optimum on a bound) is drawn again, in a ball
+    halved each time; a walker with density ``-inf`` would never move and would poison the draws.
+    """
     v = posterior.optimum
     inverse, _, _ = inverse_with_null_space(gauss_newton_matrix(posterior, v), posterior.labels)
     chi2 = float(compiled_chi_squared(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem))
     noise2 = 1.0 if posterior.has_sigma else chi2 / max(posterior.n_values - v.size, 1)
-    width = np.sqrt(noise2 * np.diag(inverse))
+    width = BALL * np.sqrt(noise2 * np.diag(inverse))
+    limits = []
+    for value, domain in zip(v, posterior.model.sampling_domains(posterior.n_channels), strict=True):
+        lower, upper = domain.bounds
+        limits.append(BALL * (upper - lower) if np.isfinite(upper) else BALL * max(abs(value), 1e-3))
     fallback = 1e-4 * np.maximum(np.abs(v), 1e-3)  # where the Laplace error is undetermined
-    width = np.where(np.isfinite(width) & (width > 0), BALL * width, fallback)
+    width = np.where(np.isfinite(width) & (width > 0), np.minimum(width, limits), fallback)
     centre = v
     if n_dimensions > v.size:  # ln s, known to about 1/sqrt(2n)
         centre = np.append(v, 0.5 * np.log(noise2))
         width = np.append(width, BALL / np.sqrt(2.0 * posterior.n_values))
     walkers = centre + width * rng.standard_normal((settings.walkers, n_dimensions))
-    # Stay in the prior's support (reflect the rare stray at a bound): an optimum may sit on one.
-    for i, domain in enumerate(posterior.model.sampling_domains(posterior.n_channels)):
-        lower, upper = domain.bounds
-        walkers[:, i] = lower + np.abs(walkers[:, i] - lower)
-        walkers[:, i] = upper - np.abs(upper - walkers[:, i]) if np.isfinite(upper) else walkers[:, i]
-    return walkers
+    for attempt in range(1, 60):
+        bad = ~np.isfinite(log_prob(walkers))
+        if not bad.any():
+            return walkers
+        walkers[bad] = centre + width * 0.5**attempt * rng.standard_normal((int(bad.sum()), n_dimensions))
+    raise BrdfInputError("the posterior density is -inf around the fitted parameters; the fit cannot be sampled")
 
 
 def mcmc_block(
@@ -162,8 +171,8 @@ def mcmc_block(
     labels = posterior.labels + ([] if posterior.has_sigma else [LOG_NOISE])
     n_dimensions = len(labels)
     rng = np.random.default_rng(settings.seed)
-    start = start_ball(posterior, settings, n_dimensions, rng)
     log_prob = log_probability_function(posterior)
+    start = start_ball(posterior, settings, n_dimensions, rng, log_prob)
 
     if chain_path is None:
         chain, accepted = _chain_of(run_sampler(settings, start, log_prob, progress))
@@ -189,6 +198,11 @@ def mcmc_block(
     messages = []
     if not result.converged:
         messages.append("the fit did not converge: the chain started from the point where it stopped")
+    # What the Laplace approximation finds at the optimum holds for the posterior too: an undetermined parameter
+    # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
+    messages += [
+        message for message in laplace_block(result, posterior)["warnings"] if "did not converge" not in message
+    ]
     longest = int(np.argmax(tau))
     if after_burn < MIN_AUTOCORRELATION_TIMES * tau[longest]:
         needed = int(np.ceil(MIN_AUTOCORRELATION_TIMES * tau[longest])) + settings.burn
@@ -237,13 +251,14 @@ def run_sampler(settings: MCMC, start: np.ndarray, log_prob, progress: bool, bac
     import emcee
 
     sampler = emcee.EnsembleSampler(settings.walkers, start.shape[1], log_prob, vectorize=True, backend=backend)
-    sampler.run_mcmc(
-        emcee.State(start, random_state=np.random.RandomState(settings.seed).get_state()),
-        settings.steps,
-        progress=progress,
-        progress_kwargs={"desc": "mcmc", "unit": "step", "leave": False},
-        skip_initial_state_check=True,  # the ball's widths span many orders of magnitude by design
-    )
+    with np.errstate(invalid="ignore", over="ignore"):  # a proposal of density -inf is rejected, not an error
+        sampler.run_mcmc(
+            emcee.State(start, random_state=np.random.RandomState(settings.seed).get_state()),
+            settings.steps,
+            progress=progress,
+            progress_kwargs={"desc": "mcmc", "unit": "step", "leave": False},
+            skip_initial_state_check=True,  # the ball's widths span many orders of magnitude by design
+        )
     return sampler
 
 

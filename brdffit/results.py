@@ -199,8 +199,9 @@ def _number(value: float, error: float | None = None, has_error: bool = False) -
     if error is None or not math.isfinite(error) or error <= 0:
         return f"{value:.6g}" + (" ± ?" if has_error and error is None else "")
     decimals = max(0, 1 - math.floor(math.log10(error)))
-    if decimals > 12 or abs(value) >= 1e6:
-        return f"{value:.6g} ± {error:.2g}"
+    if decimals > 7 or abs(value) >= 1e6:  # fixed point would be long: the value to its error's digits, in e-form
+        digits = max(0, math.floor(math.log10(abs(value))) - math.floor(math.log10(error))) + 1 if value else 1
+        return f"{value:.{min(digits, 12)}e} ± {error:.1e}"
     return f"{value:.{decimals}f} ± {error:.{decimals}f}"
 
 

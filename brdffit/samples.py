@@ -87,7 +87,13 @@ class Samples:
         if len(channels) != values.shape[1]:
             raise BrdfInputError(f"{source}: {len(channels)} channel names for {values.shape[1]} value columns")
         if sigma is not None:
-            sigma = np.broadcast_to(_float_array(sigma, "sigma", source).reshape(n, -1), values.shape).copy()
+            sigma = _float_array(sigma, "sigma", source)
+            try:  # one number, one per sample (N,) or (N, 1), or one per value (N, C)
+                sigma = np.broadcast_to(sigma if sigma.ndim == 0 else sigma.reshape(n, -1), values.shape).copy()
+            except ValueError:
+                raise BrdfInputError(
+                    f"{source}: sigma of shape {sigma.shape} does not fit values of shape {values.shape}"
+                ) from None
         if weight is not None:
             weight = _float_array(weight, "weight", source).reshape(n)
         locate = lambda row: f"{source}: row {row}"
@@ -211,7 +217,7 @@ def _check_choice(option: str, value: str, allowed: Sequence[str]) -> None:
 def _read_text(path: Path) -> str:
     with reading(path, "a samples file"):
         try:
-            return path.read_text(encoding="utf-8")
+            return path.read_text(encoding="utf-8-sig")  # a byte-order mark (Excel) is not part of the header
         except UnicodeDecodeError:
             raise BrdfInputError(f"{path}: not a text file (not UTF-8); samples files are CSV text") from None
 

@@ -155,3 +155,30 @@ def test_malformed_files_exit_2_with_one_line(name, content, piece, tmp_path, ca
     assert status == 2 and out == ""
     assert err.startswith(f"brdffit: error: {path}") and err.count("\n") == 1 and piece in err, err
     assert "Traceback" not in err and sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_byte_order_mark_and_convert_messages(small, tmp_path, capsys):
+    samples, path = small
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())  # as Excel writes UTF-8
+    assert load_samples(bom).n_samples == 300
+    with_sigma = tmp_path / "sigma.csv"
+    save_samples(
+        samples.__class__.from_arrays(
+            samples.wi, samples.wo, samples.values, samples.channels, sigma=0.01 * samples.values
+        ),
+        with_sigma,
+    )
+    status, _, err = run(["convert", with_sigma, tmp_path / "sigma.dat"], capsys)
+    assert status == 0 and "hold no sigma or weight columns; they are not written" in err
+    result = tmp_path / "r.json"
+    result.write_text("{}")
+    status, _, err = run(["convert", result, tmp_path / "out.csv"], capsys)
+    assert status == 2 and "a result file converts only to a MERL file (.binary)" in err
+
+
+def test_several_inputs_need_a_folder(small, tmp_path, capsys):
+    _, path = small
+    status, _, err = run(["fit", path, path, "-o", tmp_path / "x.json"], capsys)
+    assert status == 2 and "looks like a file; with several samples files give a folder (OUTDIR/)" in err
+    assert not (tmp_path / "x.json").exists()

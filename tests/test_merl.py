@@ -287,7 +287,7 @@ def test_no_valid_sample_is_an_error(folder, index_file):
     stored = np.ones((3, N_BINS))
     stored[:, : 90 * 180] = -1  # only θh bin 0 is missing; every other bin has θh ≥ 0.011°
     path.write_bytes(merl_bytes(stored))
-    one_line_error(lambda: read_merl(path, max_theta=0.001), str(path), "no valid sample", "max_theta 0.001")
+    one_line_error(lambda: read_merl(path, max_theta=0.001), str(path), "no valid sample", "--max-theta 0.001")
 
 
 @pytest.mark.parametrize(
@@ -298,13 +298,13 @@ def test_no_valid_sample_is_an_error(folder, index_file):
         ({"subsample": 2.5}, "subsample 2.5"),
         ({"subsample": "100"}, "subsample '100'"),
         ({"subsample": True}, "subsample True"),
-        ({"subsample": 100, "subsample_method": "grid"}, "subsample_method 'grid' is not allowed"),
-        ({"max_theta": 0}, "max_theta 0 is not allowed; give degrees in (0, 90]"),
-        ({"max_theta": -10}, "max_theta -10"),
-        ({"max_theta": 90.5}, "max_theta 90.5"),
-        ({"max_theta": math.nan}, "max_theta nan"),
-        ({"max_theta": "60"}, "max_theta '60'"),
-        ({"seed": -1}, "seed -1"),
+        ({"subsample": 100, "subsample_method": "grid"}, "--subsample-method 'grid' is not allowed"),
+        ({"max_theta": 0}, "--max-theta 0 is not allowed; give degrees in (0, 90]"),
+        ({"max_theta": -10}, "--max-theta -10"),
+        ({"max_theta": 90.5}, "--max-theta 90.5"),
+        ({"max_theta": math.nan}, "--max-theta nan"),
+        ({"max_theta": "60"}, "--max-theta '60'"),
+        ({"seed": -1}, "--seed -1"),
     ],
 )
 def test_bad_options_are_rejected(ward_file, options, fragment):

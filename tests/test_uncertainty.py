@@ -423,3 +423,45 @@ def test_cli_bad_uncertainty_options(argv, piece, oak_file, tmp_path, capsys, mo
 def test_cli_chain_takes_one_input(oak_file, tmp_path, capsys):
     status, _, err = _cli(["fit", oak_file, oak_file, "--uncertainty", "mcmc", "--chain", tmp_path / "c.npz"], capsys)
     assert status == 2 and "--chain and --corner take one samples file; got 2" in err
+
+
+def test_mcmc_near_a_bound_stays_in_the_domain_and_keeps_laplace_warnings():
+    """Cook-Torrance below 45° leaves f0 nearly free (only ks·f0 is measured) and the optimum on f0's bound:
+    every walker starts and stays inside [0, 1], and the degeneracy Laplace finds is reported by MCMC too."""
+    params = {"kd": [0.1], "ks": [0.5], "m": 0.2, "f0": 0.04}
+    wi, wo = data_synth.hemisphere_grid(n_incident=4, n_theta=18, n_phi=18)
+    samples = data_synth.synthesize("cook-torrance", params, wi, wo, noise=0.02, seed=5, with_sigma=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fit(
+            samples, "cook-torrance", max_theta=45, uncertainty="mcmc", mcmc=MCMC(walkers=16, steps=300, burn=100)
+        )
+    names = result.uncertainty["covariance"]["names"]
+    f0 = result.posterior[:, names.index("f0")]
+    assert np.all((f0 >= 0) & (f0 <= 1))
+    assert all(0 <= q <= 1 for q in result.uncertainty["quantiles"]["f0"].values())
+    assert any("nearly degenerate" in message for message in result.uncertainty["warnings"])
+    assert all(issubclass(w.category, UncertaintyWarning) for w in caught), [str(w.message) for w in caught]
+
+
+def test_laplace_quantiles_stay_in_the_domain():
+    samples = data_synth.synthesize(
+        "ward", OAK | {"rho_s": [1e-4, 1e-4, 1e-4]}, *SMALL_GRID, noise=0.02, seed=6, with_sigma=True
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)
+        result = fit(samples, "ward", uncertainty="laplace")
+    lowest = result.uncertainty["quantiles"]["rho_s"]["0.025"]
+    assert all(value >= 0 for value in lowest)
+
+
+def test_corner_plot_of_one_parameter(tmp_path):
+    wi, wo = data_synth.uniform_random(300, seed=8)
+    samples = data_synth.synthesize("lambert", {"rho_d": [0.5]}, wi, wo, noise=0.01, seed=9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)
+        result = fit(samples, "lambert", uncertainty="mcmc", mcmc=MCMC(walkers=8, steps=120, burn=20))
+    from brdffit import corner_plot
+
+    corner_plot(result, tmp_path / "one.png")
+    assert (tmp_path / "one.png").read_bytes()[:4] == b"\x89PNG"

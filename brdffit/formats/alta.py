@@ -91,7 +91,7 @@ def read_text(path: Path, what: str) -> str:
     if b"\0" in data:
         raise BrdfInputError(f"{path}: binary content (NUL bytes); {what} is text")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise BrdfInputError(f"{path}: not a text file (not UTF-8); {what} is text") from None
     if not text.strip():

@@ -113,7 +113,7 @@ def read_merl(
         keep &= (theta(wi) <= max_theta) & (theta(wo) <= max_theta)
     index = np.flatnonzero(keep)
     if index.size == 0:
-        limit = "" if max_theta is None else f" or beyond max_theta {max_theta:g} degrees"
+        limit = "" if max_theta is None else f" or beyond --max-theta {max_theta:g} degrees"
         raise BrdfInputError(f"{source}: no valid sample (every bin is missing, below the horizon{limit})")
     if subsample is not None:
         index = _subsample(index, int(subsample), subsample_method, seed, source)
@@ -125,15 +125,15 @@ def _check_options(max_theta, subsample, method, seed) -> None:
     if max_theta is not None:
         number = isinstance(max_theta, numbers.Real) and not isinstance(max_theta, bool)
         if not (number and 0 < max_theta <= 90):
-            raise BrdfInputError(f"max_theta {max_theta!r} is not allowed; give degrees in (0, 90]")
+            raise BrdfInputError(f"--max-theta {max_theta!r} is not allowed; give degrees in (0, 90]")
     if subsample is not None and not _whole_number(subsample, minimum=1):
-        raise BrdfInputError(f"subsample {subsample!r} is not allowed; give a whole number ≥ 1")
+        raise BrdfInputError(f"--subsample {subsample!r} is not allowed; give a whole number ≥ 1")
     if method not in SUBSAMPLE_METHODS:
         raise BrdfInputError(
-            f"subsample_method {method!r} is not allowed; choose one of: {', '.join(SUBSAMPLE_METHODS)}"
+            f"--subsample-method {method!r} is not allowed; choose one of: {', '.join(SUBSAMPLE_METHODS)}"
         )
     if not _whole_number(seed, minimum=0):
-        raise BrdfInputError(f"seed {seed!r} is not allowed; give a whole number ≥ 0")
+        raise BrdfInputError(f"--seed {seed!r} is not allowed; give a whole number ≥ 0")
 
 
 def _whole_number(value, minimum: int) -> bool:
@@ -168,7 +168,8 @@ def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: st
     """``count`` of the valid bins ``index`` (sorted, file order), drawn with ``default_rng(seed)``."""
     if count > index.size:
         raise BrdfInputError(
-            f"{source}: subsample {count:,} is more than the {index.size:,} valid samples; give at most {index.size:,}"
+            f"{source}: --subsample {count:,} is more than the {index.size:,} valid samples;"
+            f" give at most {index.size:,}"
         )
     rng = np.random.default_rng(seed)
     if method == "random":

@@ -334,6 +334,13 @@ class Model:
             domains += [domain for _ in range(self.n_lobes) for _, domain in self.lobe.sampling_parameters]
         return domains
 
+    def physical_domains(self, n_channels: int) -> list[Any]:
+        """The domain of each entry of the physical vector (:meth:`physical_labels` order)."""
+        domains = [NON_NEGATIVE] * ((1 + self.n_lobes) * n_channels)
+        if self.n_lobes:
+            domains += [domain for _ in range(self.n_lobes) for _, domain in self.lobe.parameters]
+        return domains
+
     def sampling_labels(self, channels: tuple[str, ...]) -> list[str]:
         """A name for each entry of the sampling vector, e.g. ``rho_d[r]``, ``alpha``, ``lobes[0].psi``."""
         return self._labels(channels, [name for name, _ in self.lobe.sampling_parameters] if self.n_lobes else ())

@@ -116,6 +116,10 @@ class _DirectionComponent:
 
     text: str = "real, with 2·cxy² + cz² = 1"
 
+    @property
+    def bounds(self) -> tuple[float, float]:
+        return -1.0, 1.0
+
 
 def lafortune(lobes: int = 1) -> Model:
     """``rho_d/π`` plus ``lobes`` generalised cosine lobes (default 1)."""
