@@ -12,6 +12,8 @@ METHODS = ("laplace", "mcmc")
 
 
 def check_method(method: str | None) -> str | None:
+    if isinstance(method, MCMC):
+        raise BrdfInputError("uncertainty takes 'laplace' or 'mcmc'; pass MCMC settings as mcmc=brdffit.MCMC(...)")
     if method is not None and method not in METHODS:
         raise BrdfInputError(f"--uncertainty {method!r} is not allowed; choose one of: {', '.join(METHODS)}")
     return method

@@ -339,6 +339,8 @@ def test_too_few_walkers_and_mismatched_samples():
         sample_posterior(result, samples, MCMC(walkers=8))
     with pytest.raises(BrdfInputError, match="the fit used 432"):
         laplace_uncertainty(result, samples.within(45))
+    with pytest.raises(BrdfInputError, match="pass MCMC settings as mcmc="):
+        fit(samples, "ward", uncertainty=MCMC())
     with pytest.raises(BrdfInputError, match="uncertainty 'bootstrap' is not allowed"):
         fit(samples, "ward", uncertainty="bootstrap")
     with pytest.raises(BrdfInputError, match="mcmc settings and chain apply only"):
