@@ -64,12 +64,10 @@ def fit_batch(
     terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
     settings) adds each result's ``uncertainty`` block after the fits.
     """
-    if uncertainty is not None:
-        from .uncertainty import check_method, with_uncertainty
+    if uncertainty is not None or mcmc is not None:
+        from .uncertainty import check_options, with_uncertainty
 
-        check_method(uncertainty)
-    if uncertainty != "mcmc" and mcmc is not None:
-        raise BrdfInputError("mcmc settings apply only to uncertainty='mcmc'")
+        check_options(uncertainty, mcmc)
     if strategy not in STRATEGIES:
         raise BrdfInputError(f"strategy {strategy!r} is not allowed; choose one of: {', '.join(STRATEGIES)}")
     samples = list(samples)

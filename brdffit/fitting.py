@@ -75,15 +75,11 @@ def fit(
     (a progress bar) apply to ``"mcmc"``. ``model_options``: ``fresnel=`` for
     cook-torrance, ``lobes=`` for lafortune.
     """
-    if uncertainty is not None:  # imported only when asked for: the plain fit's start-up stays lean
-        from .mcmc import MCMC, check_chain_path, check_walkers
-        from .uncertainty import check_method, with_uncertainty
+    if uncertainty is not None or mcmc is not None or chain is not None:  # imported only when asked for
+        from .mcmc import MCMC, check_walkers
+        from .uncertainty import check_options, with_uncertainty
 
-        check_method(uncertainty)
-    if uncertainty != "mcmc" and (mcmc is not None or chain is not None):
-        raise BrdfInputError("mcmc settings and chain apply only to uncertainty='mcmc'")
-    if chain is not None:
-        check_chain_path(chain)
+        check_options(uncertainty, mcmc, chain)
     model, loss, samples = _checked(samples, model, loss, max_theta, dtype, **model_options)
     if uncertainty == "mcmc":
         check_walkers(mcmc or MCMC(), model, samples)

@@ -4,7 +4,7 @@ import os
 
 from .errors import BrdfInputError
 from .laplace import laplace_uncertainty
-from .mcmc import MCMC, sample_posterior
+from .mcmc import MCMC, check_chain_path, sample_posterior
 from .results import FitResult
 from .samples import Samples
 
@@ -17,6 +17,16 @@ def check_method(method: str | None) -> str | None:
     if method is not None and method not in METHODS:
         raise BrdfInputError(f"--uncertainty {method!r} is not allowed; choose one of: {', '.join(METHODS)}")
     return method
+
+
+def check_options(method: str | None, mcmc: MCMC | None = None, chain: str | os.PathLike | None = None) -> None:
+    """The API's uncertainty arguments, checked before any work: the method, MCMC settings only with ``"mcmc"``,
+    and a chain file the sampler can write."""
+    check_method(method)
+    if method != "mcmc" and (mcmc is not None or chain is not None):
+        raise BrdfInputError("mcmc settings and chain apply only to uncertainty='mcmc'")
+    if chain is not None:
+        check_chain_path(chain)
 
 
 def with_uncertainty(
@@ -33,9 +43,7 @@ def with_uncertainty(
     ``mcmc``, ``chain`` and ``progress`` apply to ``method="mcmc"`` (see
     :func:`brdffit.sample_posterior`).
     """
-    check_method(method)
+    check_options(method, mcmc, chain)
     if method == "laplace":
-        if mcmc is not None or chain is not None:
-            raise BrdfInputError("MCMC settings and --chain apply only to --uncertainty mcmc")
         return laplace_uncertainty(result, samples)
     return sample_posterior(result, samples, mcmc, chain=chain, progress=progress)
