@@ -24,6 +24,7 @@ reported as null and a warning names it. Correlations of |ρ| ≥
 import warnings
 from functools import cache
 from statistics import NormalDist
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -145,16 +146,33 @@ def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
     return with_block(result, block)
 
 
-def laplace_block(result: FitResult, posterior: Setup) -> dict:
+class Curvature(NamedTuple):
+    """What one pass at the optimum gives: ``Σ r²``, ``(JᵀJ)⁻¹`` and the sandwich's meat, in sampling coordinates."""
+
+    chi2: float
+    inverse: np.ndarray  # (JᵀJ)⁻¹, NaN in the rows and columns of undetermined parameters
+    meat: np.ndarray  # Σ_i r_i² J_iᵀJ_i
+    undetermined: list[str]
+    condition: float  # of the correlation-scaled JᵀJ
+
+
+def curvature_at_optimum(posterior: Setup) -> Curvature:
+    v = jnp.asarray(posterior.optimum)
+    chi2 = float(compiled_chi_squared(posterior.model, posterior.loss)(v, posterior.problem))
+    hessian, meat = gauss_newton_and_meat(posterior, v)
+    inverse, undetermined, condition = inverse_with_null_space(hessian, posterior.labels)
+    return Curvature(chi2, inverse, meat, undetermined, condition)
+
+
+def laplace_block(result: FitResult, posterior: Setup, curvature: Curvature | None = None) -> dict:
+    """The Laplace ``uncertainty`` block; ``curvature``: :func:`curvature_at_optimum`, when already computed."""
     model, c, labels = posterior.model, posterior.n_channels, posterior.labels
     v = jnp.asarray(posterior.optimum)
     k = v.shape[0]
-    chi2 = float(compiled_chi_squared(model, posterior.loss)(v, posterior.problem))
+    chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(posterior)
     dof = posterior.n_values - k
     reduced = chi2 / dof if dof > 0 else float("nan")
     variance_scale = 1.0 if posterior.has_sigma else reduced
-    hessian, meat = gauss_newton_and_meat(posterior, v)
-    inverse, undetermined, condition = inverse_with_null_space(hessian, labels)
     covariance_v = variance_scale * inverse
     # The delta method from the sampling coordinates to the physical ones (a no-op except for Lafortune's ψ).
     to_physical = lambda w: model.to_physical_vector(model.from_sampling(w, c))

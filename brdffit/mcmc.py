@@ -18,15 +18,14 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import jax.numpy as jnp
 import numpy as np
 
 from . import _jax  # noqa: F401  (float64 before any array)
 from ._checks import whole_number
 from ._files import atomic_path
 from .errors import BrdfInputError
-from .laplace import UncertaintyWarning, gauss_newton_matrix, inverse_with_null_space, laplace_block
-from .posterior import LOG_NOISE, Setup, compiled_chi_squared, log_probability_function, physical_draws, setup
+from .laplace import Curvature, UncertaintyWarning, curvature_at_optimum, laplace_block
+from .posterior import LOG_NOISE, Setup, log_probability_function, physical_draws, setup
 from .report import (
     QUANTILES,
     correlation,
@@ -131,7 +130,9 @@ def sample_posterior(
     return with_block(result, block).with_posterior(draws)
 
 
-def start_ball(posterior: Setup, settings: MCMC, n_dimensions: int, rng: np.random.Generator, log_prob) -> np.ndarray:
+def start_ball(
+    posterior: Setup, curvature: Curvature, settings: MCMC, n_dimensions: int, rng: np.random.Generator, log_prob
+) -> np.ndarray:
     """Walker starts (W, D) with finite posterior density: the optimum plus Gaussian offsets of :data:`BALL`
     Laplace standard errors, no wider than a tenth of a bounded domain or of a positive value's magnitude.
 
@@ -139,10 +140,8 @@ def start_ball(posterior: Setup, settings: MCMC, n_dimensions: int, rng: np.rand
     halved each time; a walker with density ``-inf`` would never move and would poison the draws.
     """
     v = posterior.optimum
-    inverse, _, _ = inverse_with_null_space(gauss_newton_matrix(posterior, v), posterior.labels)
-    chi2 = float(compiled_chi_squared(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem))
-    noise2 = 1.0 if posterior.has_sigma else chi2 / max(posterior.n_values - v.size, 1)
-    width = BALL * np.sqrt(noise2 * np.diag(inverse))
+    noise2 = 1.0 if posterior.has_sigma else curvature.chi2 / max(posterior.n_values - v.size, 1)
+    width = BALL * np.sqrt(noise2 * np.diag(curvature.inverse))
     limits = []
     for value, domain in zip(v, posterior.model.sampling_domains(posterior.n_channels), strict=True):
         lower, upper = domain.bounds
@@ -172,7 +171,8 @@ def mcmc_block(
     n_dimensions = len(labels)
     rng = np.random.default_rng(settings.seed)
     log_prob = log_probability_function(posterior)
-    start = start_ball(posterior, settings, n_dimensions, rng, log_prob)
+    curvature = curvature_at_optimum(posterior)  # one pass: the start ball's widths and Laplace's warnings
+    start = start_ball(posterior, curvature, settings, n_dimensions, rng, log_prob)
 
     if chain_path is None:
         chain, accepted = _chain_of(run_sampler(settings, start, log_prob, progress))
@@ -201,7 +201,9 @@ def mcmc_block(
     # What the Laplace approximation finds at the optimum holds for the posterior too: an undetermined parameter
     # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
     messages += [
-        message for message in laplace_block(result, posterior)["warnings"] if "did not converge" not in message
+        message
+        for message in laplace_block(result, posterior, curvature)["warnings"]
+        if "did not converge" not in message
     ]
     longest = int(np.argmax(tau))
     if after_burn < MIN_AUTOCORRELATION_TIMES * tau[longest]:
