@@ -202,11 +202,9 @@ def load_samples(
         samples = replace(
             samples, values=samples.values * scale, sigma=None if samples.sigma is None else samples.sigma * scale
         )
-    if spectral_to != "keep" or illuminant != "D65" or observer != "CIE 1931 2 Degree Standard Observer":
-        from .formats.spectral import spectral_to as convert
+    from .formats.spectral import spectral_to as convert  # "keep" returns the samples as they are
 
-        samples = convert(samples, spectral_to, illuminant=illuminant, observer=observer)
-    return samples
+    return convert(samples, spectral_to, illuminant=illuminant, observer=observer)
 
 
 def _check_choice(option: str, value: str, allowed: Sequence[str]) -> None:
@@ -422,15 +420,13 @@ class _Checked:
             lambda v: f"{v:g} ≤ 0: the direction is below the horizon (z must be > 0)",
             vectors,
         )
-        length = np.linalg.norm(vectors, axis=1)
-        bad = np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE
-        if np.any(bad):
-            row = int(np.argmax(bad))
-            raise BrdfInputError(
-                f"{self.locate(row)}, columns {', '.join(components)}: length {length[row]:.6g} is not 1"
+        return normalised(
+            vectors,
+            lambda row, length: (
+                f"{self.locate(row)}, columns {', '.join(components)}: length {length:.6g} is not 1"
                 f" (directions must be unit vectors, within {UNIT_LENGTH_TOLERANCE:g})"
-            )
-        return vectors / length[:, None]
+            ),
+        )
 
     def samples(self, wi, wo, values, channels, sigma, weight, source, sigma_names=None) -> Samples:
         """Check values, sigma and weight, and build the :class:`Samples`.
@@ -449,6 +445,17 @@ class _Checked:
             if not np.any(weight > 0):
                 raise BrdfInputError(f"{source}: every weight is 0; at least one sample must count")
         return Samples(wi, wo, values, tuple(channels), sigma, weight, source)
+
+
+def normalised(vectors: np.ndarray, message: Callable[[int, float], str]) -> np.ndarray:
+    """``vectors`` (N, 3) divided by their lengths, each of which must be 1 within :data:`UNIT_LENGTH_TOLERANCE`;
+    otherwise a :class:`BrdfInputError` with ``message(row, length)`` for the first that is not."""
+    length = np.linalg.norm(vectors, axis=1)
+    bad = np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE
+    if np.any(bad):
+        row = int(np.argmax(bad))
+        raise BrdfInputError(message(row, float(length[row])))
+    return vectors / length[:, None]
 
 
 def _float_array(value, name: str, source: str) -> np.ndarray:

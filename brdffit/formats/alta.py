@@ -59,7 +59,7 @@ import numpy as np
 
 from .._files import reading, write_text_atomic
 from ..errors import BrdfInputError
-from ..samples import UNIT_LENGTH_TOLERANCE, Samples
+from ..samples import UNIT_LENGTH_TOLERANCE, Samples, normalised
 
 #: ``#PARAM_IN`` names read, with the number of input coordinates each takes.
 PARAMETERISATIONS = {
@@ -341,15 +341,13 @@ def _vs_columns(header, n_out: int, source: str) -> set[int]:
 
 
 def _unit(w: np.ndarray, lines: np.ndarray, name: str, source: str) -> np.ndarray:
-    length = np.linalg.norm(w, axis=1)
-    bad = np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE
-    if np.any(bad):
-        row = int(np.argmax(bad))
-        raise BrdfInputError(
-            f"{source}: line {lines[row]}: the {name} vector has length {length[row]:.6g}, not 1"
+    return normalised(
+        w,
+        lambda row, length: (
+            f"{source}: line {lines[row]}: the {name} vector has length {length:.6g}, not 1"
             f" (CARTESIAN directions must be unit vectors, within {UNIT_LENGTH_TOLERANCE:g})"
-        )
-    return w / length[:, None]
+        ),
+    )
 
 
 # ---------------------------------------------------------------------- parameterisations
