@@ -1,4 +1,4 @@
-"""JAX in float64: every module that uses JAX imports this first (``from . import _jax``).
+"""JAX as brdffit uses it: float64, and one ``jit`` with the compiler options that suit these programs.
 
 brdffit computes in float64 unless asked otherwise (SPEC section 1), and JAX
 only makes float64 arrays with ``jax_enable_x64`` on. It must be on before the
@@ -7,6 +7,44 @@ import line in each rather than one switch in ``__init__`` (which stays free
 of imports so that ``import brdffit`` costs nothing).
 """
 
+import functools
+
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+#: XLA options for the CPU backend. XLA's newer CPU "fusion emitters" (MLIR-based, the default since jax 0.5)
+#: take twice as long to compile the normal-equation pass as the classic loop emitters and make slower code for
+#: it: on the MERL-size Cook-Torrance fit, compile 1.26 s → 0.55 s and the solve 1.0 s → 0.88 s (2-core Xeon,
+#: jax 0.10.2; benchmarks/README). XNNPACK rewrites of the small dots only add compile time here.
+CPU_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_use_xnnpack": False}
+
+
+@functools.cache
+def compiler_options() -> dict | None:
+    """:data:`CPU_COMPILER_OPTIONS` when JAX's default backend is the CPU, else None (XLA's defaults)."""
+    return CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
+
+
+def jit(fun=None, **jit_arguments):
+    """``jax.jit`` with :func:`compiler_options`, chosen at the first call so that importing does no work.
+
+    Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
+    options only for a program compiled on its own, so inside a traced function (``jit`` or ``vmap`` of a
+    caller) the plain ``jax.jit`` is used and the outer program's options apply.
+    """
+    if fun is None:
+        return functools.partial(jit, **jit_arguments)
+    plain = jax.jit(fun, **jit_arguments)
+    top_level = None
+
+    @functools.wraps(fun)
+    def call(*args, **kwargs):
+        nonlocal top_level
+        if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
+            return plain(*args, **kwargs)
+        if top_level is None:
+            top_level = jax.jit(fun, compiler_options=compiler_options(), **jit_arguments)
+        return top_level(*args, **kwargs)
+
+    return call

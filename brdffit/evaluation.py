@@ -1,12 +1,10 @@
 """Evaluate a model with SPEC-style parameters at given directions (SPEC section 6)."""
 
-from functools import partial
 from typing import Any
 
-import jax
 import numpy as np
 
-from . import _jax  # noqa: F401  (float64 before any array)
+from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .errors import BrdfInputError
 from .models import Model, Params, get_model
 
@@ -27,7 +25,7 @@ def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any)
     return np.asarray(_evaluate(model, checked, wi, wo))
 
 
-@partial(jax.jit, static_argnums=0)
+@jit(static_argnums=0)
 def _evaluate(model: Model, params: Params, wi, wo):
     return model.evaluate(params, wi, wo)
 

@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _jax  # noqa: F401  (float64 before any array)
+from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .losses import Loss
 from .models import Model
 from .posterior import Setup, compiled_chi_squared, setup
@@ -84,7 +84,7 @@ def gauss_newton_and_meat(posterior: Setup, v) -> tuple[np.ndarray, np.ndarray]:
 def compiled_gauss_newton(model: Model, loss: Loss):
     """``(v, problem) -> (JᵀJ, Σ r² JᵢᵀJᵢ)``, compiled once per model and loss (and problem shape)."""
 
-    @jax.jit
+    @jit
     def gauss_newton(v, problem: Problem):
         c = problem.measured.shape[1]
 

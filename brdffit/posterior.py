@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _jax  # noqa: F401  (float64 before any array)
+from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, get_model
@@ -93,7 +93,7 @@ def chi_squared(model: Model, loss: Loss, v, problem: Problem):
 @cache
 def compiled_chi_squared(model: Model, loss: Loss):
     """:func:`chi_squared` compiled: ``(v, problem) -> Σ r²``."""
-    return jax.jit(partial(chi_squared, model, loss))
+    return jit(partial(chi_squared, model, loss))
 
 
 def log_prior(model: Model, v, n_channels: int):
@@ -117,7 +117,7 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
         total = log_prior(model, v, c) + likelihood
         return jnp.where(jnp.isfinite(total), total, -jnp.inf)
 
-    return jax.jit(jax.vmap(one, in_axes=(0, None, None)))
+    return jit(jax.vmap(one, in_axes=(0, None, None)))
 
 
 def log_probability_function(posterior: Setup):
@@ -132,5 +132,5 @@ def log_probability_function(posterior: Setup):
 
 def physical_draws(model: Model, draws: np.ndarray, n_channels: int) -> np.ndarray:
     """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical_labels`` order."""
-    convert = jax.jit(jax.vmap(lambda v: model.to_physical_vector(model.from_sampling(v, n_channels))))
+    convert = jit(jax.vmap(lambda v: model.to_physical_vector(model.from_sampling(v, n_channels))))
     return np.asarray(convert(jnp.asarray(draws, dtype=jnp.float64)))

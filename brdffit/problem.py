@@ -13,13 +13,12 @@ over which :func:`normal_equations` accumulates ``JᵀJ``, ``Jᵀr`` and ``rᵀr
 without ever holding the (N·C × k) Jacobian or the residual vector.
 """
 
-from functools import partial
 from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from . import _jax  # noqa: F401  (float64 before any array)
+from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .losses import Loss, residual_scale
 from .models import Model
 from .samples import Samples
@@ -69,7 +68,7 @@ def build_problem(loss: Loss, samples: Samples, dtype: str = "float64") -> Probl
     )
 
 
-@partial(jax.jit, static_argnums=(0, 1, 2))
+@jit(static_argnums=(0, 1, 2))
 def _padded_problem(loss: Loss, size: int, dtype: str, wi, wo, measured, sigma, weight) -> Problem:
     cos_i = wi[:, 2:3]
     target = loss.transform(measured, measured, cos_i)

@@ -12,14 +12,13 @@ at a time.
 """
 
 from dataclasses import replace
-from functools import partial
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.optimize
 
-from . import _jax  # noqa: F401  (float64 before any array)
+from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .losses import Loss, linearised_weight
 from .models import Model, Params
 from .problem import Problem, residuals
@@ -108,29 +107,29 @@ def _floored(albedos: np.ndarray) -> np.ndarray:
     return np.maximum(albedos, ALBEDO_FLOOR * max(float(np.max(albedos)), 1e-6))
 
 
-@partial(jax.jit, static_argnums=0)
+@jit(static_argnums=0)
 def _weights(loss: Loss, problem: Problem):
     return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
 
 
-@jax.jit
+@jit
 def _gram(basis, weight, measured):
     """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
     weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
     return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
 
 
-@jax.jit
+@jit
 def _grid_grams(fixed, lobes, weight, measured):
     """:func:`_gram` for the basis ``fixed`` plus each grid lobe: (G, C, B, B), (G, C, B)."""
     return jax.vmap(lambda lobe: _gram(jnp.concatenate([fixed, lobe[None]]), weight, measured))(lobes)
 
 
-@partial(jax.jit, static_argnums=0)
+@jit(static_argnums=0)
 def _grid_lobes(lobe, shapes, wi, wo):
     return jax.vmap(lambda shape: lobe(shape, wi, wo))(shapes)
 
 
-@partial(jax.jit, static_argnums=(0, 1))
+@jit(static_argnums=(0, 1))
 def _grid_costs(model: Model, loss: Loss, thetas, problem: Problem):
     return jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
