@@ -110,7 +110,9 @@ def steps(args) -> dict:
     model, loss = get_model(args.model), get_loss(LOSS)
     problem = build_problem(loss, samples)
     theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(json.loads(Path(args.start).read_text()))))
-    sums = jax.jit(lambda t, p: normal_equations(model, loss, t, p))
+    from brdffit._jax import jit
+
+    sums = jit(lambda t, p: normal_equations(model, loss, t, p))  # compiled as the solver is (brdffit's options)
     solve = compiled_solver(model, loss, 256)
 
     def median_seconds(call, repeats):

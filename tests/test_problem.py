@@ -57,3 +57,21 @@ def test_normal_equations_of_every_model(model, options, params, monkeypatch):
 def test_normal_equations_of_every_loss(loss_name, monkeypatch):
     monkeypatch.setattr(problem_module, "CHUNK", 256)
     assert_normal_equations_match(*CASES[4], loss_name)
+
+
+def test_brdffit_jit_agrees_with_jax_jit_at_top_level_and_inside_traces():
+    """``brdffit._jax.jit`` compiles with the CPU options on its own and falls back to plain ``jax.jit`` inside an
+    outer ``jit`` or ``vmap`` (where JAX refuses compiler options). Another emitter may sum 1001 terms in another
+    order, hence rtol 1e-12 (~1000 ulp of float64) rather than equality."""
+    from brdffit._jax import CPU_COMPILER_OPTIONS, compiler_options, jit
+
+    def f(x):
+        return jnp.sum(jnp.log1p(x) * x[::-1])
+
+    x = jnp.linspace(0.0, 3.0, 1001)
+    expected = float(jax.jit(f)(x))
+    wrapped = jit(f)
+    np.testing.assert_allclose(wrapped(x), expected, rtol=1e-12)
+    np.testing.assert_allclose(jax.jit(wrapped)(x), expected, rtol=1e-12)
+    np.testing.assert_allclose(jax.vmap(wrapped)(jnp.stack([x, 2 * x]))[0], expected, rtol=1e-12)
+    assert compiler_options() == (CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None)
