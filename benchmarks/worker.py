@@ -213,11 +213,9 @@ def mcmc(args) -> dict:
 
 
 def merl_load(args) -> dict:
-    """(g): ``brdffit.load_samples`` of a full MERL file (written first from a Ward model), fresh process."""
+    """(g): ``brdffit.load_samples`` of a full MERL file (written by run.py from a Ward model), fresh process."""
     from brdffit import load_samples
-    from brdffit.formats.merl import write_merl
 
-    write_merl(args.data, "ward", {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146})
     clock = time.perf_counter()
     samples = load_samples(args.data)
     return {"seconds": time.perf_counter() - clock, "n_samples": samples.n_samples, "peak_rss_mb": peak_rss_mb()}

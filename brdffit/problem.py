@@ -103,14 +103,14 @@ def residuals_at(model: Model, loss: Loss, params, problem: Problem):
 
 
 def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):
-    """Residuals ``r`` (N, C), their weights ``w = scale·T'(f)`` (N, C) and the model's basis (N, M).
+    """Residuals ``r`` (N, C), their weights ``w = scale·T'(f)`` (N, C), the model's basis (N, M) and values (N, C).
 
     The residual Jacobian is ``∂r[n, c]/∂θ = w[n, c] · Σ_m basis[n, m] · A[c, m]``
     with ``A`` from :meth:`Model.jacobian_coefficients`; ``T'`` by forward mode.
     """
     values, basis = model.value_and_basis(theta, problem.wi, problem.wo, problem.measured.shape[1])
     transformed, slope = loss.value_and_slope(values, problem.measured, problem.wi[:, 2:3])
-    return (transformed - problem.target) * problem.scale, slope * problem.scale, basis
+    return (transformed - problem.target) * problem.scale, slope * problem.scale, basis, values
 
 
 def chunks(problem: Problem) -> Problem:
@@ -120,37 +120,51 @@ def chunks(problem: Problem) -> Problem:
     return jax.tree.map(lambda a: a.reshape(n // size, size, *a.shape[1:]), problem)
 
 
-def normal_equations(model: Model, loss: Loss, theta, problem: Problem):
-    """``(rᵀr, Jᵀr, JᵀJ)`` at ``theta``, float64, in one pass over the chunks of ``problem``.
+class Sums(NamedTuple):
+    """What one pass over a problem accumulates (float64)."""
+
+    cost: Any  # rᵀr
+    gradient: Any  # Jᵀr, (k,)
+    gram: Any  # JᵀJ, (k, k)
+    squared_error: Any  # Σ (f - y)² over the real samples and every channel, (1/sr)²: the numerator of the rmse
+
+
+def normal_equations(model: Model, loss: Loss, theta, problem: Problem) -> Sums:
+    """``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²`` at ``theta``, float64, in one pass over the chunks of ``problem``.
 
     With ``J[n, c] = w[n, c] Σ_m B[n, m] A[c, m]`` (:func:`residuals_and_basis`),
     ``JᵀJ = Σ_c A_cᵀ Q_c A_c`` and ``Jᵀr = Σ_c A_cᵀ R_c``, where the pass only
     accumulates ``Q_c = Σ_n w²[n, c] B_n B_nᵀ`` (C × M × M) and
     ``R_c = Σ_n w[n, c] r[n, c] B_n`` (C × M): the Jacobian itself is never
-    formed, and memory is that of one chunk whatever the data size.
+    formed, and memory is that of one chunk whatever the data size. The sum of
+    squared BRDF errors comes with it, so that the solver knows the rmse of the
+    point it stops at without evaluating the model once more.
     """
 
     def accumulate(sums, chunk):
-        r, w, basis = (x.astype(jnp.float64) for x in residuals_and_basis(model, loss, theta, chunk))
-        cost, projected, gram = sums
+        r, w, basis, values = (x.astype(jnp.float64) for x in residuals_and_basis(model, loss, theta, chunk))
+        cost, projected, gram, squared_error = sums
         n = basis.shape[0]
         # Both sums are single dots over the chunk's rows of row-major (n, ·) arrays. Written as einsums of a
         # (n, C, M) product, XLA transposed that product for the dot and recomputed the basis inside it: one
         # MERL-size Cook-Torrance pass took 170 ms, now ~95 ms (2-core Xeon).
         squared_weights_times_basis = ((w * w)[:, :, None] * basis[:, None, :]).reshape(n, -1)  # (n, C·M)
+        error = jnp.where(chunk.real[:, None], values - chunk.measured.astype(jnp.float64), 0.0)
         return (
             cost + jnp.sum(r * r),
             projected + _row_contraction(w * r, basis),
             gram + _row_contraction(squared_weights_times_basis, basis).reshape(gram.shape),
+            squared_error + jnp.sum(error * error),
         ), None
 
     c = problem.measured.shape[1]
     coefficients = model.jacobian_coefficients(theta, c)
     m = coefficients.shape[1]
-    start = (jnp.zeros((), jnp.float64), jnp.zeros((c, m), jnp.float64), jnp.zeros((c, m, m), jnp.float64))
-    (cost, projected, gram), _ = jax.lax.scan(accumulate, start, chunks(problem))
+    zero = jnp.zeros((), jnp.float64)
+    start = (zero, jnp.zeros((c, m), jnp.float64), jnp.zeros((c, m, m), jnp.float64), zero)
+    (cost, projected, gram, squared_error), _ = jax.lax.scan(accumulate, start, chunks(problem))
     gradient = jnp.einsum("cmp,cm->p", coefficients, projected)
-    return cost, gradient, jnp.einsum("cmp,cml,clq->pq", coefficients, gram, coefficients)
+    return Sums(cost, gradient, jnp.einsum("cmp,cml,clq->pq", coefficients, gram, coefficients), squared_error)
 
 
 def _row_contraction(a, b):

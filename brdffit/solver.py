@@ -128,6 +128,7 @@ class _State(eqx.Module):
     y_eval: Any
     search_state: Any
     f_info: Any  # FunctionInfo.EvalGradHessian at the last accepted point: ½rᵀr, Jᵀr, JᵀJ
+    squared_error: Any  # Σ (f - y)² at the last accepted point (problem.Sums), for the result's rmse
     descent_state: Any
     terminate: Any
     result: Any
@@ -141,8 +142,9 @@ def _function_info(cost, gradient, gram):
 class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
     """Levenberg-Marquardt for ``least_squares(fn, solver, y0, args)`` where ``args`` is a :class:`Problem`.
 
-    ``normal_equations(theta, problem) -> (rᵀr, Jᵀr, JᵀJ)`` supplies the sums
-    (``problem.normal_equations``); ``fn`` itself is only used by optimistix for shapes. ``rtol`` is
+    ``normal_equations(theta, problem) -> problem.Sums`` supplies ``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²``
+    (``problem.normal_equations``); ``fn`` itself is only used by optimistix for shapes. The state's
+    ``squared_error`` is that of the point returned. ``rtol`` is
     MINPACK's ``ftol`` (relative reduction of the sum of squares), ``gtol`` its
     cosine test, and ``atol`` the residual norm below which the fit is exact.
     """
@@ -167,14 +169,15 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
             y_eval=y,
             search_state=self.search.init(y, f_info),
             f_info=f_info,
+            squared_error=jnp.zeros((), jnp.float64),
             descent_state=self.descent.init(y, f_info),
             terminate=jnp.array(False),
             result=RESULTS.successful,
         )
 
     def step(self, fn, y, args, options, state, tags):
-        cost, gradient, gram = self.normal_equations(state.y_eval, args)
-        f_eval_info = _function_info(cost, gradient, gram)
+        sums = self.normal_equations(state.y_eval, args)
+        f_eval_info = _function_info(sums.cost, sums.gradient, sums.gram)
         step_size, accept, search_result, search_state = self.search.step(
             state.first_step, y, state.y_eval, state.f_info, f_eval_info, state.search_state
         )
@@ -219,6 +222,7 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
             y_eval=new_y + y_descent,
             search_state=search_state,
             f_info=f_info,
+            squared_error=jnp.where(accept, sums.squared_error, state.squared_error),
             descent_state=descent_state,
             terminate=terminate,
             result=result,

@@ -37,7 +37,9 @@ def assert_normal_equations_match(model, options, params, loss_name):
     theta = jnp.asarray(built.to_unconstrained(built.params_from_dict(params))) * 1.01
     problem = build_problem(loss, samples)
     assert problem.wi.shape[0] == 3072 and chunk_size(3072) == 256
-    squares, gradient, gram = jax.jit(partial(normal_equations, built, loss))(theta, problem)
+    squares, gradient, gram, squared_error = jax.jit(partial(normal_equations, built, loss))(theta, problem)
+    error = built.evaluate(built.from_unconstrained(theta, 3), samples.wi, samples.wo) - samples.values
+    np.testing.assert_allclose(squared_error, np.sum(error**2), rtol=1e-11)  # the 72 padded rows excluded
     residual_fn = partial(residuals, built, loss)
     r = residual_fn(theta, problem).ravel()
     jacobian = jax.jit(jax.jacfwd(lambda t: residual_fn(t, problem).ravel()))(theta)
