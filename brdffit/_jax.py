@@ -40,15 +40,24 @@ def jit(fun=None, **jit_arguments):
     if fun is None:
         return functools.partial(jit, **jit_arguments)
     plain = jax.jit(fun, **jit_arguments)
-    top_level = None
+
+    @functools.cache
+    def top_level():
+        return jax.jit(fun, compiler_options=compiler_options(), **jit_arguments)
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
-        nonlocal top_level
         if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
             return plain(*args, **kwargs)
-        if top_level is None:
-            top_level = jax.jit(fun, compiler_options=compiler_options(), **jit_arguments)
-        return top_level(*args, **kwargs)
+        return top_level()(*args, **kwargs)
 
+    def precompile(*args, **kwargs) -> None:
+        """Trace and compile for the shapes of ``args`` (arrays or ``jax.ShapeDtypeStruct``), without running.
+
+        A later call with arrays of those shapes reuses JAX's caches; so this
+        can run in another thread while the caller does other work.
+        """
+        top_level().lower(*args, **kwargs).compile()
+
+    call.precompile = precompile
     return call

@@ -8,6 +8,7 @@ searched on a subset (``starts.search_subset``) and only the winner is refined
 on all of them.
 """
 
+import threading
 from functools import cache, partial
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -91,9 +92,12 @@ def fit(
         starts = [start_vector(model, start, samples.n_channels)]
     else:
         search = search_problem(loss, samples, full, dtype, seed)
+        compiling = None if search is full else _compile_in_background(solve, model, full)
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
             starts = [_best([solve(jnp.asarray(theta), search) for theta in starts]).theta]
+        if compiling is not None:
+            compiling.join()
     solved = _best([solve(jnp.asarray(theta), full) for theta in starts])
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(loss, samples))
@@ -102,6 +106,28 @@ def fit(
     if uncertainty is None:
         return result
     return with_uncertainty(result, samples, uncertainty, mcmc=mcmc, chain=chain, progress=progress)
+
+
+def _compile_in_background(solve, model: Model, problem: Problem) -> threading.Thread:
+    """Compile ``solve`` for the full ``problem`` in a thread while the starts are searched on a subset.
+
+    XLA compiles with the GIL released, so on two or more cores the full-size
+    solver's compilation (~1 s for a MERL-size Cook-Torrance problem) overlaps
+    the search instead of following it. A failure there is left for the real
+    call to report.
+    """
+    shapes = jax.tree.map(lambda leaf: jax.ShapeDtypeStruct(leaf.shape, leaf.dtype), problem)
+    theta = jax.ShapeDtypeStruct((model.n_parameters(problem.measured.shape[1]),), jnp.float64)
+
+    def compile_quietly():
+        try:
+            solve.precompile(theta, shapes)
+        except Exception:  # the call that follows raises it properly
+            pass
+
+    thread = threading.Thread(target=compile_quietly, name="brdffit-compile", daemon=True)
+    thread.start()
+    return thread
 
 
 def search_problem(loss: Loss, samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:

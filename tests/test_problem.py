@@ -73,6 +73,7 @@ def test_brdffit_jit_agrees_with_jax_jit_at_top_level_and_inside_traces():
     x = jnp.linspace(0.0, 3.0, 1001)
     expected = float(jax.jit(f)(x))
     wrapped = jit(f)
+    wrapped.precompile(jax.ShapeDtypeStruct(x.shape, x.dtype))  # as fitting does in a thread; the call reuses it
     np.testing.assert_allclose(wrapped(x), expected, rtol=1e-12)
     np.testing.assert_allclose(jax.jit(wrapped)(x), expected, rtol=1e-12)
     np.testing.assert_allclose(jax.vmap(wrapped)(jnp.stack([x, 2 * x]))[0], expected, rtol=1e-12)
