@@ -174,8 +174,19 @@ class Solved(NamedTuple):
     rmse: Any  # sqrt(mean((f - y)²)) over the real samples, 1/sr
 
 
+#: Costs of two runs within this relative difference are the same optimum reached twice, equal up to rounding.
+SAME_COST = 1e-12
+
+
 def _best(runs: list[Solved]) -> Solved:
-    return min(runs, key=lambda run: float(run.cost))
+    """The run of lowest cost; runs within :data:`SAME_COST` of it tie, and the first (the better start) wins.
+
+    Without the tie rule, rounding picked the winner among starts that found the same optimum, so the
+    reported step count changed with how XLA happened to order a sum (the example: 4 or 7 steps).
+    """
+    costs = [float(run.cost) for run in runs]
+    lowest = min(costs)
+    return next(run for run, cost in zip(runs, costs, strict=True) if cost <= lowest + SAME_COST * abs(lowest))
 
 
 def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_steps: int, dtype: str) -> FitResult:

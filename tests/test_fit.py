@@ -193,3 +193,16 @@ def test_rmse_is_that_of_the_returned_parameters(dtype):
     result = fit(samples, "ward", dtype=dtype)
     error = evaluate("ward", result.params, wi, wo) - samples.values
     assert result.rmse == pytest.approx(float(np.sqrt(np.mean(error**2))), rel=1e-9)
+
+
+def test_starts_that_reach_one_optimum_tie_and_the_first_wins():
+    """Costs equal to within rounding (SAME_COST, relative 1e-12) are one optimum: the earlier, better-ranked start
+    wins, so the reported step count does not depend on how a sum was rounded; a real improvement still wins."""
+    from types import SimpleNamespace
+
+    from brdffit.fitting import _best
+
+    runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.2728725253445340e-03, 3.2728725253445335e-03])]
+    assert _best(runs).name == 0
+    runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.27287252534e-03, 3.27287252530e-03, 1.0])]
+    assert _best(runs).name == 1
