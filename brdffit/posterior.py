@@ -34,7 +34,7 @@ from ._jax import jit  # float64 before any array; jax.jit with brdffit's compil
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, get_model
-from .problem import Problem, build_problem, chunks, residuals_at
+from .problem import Problem, build_problem, cost, residuals_at
 from .results import FitResult
 from .samples import Samples
 
@@ -81,13 +81,7 @@ def setup(result: FitResult, samples: Samples) -> Setup:
 def chi_squared(model: Model, loss: Loss, v, problem: Problem):
     """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk (JAX)."""
     c = problem.measured.shape[1]
-
-    def accumulate(total, chunk):
-        r = residuals_at(model, loss, model.from_sampling(v, c), chunk).astype(jnp.float64)
-        return total + jnp.sum(r * r), None
-
-    total, _ = jax.lax.scan(accumulate, jnp.zeros((), jnp.float64), chunks(problem))
-    return total
+    return cost(lambda w, chunk: residuals_at(model, loss, model.from_sampling(w, c), chunk), v, problem)
 
 
 @cache
