@@ -188,10 +188,10 @@ def test_rmse_is_that_of_the_returned_parameters(dtype):
     sqrt(mean((f - y)²)) at the reported parameters over the real samples only (5000 samples pad to 5120 rows).
     rtol 1e-9: the same sums in another order and the parameters printed to 17 digits."""
     wi, wo = data_synth.uniform_random(5000, seed=4)
-    ward = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}
-    samples = data_synth.synthesize("ward", ward, wi, wo, noise=0.05, seed=5)
-    result = fit(samples, "ward", dtype=dtype)
-    error = evaluate("ward", result.params, wi, wo) - samples.values
+    model, _, params = CASES[1]
+    samples = data_synth.synthesize(model, params, wi, wo, noise=0.05, seed=5)
+    result = fit(samples, model, dtype=dtype)
+    error = evaluate(model, result.params, wi, wo) - samples.values
     assert result.rmse == pytest.approx(float(np.sqrt(np.mean(error**2))), rel=1e-9)
 
 

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from catalogue import CASES
 
 import data_synth
 from brdffit import BrdfInputError, load_samples, save_samples
@@ -14,7 +15,7 @@ from brdffit.formats import detect_format
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "ward-pickled-oak.csv"
 TAPE = ROOT.parent / "shared" / "data" / "alta" / "retro-gray-tape.dat"
-WARD = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}
+WARD = CASES[1][2]  # pickled oak (Ngan et al. 2005)
 
 
 def run(argv, capsys):

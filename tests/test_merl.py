@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from catalogue import CASES
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -23,7 +24,7 @@ SHAPE = (90, 90, 180)
 N_BINS = 90 * 90 * 180
 FILE_BYTES = 12 + 3 * N_BINS * 8
 SCALES = np.array([1.0, 1.15, 1.66]) / 1500.0
-WARD = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}
+WARD = CASES[1][2]  # pickled oak (Ngan et al. 2005)
 
 
 # ---------------------------------------------------------------------- independent helpers
