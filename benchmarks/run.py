@@ -24,7 +24,9 @@ Sections (issue 3):
 run in ``latest.json`` (each section records its date).
 
 Every timing is a median over ``--repeats`` runs, each in a fresh process;
-the machine is shared, so compare ratios from one run. Writes
+the machine is shared, so compare ratios from one run. In (a) and (b) the
+solvers take turns, one run each per round, so that drift in the machine's
+speed falls on all of them alike. Writes
 ``benchmarks/results/latest.json`` and ``latest.md`` and prints the table.
 """
 
@@ -73,14 +75,33 @@ def worker(*arguments: str, cache: str = "") -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def repeated(repeats: int, *arguments: str, cache: str = "") -> dict:
-    runs = [worker(*arguments, cache=cache) for _ in range(repeats)]
+def summarised(runs: list[dict]) -> dict:
+    """The last run's fields, with the median time (and peak memory) of all of them."""
     result = {key: runs[-1][key] for key in runs[-1]}
     result["seconds"] = statistics.median(run["seconds"] for run in runs)
     result["all_seconds"] = [run["seconds"] for run in runs]
     if "peak_rss_mb" in runs[-1]:
         result["peak_rss_mb"] = statistics.median(run["peak_rss_mb"] for run in runs)
     return result
+
+
+def repeated(repeats: int, *arguments: str, cache: str = "") -> dict:
+    return summarised([worker(*arguments, cache=cache) for _ in range(repeats)])
+
+
+def interleaved(repeats: int, variants: dict[str, tuple[tuple[str, ...], str]], label: str) -> dict:
+    """Each variant (its worker arguments and cache folder) once per round, ``repeats`` rounds.
+
+    The machine is shared and its speed drifts over minutes; running the
+    variants in turn rather than one after the other puts every variant's
+    runs in the same stretches of time, so that the ratios compare like with like.
+    """
+    runs: dict[str, list[dict]] = {name: [] for name in variants}
+    for round_number in range(1, repeats + 1):
+        for name, (arguments, cache) in variants.items():
+            log(f"{label}: {name}, round {round_number}/{repeats}")
+            runs[name].append(worker(*arguments, cache=cache))
+    return {name: summarised(done) for name, done in runs.items()}
 
 
 def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict:
@@ -94,24 +115,20 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
     from brdffit.problem import build_problem
     from brdffit.starts import starting_points
 
-    search = search_problem(loss, samples, build_problem(loss, samples), "float64", seed=0)
+    search = search_problem(samples, build_problem(samples), "float64", seed=0)
     theta = starting_points(model, loss, search, 1)[0]
     start = folder / f"{model_name}-start.json"
     start.write_text(json.dumps(model.params_to_dict(model.from_unconstrained(theta, 3))))
     common = ("merl", "--model", model_name, "--data", str(data), "--start", str(start))
 
-    section: dict = {"n_samples": size}
-    log(f"(a) {model_name}: brdffit, empty compilation cache")
-    section["brdffit_cold"] = repeated(repeats, *common, "--solver", "brdffit")
     cache = str(folder / f"cache-{model_name}")
     worker(*common, "--solver", "brdffit", cache=cache)  # fills the persistent cache
-    log(f"(a) {model_name}: brdffit, filled compilation cache")
-    section["brdffit_cached"] = repeated(repeats, *common, "--solver", "brdffit", cache=cache)
-    log(f"(a) {model_name}: brdffit default path (own start search), empty cache")
-    section["brdffit_default"] = repeated(repeats, *common, "--solver", "brdffit-default")
-    for solver in SCIPY_SOLVERS:
-        log(f"(a) {model_name}: {solver}")
-        section[solver] = repeated(repeats, *common, "--solver", solver)
+    variants = {
+        "brdffit_cold": ((*common, "--solver", "brdffit"), ""),
+        "brdffit_cached": ((*common, "--solver", "brdffit"), cache),
+        "brdffit_default": ((*common, "--solver", "brdffit-default"), ""),
+    } | {solver: ((*common, "--solver", solver), "") for solver in SCIPY_SOLVERS}
+    section: dict = {"n_samples": size} | interleaved(repeats, variants, f"(a) {model_name}")
     log(f"(e) {model_name}: time per step")
     section["per_step"] = worker("steps", "--model", model_name, "--data", str(data), "--start", str(start))
     return section
@@ -120,10 +137,10 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
 def batch_section(materials: int, size: int, repeats: int) -> dict:
     arguments = ("batch", "--materials", str(materials), "--size", str(size))
     section: dict = {"materials": materials, "n_samples": size}
-    for solver in ("brdffit", "brdffit-default", "scipy-lm-exact"):
-        log(f"(b) {materials} × {size}: {solver}")
-        section[solver] = repeated(repeats, *arguments, "--solver", solver)
-    return section
+    variants = {
+        solver: ((*arguments, "--solver", solver), "") for solver in ("brdffit", "brdffit-default", "scipy-lm-exact")
+    }
+    return section | interleaved(repeats, variants, f"(b) {materials} × {size}")
 
 
 def cli_section(repeats: int, folder: Path) -> dict:
@@ -194,7 +211,7 @@ def table(results: dict) -> str:
     lines = [
         f"Measured {info['date']} on {info['cpu']}, {info['cores']} cores, {info['backend']} "
         f"(jax {info['jax']}, optimistix {info['optimistix']}, scipy {info['scipy']}); medians of "
-        f"{results['repeats']} runs, each in a fresh process.",
+        f"{results['repeats']} runs, each in a fresh process; in (a) and (b) the solvers take turns, round by round.",
         "",
         "| (a) MERL-size fit, 1,458,000 × RGB | Cook-Torrance | cost | Ward | cost |",
         "|---|---|---|---|---|",

@@ -76,7 +76,7 @@ def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str
     from brdffit.problem import build_problem
 
     n = samples.n_samples
-    problem = jax.tree.map(lambda a: a[:n], build_problem(get_loss(LOSS), samples))  # exactly the samples, no padding
+    problem = jax.tree.map(lambda a: a[:n], build_problem(samples))  # exactly the samples, no padding
     residual, jacobian = scipy_functions(model_name)
     out = scipy.optimize.least_squares(
         lambda th: np.asarray(residual(jnp.asarray(th), problem)),
@@ -118,7 +118,7 @@ def steps(args) -> dict:
 
     samples = load(args.data)
     model, loss = get_model(args.model), get_loss(LOSS)
-    problem = build_problem(loss, samples)
+    problem = build_problem(samples)
     theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(json.loads(Path(args.start).read_text()))))
     from brdffit._jax import jit
 
@@ -165,7 +165,7 @@ def batch_starts(datasets) -> list[dict]:
     model, loss = get_model("cook-torrance"), get_loss(LOSS)
     starts = []
     for samples in datasets:
-        search = search_problem(loss, samples, build_problem(loss, samples), "float64", seed=0)
+        search = search_problem(samples, build_problem(samples), "float64", seed=0)
         theta = starting_points(model, loss, search, 1)[0]
         starts.append(model.params_to_dict(model.from_unconstrained(theta, samples.n_channels)))
     return starts

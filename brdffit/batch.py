@@ -113,11 +113,13 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
     max_steps = whole_number("--max-steps", max_steps)
     solve = jax.vmap(compiled_solver(model, loss, max_steps, dtype))
     results: list[FitResult | None] = [None] * len(kept)
-    buckets: dict[tuple[int, int], list[int]] = {}
+    # One bucket per padded size, channel count and optional columns: its problems stack into one pytree.
+    buckets: dict[tuple[int, int, bool, bool], list[int]] = {}
     for index, one in enumerate(kept):
-        buckets.setdefault((padded_size(one.n_samples), one.n_channels), []).append(index)
+        key = (padded_size(one.n_samples), one.n_channels, one.sigma is None, one.weight is None)
+        buckets.setdefault(key, []).append(index)
     for indices in buckets.values():
-        problems = [build_problem(loss, kept[i], dtype) for i in indices]
+        problems = [build_problem(kept[i], dtype) for i in indices]
         if any(starts[i] is None for i in indices):
             thetas = _best_starts(model, loss, [kept[i] for i in indices], problems, n_starts, solve, dtype, seed)
         else:
@@ -127,7 +129,7 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
                 thetas[position] = start_vector(model, starts[index], kept[index].n_channels)
         solved = solve(jnp.asarray(thetas), _stacked(problems))
         if dtype == "float32":
-            stacked = _stacked([build_problem(loss, kept[i]) for i in indices])
+            stacked = _stacked([build_problem(kept[i]) for i in indices])
             refined = jax.vmap(compiled_solver(model, loss, max_steps))(solved.theta, stacked)
             solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
         for position, index in enumerate(indices):
@@ -139,7 +141,7 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
 
 def _best_starts(model, loss, samples, problems, n_starts, solve, dtype, seed):
     """For each dataset, the best of its ``n_starts`` grid starts after a solve on its search subsample."""
-    searches = [search_problem(loss, one, problem, dtype, seed) for one, problem in zip(samples, problems, strict=True)]
+    searches = [search_problem(one, problem, dtype, seed) for one, problem in zip(samples, problems, strict=True)]
     starts = [starting_points(model, loss, search, n_starts) for search in searches]
     if all(len(s) == 1 for s in starts):
         return np.stack([s[0] for s in starts])

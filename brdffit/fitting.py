@@ -22,7 +22,7 @@ from ._jax import jit  # float64 before any array; jax.jit with brdffit's compil
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, Params, get_model
-from .problem import DTYPES, Problem, build_problem, normal_equations
+from .problem import DTYPES, Problem, build_problem, normal_equations, prepared
 from .results import FitResult
 from .samples import Samples
 from .solver import LevenbergMarquardt
@@ -86,21 +86,21 @@ def fit(
         check_walkers(mcmc or MCMC(), model, samples)
     n_starts = whole_number("--starts", n_starts)
     max_steps = whole_number("--max-steps", max_steps)
-    full = build_problem(loss, samples, dtype)
+    full = build_problem(samples, dtype)
     solve = compiled_solver(model, loss, max_steps, dtype)
     if start is not None:
         starts = [start_vector(model, start, samples.n_channels)]
     else:
-        search = search_problem(loss, samples, full, dtype, seed)
+        search = search_problem(samples, full, dtype, seed)
         compiling = None if search is full else _compile_in_background(solve, model, full)
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
-            starts = [_best([solve(jnp.asarray(theta), search) for theta in starts]).theta]
+            starts = [_best([solve(theta, search) for theta in starts]).theta]
         if compiling is not None:
             compiling.join()
-    solved = _best([solve(jnp.asarray(theta), full) for theta in starts])
+    solved = _best([solve(theta, full) for theta in starts])
     if dtype == "float32":
-        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(loss, samples))
+        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples))
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
     result = result_of(model, loss, samples, solved, max_steps, dtype)
     if uncertainty is None:
@@ -130,10 +130,10 @@ def _compile_in_background(solve, model: Model, problem: Problem) -> threading.T
     return thread
 
 
-def search_problem(loss: Loss, samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
+def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
     """The problem the starts are searched on: ``full``, or that of the subset ``starts.search_subset`` picks."""
     subset = search_subset(samples, seed)
-    return full if subset is None else build_problem(loss, samples.select(subset), dtype)
+    return full if subset is None else build_problem(samples.select(subset), dtype)
 
 
 def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
@@ -170,6 +170,9 @@ class Solved(NamedTuple):
     cost: Any  # rᵀr there
     n_steps: Any
     result: Any  # optimistix.RESULTS
+    converged: (
+        Any  # result == RESULTS.successful, decided inside the compiled solve (on the host it compiles a program)
+    )
     params: Params  # the optimum as physical parameters
     rmse: Any  # sqrt(mean((f - y)²)) over the real samples, 1/sr
 
@@ -191,7 +194,7 @@ def _best(runs: list[Solved]) -> Solved:
 
 def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_steps: int, dtype: str) -> FitResult:
     """The :class:`FitResult` of a solve."""
-    converged = bool(solved.result == optx.RESULTS.successful)
+    converged = bool(solved.converged)
     return FitResult(
         model=model.name,
         model_options=model.model_options,
@@ -237,6 +240,7 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
 
     @jit
     def solve(theta0, problem: Problem):
+        problem = prepared(loss, problem)
         solution = optx.least_squares(_residual_shape, solver, theta0, args=problem, max_steps=max_steps, throw=False)
         theta = solution.value
         params = model.from_unconstrained(theta, problem.measured.shape[1])
@@ -244,6 +248,7 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
         # rmse: sqrt(mean((f - y)²)) over the real samples, from the pass at the point returned.
         n_values = jnp.sum(problem.real) * problem.measured.shape[1]
         rmse = jnp.sqrt(solution.state.squared_error / n_values)
-        return Solved(theta, cost, solution.stats["num_steps"], solution.result, params, rmse)
+        converged = solution.result == optx.RESULTS.successful
+        return Solved(theta, cost, solution.stats["num_steps"], solution.result, converged, params, rmse)
 
     return solve

@@ -34,7 +34,7 @@ from ._jax import jit  # float64 before any array; jax.jit with brdffit's compil
 from .errors import BrdfInputError
 from .losses import Loss, get_loss
 from .models import Model, get_model
-from .problem import Problem, build_problem, cost, residuals_at
+from .problem import Problem, build_problem, cost, prepared, residuals_at, target_and_scale
 from .results import FitResult
 from .samples import Samples
 
@@ -71,11 +71,17 @@ def setup(result: FitResult, samples: Samples) -> Setup:
         )
     model = get_model(result.model, **result.model_options)
     loss = get_loss(result.loss)
-    problem = build_problem(loss, samples)
+    problem = build_problem(samples)
     optimum = model.to_sampling(model.params_from_dict(result.params))
-    n_values = int(np.count_nonzero(np.asarray(problem.scale)[np.asarray(problem.real)]))
+    n_values = int(_count_weighted(loss, problem))
     labels = model.sampling_labels(tuple(result.channels))
     return Setup(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
+
+
+@jit(static_argnums=0)
+def _count_weighted(loss: Loss, problem: Problem):
+    """How many residuals carry weight: values of real samples whose residual scale is not 0."""
+    return jnp.count_nonzero(jnp.broadcast_to(target_and_scale(loss, problem)[1], problem.measured.shape))
 
 
 def chi_squared(model: Model, loss: Loss, v, problem: Problem):
@@ -111,7 +117,8 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
         total = log_prior(model, v, c) + likelihood
         return jnp.where(jnp.isfinite(total), total, -jnp.inf)
 
-    return jit(jax.vmap(one, in_axes=(0, None, None)))
+    walkers = jax.vmap(one, in_axes=(0, None, None))
+    return jit(lambda x, problem, n_values: walkers(x, prepared(loss, problem), n_values))
 
 
 def log_probability_function(posterior: Setup):

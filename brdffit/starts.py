@@ -21,7 +21,7 @@ import scipy.optimize
 from ._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
 from .losses import Loss, linearised_weight
 from .models import Model, Params
-from .problem import Problem, residuals
+from .problem import Problem, prepared, residuals, target_and_scale
 from .samples import Samples
 
 #: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
@@ -109,7 +109,7 @@ def _floored(albedos: np.ndarray) -> np.ndarray:
 
 @jit(static_argnums=0)
 def _weights(loss: Loss, problem: Problem):
-    return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
+    return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], target_and_scale(loss, problem)[1])
 
 
 @jit
@@ -132,4 +132,5 @@ def _grid_lobes(lobe, shapes, wi, wo):
 
 @jit(static_argnums=(0, 1))
 def _grid_costs(model: Model, loss: Loss, thetas, problem: Problem):
+    problem = prepared(loss, problem)
     return jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)

@@ -12,7 +12,17 @@ from catalogue import CASES, parametrize_cases
 import data_synth
 from brdffit import get_model
 from brdffit.losses import LOSSES, get_loss
-from brdffit.problem import CHUNK, build_problem, chunk_size, cost, normal_equations, padded_size, residuals
+from brdffit.problem import (
+    CHUNK,
+    build_problem,
+    chunk_size,
+    cost,
+    normal_equations,
+    padded_size,
+    prepared,
+    residuals,
+)
+from brdffit.samples import Samples
 
 problem_module = sys.modules["brdffit.problem"]
 
@@ -35,7 +45,7 @@ def assert_normal_equations_match(model, options, params, loss_name):
     wi, wo = data_synth.uniform_random(3000, seed=2)
     samples = data_synth.synthesize(model, params, wi, wo, noise=0.02, seed=3, **options)
     theta = jnp.asarray(built.to_unconstrained(built.params_from_dict(params))) * 1.01
-    problem = build_problem(loss, samples)
+    problem = build_problem(samples)
     assert problem.wi.shape[0] == 3072 and chunk_size(3072) == 256
     squares, gradient, gram, squared_error = jax.jit(partial(normal_equations, built, loss))(theta, problem)
     error = built.evaluate(built.from_unconstrained(theta, 3), samples.wi, samples.wo) - samples.values
@@ -59,6 +69,45 @@ def test_normal_equations_of_every_model(model, options, params, monkeypatch):
 def test_normal_equations_of_every_loss(loss_name, monkeypatch):
     monkeypatch.setattr(problem_module, "CHUNK", 256)
     assert_normal_equations_match(*CASES[4], loss_name)
+
+
+@pytest.mark.parametrize("columns", ["none", "sigma", "weight", "both"])
+@pytest.mark.parametrize("loss_name", ["log", "cbrt"])
+def test_residuals_follow_the_loss_formula_on_samples_and_vanish_on_padding(columns, loss_name):
+    """Residuals of a padded problem, its target and scale computed on the fly or prepared once, against
+    SPEC section 3 written out in numpy: sqrt(weight)·(T(f) − T(y)) / (sigma·|T'(max(y, sigma))|).
+
+    1000 samples pad to 1024 rows, whose residuals must be exactly 0. T' of log (ci / (1 + v ci)) and of
+    cbrt (v^(-2/3) / 3) by hand. Tolerance: T(f) and T(y) are each within an ulp or two of the numpy
+    values, and their difference cancels up to ~10³-fold where f and y are close, so 1e-10 relative."""
+    model, loss = get_model("ward"), get_loss(loss_name)
+    params = CASES[1][2]
+    wi, wo = data_synth.uniform_random(1000, seed=5)
+    clean = data_synth.synthesize("ward", params, wi, wo, noise=0.05, seed=6)
+    rng = np.random.default_rng(7)
+    sigma = 0.02 * clean.values + 1e-3 if columns in ("sigma", "both") else None
+    weight = rng.uniform(0.0, 2.0, 1000) if columns in ("weight", "both") else None
+    samples = Samples.from_arrays(wi, wo, clean.values, channels=clean.channels, sigma=sigma, weight=weight)
+    problem = build_problem(samples)
+    assert problem.wi.shape[0] == 1024
+    theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(params))) * 1.02
+    on_the_fly = np.asarray(jax.jit(partial(residuals, model, loss))(theta, problem))
+    once = np.asarray(jax.jit(lambda t, q: residuals(model, loss, t, prepared(loss, q)))(theta, problem))
+
+    ci, y = wi[:, 2:3], clean.values
+    f = model.evaluate(model.from_unconstrained(theta, 3), wi, wo)
+    if loss_name == "log":
+        transform, slope = (lambda v: np.log1p(v * ci)), (lambda v: ci / (1.0 + v * ci))
+    else:
+        transform, slope = np.cbrt, (lambda v: np.maximum(v, np.finfo(float).tiny) ** (-2.0 / 3.0) / 3.0)
+    expected = transform(np.asarray(f)) - transform(y)
+    if sigma is not None:
+        expected = expected / (sigma * np.abs(slope(np.maximum(y, sigma))))
+    if weight is not None:
+        expected = expected * np.sqrt(weight)[:, None]
+    for got in (on_the_fly, once):
+        np.testing.assert_allclose(got[:1000], expected, rtol=1e-10, atol=0.0)
+        assert np.all(got[1000:] == 0.0)
 
 
 def test_brdffit_jit_agrees_with_jax_jit_at_top_level_and_inside_traces():

@@ -68,7 +68,7 @@ def test_step_counts_match_minpack():
             "f0": float(rng.uniform(0.02, 0.9)),
         }
         samples = data_synth.synthesize("cook-torrance", truth, wi, wo, noise=0.01, seed=index)
-        theta0 = starting_points(model, LOG, build_problem(LOG, samples), 1)[0]
+        theta0 = starting_points(model, LOG, build_problem(samples), 1)[0]
         start = model.params_to_dict(model.from_unconstrained(jnp.asarray(theta0), 3))
         ours = fit(samples, "cook-torrance", start=start, n_starts=1)
         minpack = _minpack(model, samples, theta0)
@@ -78,6 +78,6 @@ def test_step_counts_match_minpack():
 
 def _minpack(model, samples, theta0):
     """scipy.optimize.least_squares (method lm: MINPACK's lmdif) on brdffit's residuals."""
-    problem = build_problem(LOG, samples)
+    problem = build_problem(samples)
     residual = jax.jit(lambda theta: residuals(model, LOG, theta, problem)[: samples.n_samples].ravel())
     return scipy.optimize.least_squares(lambda theta: np.asarray(residual(jnp.asarray(theta))), theta0, method="lm")
