@@ -21,6 +21,19 @@ def test_spherical_round_trip(rng):
     np.testing.assert_allclose(spherical_to_direction(np.pi / 2, np.pi / 2), [0.0, 1.0, 0.0], atol=1e-16)
 
 
+def test_angle_conversions_stay_on_the_host_for_numpy_and_trace_for_jax(rng):
+    """numpy in, numpy out (readers run on the host); JAX arrays and tracers get jax.numpy. Same values
+    to 1 ulp (libm and XLA's sin/cos/atan2 may round differently)."""
+    theta, phi = rng.uniform(0, np.pi / 2, 50), rng.uniform(-np.pi, np.pi, 50)
+    on_host = spherical_to_direction(theta, phi)
+    assert type(on_host) is np.ndarray and type(direction_to_spherical(on_host)[0]) is np.ndarray
+    traced = jax.jit(spherical_to_direction)(jnp.asarray(theta), jnp.asarray(phi))
+    assert isinstance(traced, jax.Array)
+    np.testing.assert_allclose(on_host, traced, rtol=0, atol=4e-16)
+    for host, device in zip(direction_to_spherical(on_host), jax.jit(direction_to_spherical)(traced), strict=True):
+        np.testing.assert_allclose(host, device, rtol=0, atol=1e-15)
+
+
 def test_half_vector_bisects(rng):
     wi, wo = random_directions(rng, 100), random_directions(rng, 100)
     h = np.asarray(half_vector(wi, wo))

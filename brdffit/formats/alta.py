@@ -59,6 +59,7 @@ import numpy as np
 
 from .._files import reading, write_text_atomic
 from ..errors import BrdfInputError
+from ..geometry import direction_to_spherical, spherical_to_direction
 from ..samples import UNIT_LENGTH_TOLERANCE, Samples, normalised
 
 #: ``#PARAM_IN`` names read, with the number of input coordinates each takes.
@@ -156,17 +157,6 @@ def check_non_negative(values: np.ndarray, lines: np.ndarray, names: Sequence[st
 def format_rows(table: np.ndarray, separator: str) -> str:
     """Rows of numbers with 17 significant digits (exact float64 round trip), one per line."""
     return "".join(separator.join(f"{x:.17g}" for x in row) + "\n" for row in table)
-
-
-def spherical(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Zenith ``θ ∈ [0, π]`` and azimuth ``φ ∈ (−π, π]`` (radians) of unit vectors, as ``geometry``."""
-    return np.arctan2(np.hypot(w[:, 0], w[:, 1]), w[:, 2]), np.arctan2(w[:, 1], w[:, 0])
-
-
-def direction(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Unit vectors ``(sin θ cos φ, sin θ sin φ, cos θ)`` (N, 3), as ``geometry.spherical_to_direction``."""
-    sin_theta = np.sin(theta)
-    return np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), np.cos(theta)], axis=-1)
 
 
 # ---------------------------------------------------------------------- reading
@@ -352,18 +342,20 @@ def _unit(w: np.ndarray, lines: np.ndarray, name: str, source: str) -> np.ndarra
 
 # ---------------------------------------------------------------------- parameterisations
 def _spherical_tl_pl_tv_pv(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return direction(x[:, 0], x[:, 1]), direction(x[:, 2], x[:, 3])
+    return spherical_to_direction(x[:, 0], x[:, 1]), spherical_to_direction(x[:, 2], x[:, 3])
 
 
 def _isotropic_tl_tv_proj_dphi(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     theta_v = np.hypot(x[:, 1], x[:, 2])
-    return direction(x[:, 0], np.zeros(len(x))), direction(theta_v, np.arctan2(x[:, 2], x[:, 1]))
+    return spherical_to_direction(x[:, 0], np.zeros(len(x))), spherical_to_direction(
+        theta_v, np.arctan2(x[:, 2], x[:, 1])
+    )
 
 
 def half_difference_to_directions(theta_h, phi_h, theta_d, phi_d) -> tuple[np.ndarray, np.ndarray]:
     """``wi, wo`` (N, 3) from Rusinkiewicz's ``θh, φh, θd, φd`` (radians): ``wi = Rz(φh) Ry(θh) d(θd, φd)``,
     ``wo = Rz(φh) Ry(θh) (−dx, −dy, dz)``."""
-    d = direction(theta_d, phi_d)
+    d = spherical_to_direction(theta_d, phi_d)
     mirrored = d * np.array([-1.0, -1.0, 1.0])
     return _rotate(d, theta_h, phi_h), _rotate(mirrored, theta_h, phi_h)
 
@@ -418,8 +410,8 @@ def write_alta(samples: Samples, path: str | os.PathLike) -> None:
         output = "RGB_COLOR"
     else:
         output = "INV_STERADIAN"
-    theta_l, phi_l = spherical(np.asarray(samples.wi, dtype=np.float64))
-    theta_v, phi_v = spherical(np.asarray(samples.wo, dtype=np.float64))
+    theta_l, phi_l = direction_to_spherical(np.asarray(samples.wi, dtype=np.float64))
+    theta_v, phi_v = direction_to_spherical(np.asarray(samples.wo, dtype=np.float64))
     table = np.column_stack([theta_l, phi_l, theta_v, phi_v, np.asarray(samples.values, dtype=np.float64)])
     header = [
         f"#DIM 4 {n_channels}",

@@ -44,8 +44,9 @@ import numpy as np
 
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
+from ..geometry import direction_to_spherical, spherical_to_direction
 from ..samples import Samples
-from .alta import check_non_negative, direction, format_rows, is_number, parse_table, read_text, spherical
+from .alta import check_non_negative, format_rows, is_number, parse_table, read_text
 
 #: The geometry columns every ``VARS`` line names.
 ANGLE_NAMES = ("theta_i", "phi_i", "theta_s", "phi_s")
@@ -114,8 +115,8 @@ def read_astm(path: str | os.PathLike) -> Samples:
     check_non_negative(values, lines, channels, source)
     if not radians:
         theta, phi = np.radians(theta), np.radians(phi)
-    wi = direction(theta[:, 0], phi[:, 0])
-    wo = direction(theta[:, 1], phi[:, 1])
+    wi = spherical_to_direction(theta[:, 0], phi[:, 0])
+    wo = spherical_to_direction(theta[:, 1], phi[:, 1])
     return Samples.from_arrays(wi, wo, values, channels=channels, source=source)
 
 
@@ -213,8 +214,8 @@ def write_astm(samples: Samples, path: str | os.PathLike) -> None:
     back = [channel_name(name) for name in written]
     if len(set(back)) != len(back):
         raise BrdfInputError(f"{path}: channels {', '.join(samples.channels)} would read back as the same column")
-    theta_i, phi_i = spherical(np.asarray(samples.wi, dtype=np.float64))
-    theta_s, phi_s = spherical(np.asarray(samples.wo, dtype=np.float64))
+    theta_i, phi_i = direction_to_spherical(np.asarray(samples.wi, dtype=np.float64))
+    theta_s, phi_s = direction_to_spherical(np.asarray(samples.wo, dtype=np.float64))
     table = np.column_stack([theta_i, phi_i, theta_s, phi_s, np.asarray(samples.values, dtype=np.float64)])
     name = " ".join(str(samples.source).replace('"', "'").split())
     header = (
