@@ -241,6 +241,12 @@ def table(results: dict) -> str:
             cached = section[baseline]["seconds"] / section["brdffit_cached"]["seconds"]
             cells += [f"{cold:.1f}× / {cached:.1f}×", ""]
         lines.append(f"| speed-up over {baseline} (empty / filled cache) | " + " | ".join(cells) + " |")
+    cells = []
+    for section in merl.values():
+        rounds = zip(section["scipy-trf"]["all_seconds"], section["brdffit_cold"]["all_seconds"], strict=True)
+        cells += [", ".join(f"{scipy_seconds / seconds:.1f}×" for scipy_seconds, seconds in rounds), ""]
+    if merl:
+        lines.append("| speed-up over scipy-trf, empty cache, round by round | " + " | ".join(cells) + " |")
     batch = results.get("batch")
     if batch:
         scipy_run = batch["scipy-lm-exact"]
