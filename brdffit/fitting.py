@@ -170,9 +170,7 @@ class Solved(NamedTuple):
     cost: Any  # rᵀr there
     n_steps: Any
     result: Any  # optimistix.RESULTS
-    converged: (
-        Any  # result == RESULTS.successful, decided inside the compiled solve (on the host it compiles a program)
-    )
+    converged: Any  # result == RESULTS.successful, decided in the compiled solve, not by a host program
     params: Params  # the optimum as physical parameters
     rmse: Any  # sqrt(mean((f - y)²)) over the real samples, 1/sr
 
