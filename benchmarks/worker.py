@@ -73,10 +73,12 @@ def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str
     import jax.numpy as jnp
     import scipy.optimize
 
-    from brdffit.problem import build_problem
+    from brdffit.problem import build_problem, prepared
 
     n = samples.n_samples
-    problem = jax.tree.map(lambda a: a[:n], build_problem(samples))  # exactly the samples, no padding
+    # T(y) and the scale computed once, as brdffit's solver does; then exactly the samples, no padding.
+    problem = jax.jit(functools.partial(prepared, get_loss(LOSS)))(build_problem(samples))
+    problem = jax.tree.map(lambda a: a[:n], problem)
     residual, jacobian = scipy_functions(model_name)
     out = scipy.optimize.least_squares(
         lambda th: np.asarray(residual(jnp.asarray(th), problem)),
