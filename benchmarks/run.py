@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 
 import data_synth  # noqa: E402
 from brdffit import get_model  # noqa: E402
-from brdffit.losses import get_loss  # noqa: E402
+from brdffit.fitting.losses import get_loss  # noqa: E402
 
 WORKER = Path(__file__).with_name("worker.py")
 RESULTS = Path(__file__).with_name("results")
@@ -111,9 +111,9 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
     samples = data_synth.synthesize(model_name, MATERIALS[model_name], wi, wo, noise=0.01, seed=2)
     data = folder / f"{model_name}.npz"
     np.savez(data, wi=samples.wi, wo=samples.wo, values=samples.values)
-    from brdffit.fitting import search_problem
-    from brdffit.problem import build_problem
-    from brdffit.starts import starting_points
+    from brdffit.fitting.fit import search_problem
+    from brdffit.fitting.problem import build_problem
+    from brdffit.fitting.starts import starting_points
 
     search = search_problem(samples, build_problem(samples), "float64", seed=0)
     theta = starting_points(model, loss, search, 1)[0]
@@ -175,7 +175,7 @@ def mcmc_section(repeats: int) -> dict:
 
 def merl_load_section(repeats: int, folder: Path) -> dict:
     log("(g) reading a full MERL file")
-    from brdffit.formats.merl import write_merl
+    from brdffit.data.merl import write_merl
 
     data = folder / "ward.binary"
     write_merl(data, "ward", MATERIALS["ward"])  # here, so that the reading process's peak memory is the reader's

@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import data_synth
 from brdffit import Samples, enable_compilation_cache, fit, fit_batch, get_model
-from brdffit.losses import get_loss
+from brdffit.fitting.losses import get_loss
 
 LOSS = "log"
 
@@ -57,7 +57,7 @@ def scipy_functions(model_name: str):
     competent scipy user would write them (compiled on first call, inside the clock)."""
     import jax
 
-    from brdffit.problem import residuals
+    from brdffit.fitting.problem import residuals
 
     model, loss = get_model(model_name), get_loss(LOSS)
 
@@ -73,7 +73,7 @@ def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str
     import jax.numpy as jnp
     import scipy.optimize
 
-    from brdffit.problem import build_problem, prepared
+    from brdffit.fitting.problem import build_problem, prepared
 
     n = samples.n_samples
     # T(y) and the scale computed once, as brdffit's solver does; then exactly the samples, no padding.
@@ -116,8 +116,8 @@ def steps(args) -> dict:
     import jax.numpy as jnp
 
     from brdffit._jax import jit
-    from brdffit.fitting import compiled_solver
-    from brdffit.problem import build_problem, normal_equations, prepared
+    from brdffit.fitting.fit import compiled_solver
+    from brdffit.fitting.problem import build_problem, normal_equations, prepared
 
     samples = load(args.data)
     model, loss = get_model(args.model), get_loss(LOSS)
@@ -161,9 +161,9 @@ def batch_data(materials: int, size: int):
 
 def batch_starts(datasets) -> list[dict]:
     """brdffit's data-driven start of each dataset, given to both solvers (computed before the clock)."""
-    from brdffit.fitting import search_problem
-    from brdffit.problem import build_problem
-    from brdffit.starts import starting_points
+    from brdffit.fitting.fit import search_problem
+    from brdffit.fitting.problem import build_problem
+    from brdffit.fitting.starts import starting_points
 
     model, loss = get_model("cook-torrance"), get_loss(LOSS)
     starts = []

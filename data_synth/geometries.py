@@ -7,9 +7,9 @@ midpoints, so no direction lies on the horizon. Random geometries take a seed.
 
 import numpy as np
 
-from brdffit._checks import whole_number
+from brdffit.checks import whole_number
 from brdffit.errors import BrdfInputError
-from brdffit.geometry import mirror_direction, spherical_to_direction
+from brdffit.physics.geometry import mirror_direction, spherical_to_direction
 
 
 def _directions(theta, phi) -> np.ndarray:

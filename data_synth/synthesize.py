@@ -4,9 +4,9 @@ from typing import Any
 
 import numpy as np
 
+from brdffit.data.samples import Samples
 from brdffit.errors import BrdfInputError
-from brdffit.evaluation import evaluate
-from brdffit.samples import Samples
+from brdffit.physics.evaluate import evaluate
 
 from .noise import add_noise
 

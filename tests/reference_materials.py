@@ -6,9 +6,9 @@ README for the mapping); tests that need them skip where that folder is absent.
 
 import math
 import re
-from pathlib import Path
 
-NGAN_FOLDER = Path(__file__).resolve().parents[2] / "shared" / "data" / "ngan2005"
+from paths import NGAN_FOLDER
+
 SKIP_REASON = f"reference data {NGAN_FOLDER} is absent (it ships beside the project, not in it)"
 
 _FILES = {

@@ -5,7 +5,7 @@ import pytest
 
 import data_synth
 from brdffit import BrdfInputError
-from brdffit.geometry import mirror_direction
+from brdffit.physics.geometry import mirror_direction
 
 
 def test_hemisphere_grid_layout():

@@ -3,12 +3,11 @@
 import os
 import subprocess
 import sys
-from pathlib import Path
+
+from paths import ROOT
 
 import brdffit
 from brdffit.cache import CACHE_VARIABLE, default_cache_dir, enable_compilation_cache
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_import_loads_no_jax():

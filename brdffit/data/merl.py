@@ -1,0 +1,250 @@
+"""MERL ``.binary`` BRDF tables: reader and writer.
+
+The format is that of the MERL BRDF database (Matusik, Pfister, Brand and
+McMillan, "A data-driven reflectance model", SIGGRAPH 2003), as read by MERL's
+reference code ``BRDFRead.cpp``:
+
+* a header of three little-endian int32, the table dimensions ``(90, 90, 180)``;
+* three planes of ``90·90·180 = 1,458,000`` little-endian float64, red, then
+  green, then blue, each complete before the next;
+* a stored number times the channel's scale (``1/1500``, ``1.15/1500``,
+  ``1.66/1500`` for r, g, b) is the BRDF in 1/sr; stored values < 0 mark
+  missing data.
+
+The table is indexed by Rusinkiewicz's half/difference angles (Rusinkiewicz,
+"A new change of variables for efficient BRDF representation", EGWR 1998) of an
+isotropic BRDF (``φh`` dropped): bin ``(i, j, k)`` at flat index
+``k + 180 j + 16200 i`` holds ``θh = (i/90)² · π/2`` (a square-root grid, dense
+near the specular peak), ``θd = j/90 · π/2`` and ``φd = k/180 · π``; ``φd`` is
+folded into ``[0, π)`` by reciprocity (``φd → φd + π`` swaps light and viewer).
+These are the angles ``BRDFRead.cpp``'s lookup maps to the bin (each bin's
+lower edge).
+
+A bin's directions (SPEC section 1 frame, ``φh = 0``): the difference vector
+``d = (sin θd cos φd, sin θd sin φd, cos θd)`` and its mirror image about the
+half vector ``d' = (-d_x, -d_y, d_z)`` are rotated about the binormal ``y`` by
+``θh``: ``wi = R_y(θh) d``, ``wo = R_y(θh) d'``; the half vector is then
+``h = R_y(θh) z = (sin θh, 0, cos θh)``.
+"""
+
+import math
+import numbers
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._files import atomic_path, reading
+from ..errors import BrdfInputError
+from .samples import Samples
+
+#: Table dimensions (θh, θd, φd bins), as in the header.
+SHAPE = (90, 90, 180)
+N_BINS = SHAPE[0] * SHAPE[1] * SHAPE[2]
+HEADER_BYTES = 12
+FILE_BYTES = HEADER_BYTES + 3 * N_BINS * 8
+#: Stored number × scale = BRDF in 1/sr, for r, g, b (Matusik et al. 2003, ``BRDFRead.cpp``).
+SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
+CHANNELS = ("r", "g", "b")
+SUBSAMPLE_METHODS = ("random", "stratified")
+#: Directions with ``z`` at most this are below the horizon; it keeps bins that lie exactly on the horizon
+#: (``θh + θd = 90°`` at ``φd = 0``), which rounding puts at ``z = ±1e-17``, out on every platform.
+HORIZON = 1e-12
+
+
+def bin_angles() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(θh, θd, φd)`` in radians of every bin, each of shape (90, 90, 180) (``BRDFRead.cpp``'s lookup)."""
+    i, j, k = (np.arange(n, dtype=float) for n in SHAPE)
+    theta_h = (i / SHAPE[0]) ** 2 * (math.pi / 2)
+    theta_d = j / SHAPE[1] * (math.pi / 2)
+    phi_d = k / SHAPE[2] * math.pi
+    return tuple(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"))
+
+
+def bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``wi``, ``wo`` (1,458,000, 3) of every bin in file order (Rusinkiewicz 1998, ``φh = 0``).
+
+    Some point below the horizon (``z ≤ 0``); MERL never looks those bins up.
+    """
+    theta_h, theta_d, phi_d = (a.reshape(-1) for a in bin_angles())
+    dx = np.sin(theta_d) * np.cos(phi_d)
+    dy = np.sin(theta_d) * np.sin(phi_d)
+    dz = np.cos(theta_d)
+    cos_h, sin_h = np.cos(theta_h), np.sin(theta_h)
+    # R_y(θh) (x, y, z) = (x cos θh + z sin θh, y, -x sin θh + z cos θh); wo uses d' = (-dx, -dy, dz).
+    wi = np.stack([dx * cos_h + dz * sin_h, dy, -dx * sin_h + dz * cos_h], axis=-1)
+    wo = np.stack([-dx * cos_h + dz * sin_h, -dy, dx * sin_h + dz * cos_h], axis=-1)
+    return wi, wo
+
+
+# ---------------------------------------------------------------------- reading
+def read_merl(
+    path: str | os.PathLike,
+    *,
+    max_theta: float | None = None,
+    subsample: int | None = None,
+    subsample_method: str = "random",
+    seed: int = 0,
+) -> Samples:
+    """Read a MERL ``.binary`` file (Matusik et al. 2003) into :class:`Samples` with channels r, g, b in 1/sr.
+
+    Every valid bin becomes one sample at its Rusinkiewicz (1998) directions: all three channels ≥ 0,
+    both directions above the horizon and, with ``max_theta`` (degrees, in (0, 90]), θi and θo at most
+    that. ``subsample``: keep that many of the valid samples, chosen with ``numpy.random.default_rng(seed)``;
+    ``subsample_method`` ``"random"`` (uniform, without replacement) or ``"stratified"`` (an equal share
+    from each θh bin, the rest spread over the bins that have more). Bad input raises
+    :class:`~brdffit.errors.BrdfInputError` with one line naming the file.
+    """
+    source = str(path)
+    _check_options(max_theta, subsample, subsample_method, seed)
+    table = _read_table(Path(path))  # (3, N) stored numbers
+    bad = ~np.isfinite(table)
+    if np.any(bad):
+        channel, index = np.unravel_index(np.argmax(bad), bad.shape)
+        where = np.unravel_index(index, SHAPE)
+        raise BrdfInputError(
+            f"{source}: stored value {table[channel, index]} in channel {CHANNELS[channel]} at bin"
+            f" (θh {where[0]}, θd {where[1]}, φd {where[2]}) is not allowed (values must be finite)"
+        )
+    wi, wo = bin_directions()
+    keep = np.all(table >= 0, axis=0) & (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
+    if max_theta is not None:
+        theta = lambda w: np.degrees(np.arccos(np.clip(w[:, 2], -1.0, 1.0)))  # as Samples.theta_i
+        keep &= (theta(wi) <= max_theta) & (theta(wo) <= max_theta)
+    index = np.flatnonzero(keep)
+    if index.size == 0:
+        limit = "" if max_theta is None else f" or beyond --max-theta {max_theta:g} degrees"
+        raise BrdfInputError(f"{source}: no valid sample (every bin is missing, below the horizon{limit})")
+    if subsample is not None:
+        index = _subsample(index, int(subsample), subsample_method, seed, source)
+    values = (table[:, index] * SCALES[:, None]).T
+    return Samples.from_arrays(wi[index], wo[index], values, channels=CHANNELS, source=source)
+
+
+def _check_options(max_theta, subsample, method, seed) -> None:
+    if max_theta is not None:
+        number = isinstance(max_theta, numbers.Real) and not isinstance(max_theta, bool)
+        if not (number and 0 < max_theta <= 90):
+            raise BrdfInputError(f"--max-theta {max_theta!r} is not allowed; give degrees in (0, 90]")
+    if subsample is not None and not _whole_number(subsample, minimum=1):
+        raise BrdfInputError(f"--subsample {subsample!r} is not allowed; give a whole number ≥ 1")
+    if method not in SUBSAMPLE_METHODS:
+        raise BrdfInputError(
+            f"--subsample-method {method!r} is not allowed; choose one of: {', '.join(SUBSAMPLE_METHODS)}"
+        )
+    if not _whole_number(seed, minimum=0):
+        raise BrdfInputError(f"--seed {seed!r} is not allowed; give a whole number ≥ 0")
+
+
+def _whole_number(value, minimum: int) -> bool:
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, numbers.Integral):
+        return int(value) >= minimum
+    return isinstance(value, float) and value.is_integer() and value >= minimum
+
+
+def _read_table(path: Path) -> np.ndarray:
+    """The stored numbers (3, 1,458,000) of a MERL file, after checking its header and size."""
+    with reading(path, "a MERL file"), path.open("rb") as handle:
+        size = os.fstat(handle.fileno()).st_size
+        if size < HEADER_BYTES:
+            raise BrdfInputError(
+                f"{path}: holds {size} bytes, shorter than the {HEADER_BYTES}-byte header of a MERL file"
+            )
+        header = handle.read(HEADER_BYTES)
+        dims = tuple(int(n) for n in np.frombuffer(header, dtype="<i4")) if len(header) == HEADER_BYTES else ()
+        if dims != SHAPE:
+            raise BrdfInputError(f"{path}: dimensions {dims}, expected {SHAPE}; not a MERL BRDF file")
+        if size != FILE_BYTES:
+            raise BrdfInputError(f"{path}: holds {size:,} bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
+        table = np.fromfile(handle, dtype="<f8", count=3 * N_BINS)
+    if table.size != 3 * N_BINS:  # the file shrank while it was read
+        raise BrdfInputError(f"{path}: holds too few bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
+    return table.reshape(3, N_BINS).astype(np.float64, copy=False)
+
+
+def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: str) -> np.ndarray:
+    """``count`` of the valid bins ``index`` (sorted, file order), drawn with ``default_rng(seed)``."""
+    if count > index.size:
+        raise BrdfInputError(
+            f"{source}: --subsample {count:,} is more than the {index.size:,} valid samples;"
+            f" give at most {index.size:,}"
+        )
+    rng = np.random.default_rng(seed)
+    if method == "random":
+        return np.sort(index[rng.choice(index.size, size=count, replace=False)])
+    # Stratified over θh: bin i gets min(n_i, level), the largest level the count allows; the remainder
+    # goes one each to bins (chosen at random) that have more. Within a bin, the samples are random.
+    stratum = index // (SHAPE[1] * SHAPE[2])
+    available = np.bincount(stratum, minlength=SHAPE[0])
+    level = _water_level(available, count)
+    share = np.minimum(available, level)
+    spare = np.flatnonzero(available > level)
+    extra = rng.choice(spare, size=count - int(share.sum()), replace=False)
+    share[extra] += 1
+    order = np.lexsort((rng.random(index.size), stratum))  # by stratum, random within it
+    ordered = stratum[order]
+    rank = np.arange(index.size) - np.searchsorted(ordered, ordered, side="left")
+    return np.sort(index[order[rank < share[ordered]]])
+
+
+def _water_level(available: np.ndarray, count: int) -> int:
+    """The largest ``level`` with ``Σ min(available, level) ≤ count``."""
+    low, high = 0, int(available.max())
+    while low < high:
+        middle = (low + high + 1) // 2
+        if np.minimum(available, middle).sum() <= count:
+            low = middle
+        else:
+            high = middle - 1
+    return low
+
+
+# ---------------------------------------------------------------------- writing
+def write_merl(path: str | os.PathLike, model, params: dict, **model_options) -> None:
+    """Tabulate ``model`` with ``params`` (SPEC section 5) into a MERL ``.binary`` file for renderers.
+
+    The model (three channels, r, g, b) is evaluated with :func:`brdffit.evaluate` at every bin's
+    directions (Matusik et al. 2003 table, Rusinkiewicz 1998 angles); bins with a direction below the
+    horizon, which MERL never looks up, hold 0. ``model_options`` are the model's options (``fresnel=``).
+    """
+    from ..physics.evaluate import evaluate
+
+    wi, wo = bin_directions()
+    above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
+    values = np.zeros((N_BINS, len(CHANNELS)))
+    computed = evaluate(model, params, wi[above], wo[above], **model_options)
+    if computed.ndim != 2 or computed.shape[1] != len(CHANNELS):
+        name = getattr(model, "name", model)
+        raise BrdfInputError(
+            f"{path}: model {name!s} gives {computed.shape[-1]} channel(s); a MERL file holds 3 (r, g, b)"
+        )
+    values[above] = computed
+    write_merl_values(path, values)
+
+
+def write_merl_values(path: str | os.PathLike, values_rgb) -> None:
+    """Write BRDF values (1/sr) as a MERL ``.binary`` file (Matusik et al. 2003), atomically.
+
+    ``values_rgb``: shape (90, 90, 180, 3) indexed ``[θh bin, θd bin, φd bin, channel]``, or
+    (1,458,000, 3) in file order; channels r, g, b. Negative values mark missing bins; NaN and
+    infinity are not allowed. Each is divided by its channel's scale before it is stored.
+    """
+    try:
+        values = np.asarray(values_rgb, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise BrdfInputError(f"{path}: values must be an array of numbers") from None
+    if values.shape not in ((*SHAPE, 3), (N_BINS, 3)):
+        raise BrdfInputError(f"{path}: values must have shape {(*SHAPE, 3)} or {(N_BINS, 3)}, got {values.shape}")
+    values = values.reshape(N_BINS, 3)
+    if not np.all(np.isfinite(values)):
+        raise BrdfInputError(f"{path}: values contain NaN or infinity; a MERL file holds finite numbers")
+    planes = np.ascontiguousarray((values / SCALES).T, dtype="<f8")
+    header = np.array(SHAPE, dtype="<i4")
+    try:
+        with atomic_path(path) as temporary, temporary.open("wb") as handle:
+            handle.write(header.tobytes())
+            handle.write(planes.tobytes())
+    except OSError as error:
+        raise BrdfInputError(f"{path}: cannot be written ({error.strerror or error})") from None

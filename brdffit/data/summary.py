@@ -1,0 +1,50 @@
+"""``brdffit info``: what a samples file holds — count, channels, value ranges and angular coverage."""
+
+import numpy as np
+
+from .samples import Samples
+
+#: Cell size of the coverage count, degrees, over Rusinkiewicz's (θh, θd) (each 0–90°).
+CELL = 10
+
+
+def half_difference_angles(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
+    """θh (half vector from the normal) and θd (light from the half vector), degrees (Rusinkiewicz 1998)."""
+    half = samples.wi + samples.wo
+    half /= np.linalg.norm(half, axis=1, keepdims=True)
+    theta_h = np.degrees(np.arccos(np.clip(half[:, 2], -1.0, 1.0)))
+    theta_d = np.degrees(np.arccos(np.clip(np.sum(half * samples.wi, axis=1), -1.0, 1.0)))
+    return theta_h, theta_d
+
+
+def describe(samples: Samples, format_name: str) -> str:
+    """A few lines a person reads to judge whether the samples can determine a model."""
+    n, c = samples.n_samples, samples.n_channels
+    shown = ", ".join(samples.channels[:6]) + (f", … ({c} in all)" if c > 6 else "")
+    azimuth_i = np.arctan2(samples.wi[:, 1], samples.wi[:, 0])
+    azimuth_o = np.arctan2(samples.wo[:, 1], samples.wo[:, 0])
+    delta_phi = np.degrees(np.abs(np.angle(np.exp(1j * (azimuth_o - azimuth_i)))))
+    theta_h, theta_d = half_difference_angles(samples)
+    cells = np.unique((np.minimum(theta_h, 89.999) // CELL) * 100 + np.minimum(theta_d, 89.999) // CELL)
+    total = (90 // CELL) ** 2
+    lines = [
+        f"{samples.source}: {format_name}, {n} samples × {c} channel(s): {shown}",
+        f"  θi {_range(samples.theta_i)}°, θo {_range(samples.theta_o)}°, |φo − φi| {_range(delta_phi)}°",
+        f"  θh {_range(theta_h)}°, θd {_range(theta_d)}°; {len(cells)} of {total} {CELL}°×{CELL}° (θh, θd) cells"
+        f" hold samples; {len(np.unique(np.round(samples.wi, 6), axis=0))} distinct light directions",
+        f"  grazing: {np.mean(np.maximum(samples.theta_i, samples.theta_o) > 70):.0%} of samples have θi or θo > 70°",
+    ]
+    for index, name in enumerate(samples.channels[:6]):
+        values = samples.values[:, index]
+        lines.append(f"  {name}: {values.min():.4g} … {values.max():.4g} 1/sr, median {np.median(values):.4g}")
+    lines.append(
+        "  sigma: "
+        + ("given" if samples.sigma is not None else "none")
+        + " · weight: "
+        + ("given" if samples.weight is not None else "none")
+    )
+    return "\n".join(lines)
+
+
+def _range(values: np.ndarray) -> str:
+    return f"{values.min():.1f}–{values.max():.1f}"

@@ -1,0 +1,136 @@
+"""Data-driven starting points for the fit, by variable projection over a grid of lobe shapes.
+
+Every model is linear in its albedos (``models/base.py``). For a fixed lobe
+shape, the albedos that minimise the loss *linearised about the data*,
+``Σ w (f - y)²`` with ``w = (scale · T'(y))²`` (``losses.linearised_weight``), are
+a small non-negative least-squares problem per channel (Golub & Pereyra 1973,
+variable projection; Lawson & Hanson's NNLS via ``scipy.optimize.nnls``). Every
+shape of the lobe family's coarse grid gets its best albedos and is scored by
+the true loss, all shapes at once; the best few become the Levenberg-Marquardt
+starts. Models with several lobes (Lafortune) place their lobes greedily, one
+at a time.
+"""
+
+from dataclasses import replace
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import scipy.optimize
+
+from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from ..data.samples import Samples
+from ..physics.models import Model, Params
+from .losses import Loss, linearised_weight
+from .problem import Problem, prepared, residuals, target_and_scale
+
+#: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
+ALBEDO_FLOOR = 1e-3
+#: Starts are searched on at most this many samples; the winner is then refined on all of them.
+SEARCH_SAMPLES = 2**14
+#: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
+#: that a few samples see is still seen.
+BRIGHT_SHARE = 0.25
+
+
+def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
+    """Indices of the samples the starts are searched on, or None for all of them.
+
+    Above :data:`SEARCH_SAMPLES` samples: the brightest quarter of the subset
+    (by each sample's largest value relative to its channel's median, so a
+    specular peak is kept) and the rest drawn at random with ``seed``. An
+    all-zero channel would overflow the ratio; each channel's scale is at
+    least a thousandth of its largest value.
+    """
+    n = samples.n_samples
+    if n <= SEARCH_SAMPLES:
+        return None
+    # A channel that is 0 almost everywhere (an albedo of 0) is scaled by a thousandth of its largest value.
+    values = samples.values
+    scale = np.maximum(np.median(values, axis=0), 1e-3 * np.max(values, axis=0))
+    brightness = np.max(values / np.maximum(scale, np.finfo(float).tiny), axis=1)
+    n_bright = int(SEARCH_SAMPLES * BRIGHT_SHARE)
+    bright = np.argpartition(-brightness, n_bright)[:n_bright]
+    others = np.setdiff1d(np.arange(n), bright, assume_unique=True)
+    rest = np.random.default_rng(seed).choice(others, SEARCH_SAMPLES - n_bright, replace=False)
+    return np.sort(np.concatenate([bright, rest]))
+
+
+def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -> list[np.ndarray]:
+    """Up to ``n_starts`` unconstrained start vectors, best first."""
+    weight = _weights(loss, problem)
+    n_channels = problem.measured.shape[1]
+    diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
+    if not model.n_lobes:
+        diffuse = _albedos(*(np.asarray(x) for x in _gram(diffuse_basis, weight, problem.measured)))[0]
+        return [model.to_unconstrained(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
+
+    grid = model.lobe.grid
+    stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
+    lobes = _grid_lobes(model.lobe, stacked, problem.wi, problem.wo)  # (G, N)
+    chosen: list[dict[str, float]] = []  # shapes of the lobes already placed
+    fixed = diffuse_basis
+    for placed in range(model.n_lobes):
+        partial_model = replace(model, n_lobes=placed + 1)
+        grams, rhs = (np.asarray(x) for x in _grid_grams(fixed, lobes, weight, problem.measured))
+        thetas = []
+        for index, shape in enumerate(grid):
+            albedos = _floored(_albedos(grams[index], rhs[index]))
+            shapes = [*chosen, shape]
+            shape_arrays = {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
+            thetas.append(partial_model.to_unconstrained(Params(albedos[0], albedos[1:], shape_arrays)))
+        costs = np.asarray(_grid_costs(partial_model, loss, jnp.asarray(np.stack(thetas)), problem))
+        order = np.argsort(costs, kind="stable")
+        chosen.append(grid[order[0]])
+        fixed = jnp.concatenate([fixed, lobes[order[0]][None]])
+    return [thetas[index] for index in order[:n_starts]]
+
+
+def _albedos(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Non-negative albedos (B, C) from per-channel normal equations ``gram`` (C, B, B) and ``rhs`` (C, B).
+
+    NNLS on the B×B system through its Cholesky factor ``R``: ``|R x - R⁻ᵀ rhs|²``
+    equals the weighted sum of squares up to a constant.
+    """
+    n_channels, n_basis = rhs.shape
+    albedos = np.zeros((n_basis, n_channels))
+    for channel in range(n_channels):
+        # A lobe that no sample sees has a zero row; a relative ridge keeps the factor defined.
+        matrix = gram[channel]
+        matrix = matrix + (1e-12 * np.trace(matrix) + np.finfo(float).tiny) * np.eye(n_basis)
+        upper = np.linalg.cholesky(matrix).T
+        albedos[:, channel], _ = scipy.optimize.nnls(upper, np.linalg.solve(upper.T, rhs[channel]))
+    return albedos
+
+
+def _floored(albedos: np.ndarray) -> np.ndarray:
+    return np.maximum(albedos, ALBEDO_FLOOR * max(float(np.max(albedos)), 1e-6))
+
+
+@jit(static_argnums=0)
+def _weights(loss: Loss, problem: Problem):
+    return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], target_and_scale(loss, problem)[1])
+
+
+@jit
+def _gram(basis, weight, measured):
+    """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
+    weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
+    return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
+
+
+@jit
+def _grid_grams(fixed, lobes, weight, measured):
+    """:func:`_gram` for the basis ``fixed`` plus each grid lobe: (G, C, B, B), (G, C, B)."""
+    return jax.vmap(lambda lobe: _gram(jnp.concatenate([fixed, lobe[None]]), weight, measured))(lobes)
+
+
+@jit(static_argnums=0)
+def _grid_lobes(lobe, shapes, wi, wo):
+    return jax.vmap(lambda shape: lobe(shape, wi, wo))(shapes)
+
+
+@jit(static_argnums=(0, 1))
+def _grid_costs(model: Model, loss: Loss, thetas, problem: Problem):
+    problem = prepared(loss, problem)
+    return jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)

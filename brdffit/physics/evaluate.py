@@ -1,0 +1,42 @@
+"""Evaluate a model with SPEC-style parameters at given directions (SPEC section 6)."""
+
+from typing import Any
+
+import numpy as np
+
+from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from ..errors import BrdfInputError
+from .models import Model, Params, get_model
+
+
+def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any) -> np.ndarray:
+    """BRDF values (N, C) in 1/sr of ``model`` with ``params`` at directions ``wi``, ``wo`` (N, 3).
+
+    ``params`` is the dictionary of SPEC section 5; ``options`` are the model's
+    options (``fresnel=``, ``lobes=``). Directions are unit vectors in the local
+    frame; pairs with either ``z ≤ 0`` give 0.
+    """
+    model = get_model(model, **options)
+    checked = model.params_from_dict(params)
+    wi = _directions(wi, "wi")
+    wo = _directions(wo, "wo")
+    if wi.shape != wo.shape:
+        raise BrdfInputError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+    return np.asarray(_evaluate(model, checked, wi, wo))
+
+
+@jit(static_argnums=0)
+def _evaluate(model: Model, params: Params, wi, wo):
+    return model.evaluate(params, wi, wo)
+
+
+def _directions(value, name: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise BrdfInputError(f"{name} must be an (N, 3) array of numbers") from None
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise BrdfInputError(f"{name} must have shape (N, 3), got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise BrdfInputError(f"{name} contains NaN or infinite values")
+    return array

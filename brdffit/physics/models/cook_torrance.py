@@ -1,0 +1,100 @@
+"""Cook-Torrance microfacet lobe: Beckmann distribution, V-groove shadowing, Fresnel.
+
+Cook & Torrance, "A reflectance model for computer graphics", ACM TOG 1982,
+normalised as in Walter et al., "Microfacet models for refraction through
+rough surfaces", EGSR 2007 (SPEC section 2)::
+
+    lobe = F(cos β) · D · G / (4 ci co)
+    D    = exp(-tan²θh / m²) / (π m² ch⁴)                     (Beckmann; m is the rms slope)
+    G    = min(1, 2 ch co / (wo·h), 2 ch ci / (wo·h))       (V-groove, Torrance & Sparrow 1967)
+
+With ``ks = 1`` and ``F = 1`` the lobe's directional albedo is at most 1.
+"""
+
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+
+from ... import _jax  # noqa: F401  (float64 before any array)
+from ...errors import BrdfInputError
+from ..domains import POSITIVE, UNIT_INTERVAL, GreaterThan, Positive
+from ..fresnel import fresnel_conductor, fresnel_dielectric, fresnel_schlick
+from ..geometry import half_vector, tan2_from_cos
+from .base import Lobe, Model
+from .grids import ROUGHNESS_GRID
+
+#: ``--fresnel`` choices: the Fresnel parameters each one adds, with their domains and starting values.
+FRESNEL_PARAMETERS = {
+    "schlick": (("f0", UNIT_INTERVAL, (0.04, 0.3, 0.9)),),
+    "dielectric": (("eta", GreaterThan(1.0), (1.5, 3.0)),),
+    "conductor": (("eta", POSITIVE, (0.5, 1.5)), ("k", Positive(allow_zero=True), (1.0, 4.0))),
+    "none": (),
+}
+
+
+def beckmann_distribution(cos_theta_h, m):
+    """Beckmann 1963 microfacet distribution ``exp(-tan²θh/m²) / (π m² cos⁴θh)``, in 1/sr."""
+    cos2 = cos_theta_h * cos_theta_h
+    return jnp.exp(-tan2_from_cos(cos_theta_h) / (m * m)) / (jnp.pi * m * m * cos2 * cos2)
+
+
+def v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta):
+    """Torrance-Sparrow V-groove masking-shadowing ``min(1, 2 ch co/(wo·h), 2 ch ci/(wo·h))``.
+
+    ``cos_beta = wi·h = wo·h``.
+    """
+    return jnp.minimum(1.0, 2.0 * cos_theta_h * jnp.minimum(cos_i, cos_o) / cos_beta)
+
+
+@dataclass(frozen=True)
+class CookTorranceLobe(Lobe):
+    """Cook-Torrance lobe with rms slope ``m`` and the Fresnel term named by ``fresnel``."""
+
+    fresnel: str = "schlick"
+
+    def __post_init__(self):
+        if self.fresnel not in FRESNEL_PARAMETERS:
+            raise BrdfInputError(
+                f"--fresnel {self.fresnel!r} is not known; choose one of: {', '.join(FRESNEL_PARAMETERS)}"
+            )
+
+    @property
+    def summary(self) -> str:
+        return f"Beckmann D, V-groove G, {self.fresnel} Fresnel, F·D·G/(4 ci co)"
+
+    @property
+    def parameters(self):
+        return (("m", POSITIVE), *((name, domain) for name, domain, _ in FRESNEL_PARAMETERS[self.fresnel]))
+
+    @property
+    def grid(self):
+        shapes = [{"m": m} for m in ROUGHNESS_GRID]
+        for name, _, starts in FRESNEL_PARAMETERS[self.fresnel]:
+            shapes = [shape | {name: start} for shape in shapes for start in starts]
+        return tuple(shapes)
+
+    def fresnel_term(self, shape, cos_beta):
+        if self.fresnel == "schlick":
+            return fresnel_schlick(cos_beta, shape["f0"])
+        if self.fresnel == "dielectric":
+            return fresnel_dielectric(cos_beta, shape["eta"])
+        if self.fresnel == "conductor":
+            return fresnel_conductor(cos_beta, shape["eta"], shape["k"])
+        return jnp.ones_like(cos_beta)
+
+    def __call__(self, shape, wi, wo):
+        cos_i, cos_o = wi[:, 2], wo[:, 2]
+        h = half_vector(wi, wo)
+        cos_theta_h = h[:, 2]
+        cos_beta = jnp.sum(wi * h, axis=-1)
+        distribution = beckmann_distribution(cos_theta_h, shape["m"])
+        shadowing = v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta)
+        return self.fresnel_term(shape, cos_beta) * distribution * shadowing / (4.0 * cos_i * cos_o)
+
+
+def cook_torrance(fresnel: str = "schlick") -> Model:
+    """``kd/π + ks · F·D·G/(4 ci co)``; ``fresnel`` one of schlick (default), dielectric, conductor, none."""
+    lobe = CookTorranceLobe(fresnel)
+    return Model(
+        "cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", (("fresnel", fresnel),)
+    )

@@ -1,0 +1,68 @@
+"""Phong-type cosine-power lobes, energy-normalised.
+
+``phong`` is the modified Phong model of Lewis, "Making shaders more physically
+plausible", CGF 1994 (the mirror-direction lobe Ngan et al. 2005 fit);
+``blinn-phong`` is Blinn's half-vector variant, "Models of light reflection for
+computer synthesized pictures", SIGGRAPH 1977, with the ``(n+8)/(8π)``
+normalisation of Akenine-Möller et al., *Real-Time Rendering*. SPEC section 2::
+
+    phong        rho_s · (n+2)/(2π) · max(0, r·wo)^n,  r = (-wi_x, -wi_y, wi_z)
+    blinn-phong  rho_s · (n+8)/(8π) · ch^n
+"""
+
+from dataclasses import dataclass
+
+import jax.numpy as jnp
+
+from ... import _jax  # noqa: F401  (float64 before any array)
+from ..domains import POSITIVE
+from ..geometry import half_vector, mirror_direction, safe_power
+from .base import Lobe, Model
+from .grids import EXPONENT_GRID
+
+
+@dataclass(frozen=True)
+class PhongLobe(Lobe):
+    """Cosine power ``n`` of the angle between ``wo`` and the mirror direction of ``wi``."""
+
+    summary = "(n+2)/(2π) · max(0, r·wo)^n around the mirror direction r"
+
+    @property
+    def parameters(self):
+        return (("n", POSITIVE),)
+
+    @property
+    def grid(self):
+        return tuple({"n": n} for n in EXPONENT_GRID)
+
+    def __call__(self, shape, wi, wo):
+        n = shape["n"]
+        cos_alpha = jnp.sum(mirror_direction(wi) * wo, axis=-1)
+        return (n + 2.0) / (2.0 * jnp.pi) * safe_power(cos_alpha, n)
+
+
+@dataclass(frozen=True)
+class BlinnPhongLobe(Lobe):
+    """Cosine power ``n`` of the half-vector's zenith angle."""
+
+    summary = "(n+8)/(8π) · ch^n around the normal, in the half vector"
+
+    @property
+    def parameters(self):
+        return (("n", POSITIVE),)
+
+    @property
+    def grid(self):
+        return tuple({"n": n} for n in EXPONENT_GRID)
+
+    def __call__(self, shape, wi, wo):
+        n = shape["n"]
+        return (n + 8.0) / (8.0 * jnp.pi) * safe_power(half_vector(wi, wo)[:, 2], n)
+
+
+def phong() -> Model:
+    return Model("phong", "modified Phong (Lewis 1994), mirror-direction lobe", PhongLobe(), 1)
+
+
+def blinn_phong() -> Model:
+    return Model("blinn-phong", "normalised Blinn-Phong (Blinn 1977), half-vector lobe", BlinnPhongLobe(), 1)

@@ -1,0 +1,137 @@
+"""The posterior of a fit's parameters: priors, a likelihood consistent with the loss, and its log density.
+
+Coordinates are the model's *sampling vector* (``models/base.py``): the
+physical parameters themselves, except that a Lafortune lobe's direction is
+its angle ``psi``. When the samples carry no ``sigma``, one more coordinate,
+``ln s``, scales the noise.
+
+Likelihood: Gaussian on the residuals of the fit's loss (``problem.py``),
+``r = scale · (T(f) - T(y))``. With a ``sigma`` column ``scale`` already
+divides by the measurement's σ carried into the loss's units, so
+``ln L = -½ Σ r²``. Without one the residuals share an unknown standard
+deviation ``s`` (a nuisance parameter)::
+
+    ln L = -½ Σ r² / s² - n ln s            (n: fitted values, samples × channels)
+
+Priors (``domains.py``): flat on albedos and bounded parameters (``f0``,
+``psi``), log-uniform on scales (roughness, exponents, ``eta - 1``) and on
+``s``. They are improper where unbounded; the likelihood makes the posterior
+proper whenever the fit is determined.
+
+The log density is compiled once per problem and walker batch shape, evaluates
+a whole batch of walkers at once, and returns ``-inf`` (never NaN) outside the
+prior's support or wherever the model cannot be evaluated.
+"""
+
+from functools import cache, partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from ..data.samples import Samples
+from ..errors import BrdfInputError
+from ..fitting.losses import Loss, get_loss
+from ..fitting.problem import Problem, build_problem, cost, prepared, residuals_at, target_and_scale
+from ..fitting.results import FitResult
+from ..physics.models import Model, get_model
+
+#: Name of the noise coordinate ``ln s`` (sampled only when the samples carry no sigma).
+LOG_NOISE = "ln_noise"
+
+
+class Setup(NamedTuple):
+    """Everything a posterior of ``result`` on ``samples`` needs."""
+
+    model: Model
+    loss: Loss
+    problem: Problem
+    optimum: np.ndarray  # the sampling vector at the fitted parameters
+    labels: list[str]  # of the sampling vector
+    n_channels: int
+    has_sigma: bool
+    n_values: int  # fitted values: real samples × channels with a nonzero weight
+
+
+def setup(result: FitResult, samples: Samples) -> Setup:
+    """The model, loss and problem of ``result``, checked against ``samples`` (the samples it was fitted to)."""
+    if not isinstance(samples, Samples):
+        raise BrdfInputError(f"expected Samples (from brdffit.load_samples), got {type(samples).__name__}")
+    if tuple(samples.channels) != tuple(result.channels):
+        raise BrdfInputError(
+            f"{samples.source}: channels {', '.join(samples.channels)} differ from the fit's"
+            f" ({', '.join(result.channels)})"
+        )
+    if samples.n_samples != result.n_samples:
+        raise BrdfInputError(
+            f"{samples.source}: {samples.n_samples} samples, but the fit used {result.n_samples};"
+            " give the samples it was fitted to (after the same max_theta)"
+        )
+    model = get_model(result.model, **result.model_options)
+    loss = get_loss(result.loss)
+    problem = build_problem(samples)
+    optimum = model.to_sampling(model.params_from_dict(result.params))
+    n_values = int(_count_weighted(loss, problem))
+    labels = model.sampling_labels(tuple(result.channels))
+    return Setup(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
+
+
+@jit(static_argnums=0)
+def _count_weighted(loss: Loss, problem: Problem):
+    """How many residuals carry weight: values of real samples whose residual scale is not 0."""
+    return jnp.count_nonzero(jnp.broadcast_to(target_and_scale(loss, problem)[1], problem.measured.shape))
+
+
+def chi_squared(model: Model, loss: Loss, v, problem: Problem):
+    """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk (JAX)."""
+    c = problem.measured.shape[1]
+    return cost(lambda w, chunk: residuals_at(model, loss, model.from_sampling(w, c), chunk), v, problem)
+
+
+@cache
+def compiled_chi_squared(model: Model, loss: Loss):
+    """:func:`chi_squared` compiled: ``(v, problem) -> Σ r²``."""
+    return jit(partial(chi_squared, model, loss))
+
+
+def log_prior(model: Model, v, n_channels: int):
+    """Sum of the domains' log priors at the sampling vector ``v`` (JAX); ``-inf`` outside the support."""
+    return sum(domain.log_prior(v[i]) for i, domain in enumerate(model.sampling_domains(n_channels)))
+
+
+@cache
+def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
+    """``(walkers (W, D), problem, n_values) -> (W,)`` log posterior densities, jit-compiled, vmapped over walkers."""
+
+    def one(x, problem, n_values):
+        c = problem.measured.shape[1]
+        k = len(model.sampling_domains(c))
+        v = x[:k]
+        chi2 = chi_squared(model, loss, v, problem)
+        if has_sigma:
+            likelihood = -0.5 * chi2
+        else:  # x[k] = ln s, with a flat prior (log-uniform in s)
+            likelihood = -0.5 * chi2 * jnp.exp(-2.0 * x[k]) - n_values * x[k]
+        total = log_prior(model, v, c) + likelihood
+        return jnp.where(jnp.isfinite(total), total, -jnp.inf)
+
+    walkers = jax.vmap(one, in_axes=(0, None, None))
+    return jit(lambda x, problem, n_values: walkers(x, prepared(loss, problem), n_values))
+
+
+def log_probability_function(posterior: Setup):
+    """``log_prob(walkers) -> (W,)`` for a (W, D) numpy batch, D the sampling vector's length (+1 for ``ln s``)."""
+    density = compiled_log_density(posterior.model, posterior.loss, posterior.has_sigma)
+
+    def log_prob(walkers):
+        return np.asarray(density(jnp.asarray(walkers, dtype=jnp.float64), posterior.problem, posterior.n_values))
+
+    return log_prob
+
+
+def physical_draws(model: Model, draws: np.ndarray, n_channels: int) -> np.ndarray:
+    """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical_labels`` order."""
+    convert = jit(jax.vmap(lambda v: model.to_physical_vector(model.from_sampling(v, n_channels))))
+    return np.asarray(convert(jnp.asarray(draws, dtype=jnp.float64)))

@@ -1,0 +1,235 @@
+"""Laplace (Gauss-Newton) covariance of a fit's parameters.
+
+At the optimum ``v̂`` the posterior is approximated by a Gaussian with
+covariance ``s² (JᵀJ)⁻¹``, with ``J`` the exact Jacobian of the residuals
+(``posterior.py``) and ``s² = Σ r² / (n - k)`` (the reduced χ², n fitted
+values, k parameters) when the samples carry no ``sigma``; ``s² = 1`` when
+they do, since the residuals are then already in units of σ (Bard 1974,
+*Nonlinear Parameter Estimation*, ch. 7; Press et al., *Numerical Recipes*,
+§15.5).
+
+``J`` is taken in the sampling coordinates (physical values, Lafortune
+directions as the angle ψ), chunk by chunk in forward mode. Since the solver's
+coordinates ``u`` map to these by ``v = g(u)`` elementwise,
+``(J_vᵀJ_v)⁻¹ = G (J_uᵀJ_u)⁻¹ Gᵀ`` with ``G = dv/du``: this *is* the delta
+method, evaluated where it stays finite when an albedo sits at 0 (``G → 0``
+there). Lafortune's ``(cxy, cz)`` then follow from ψ by the delta method
+proper. The inverse is taken in correlation scaling, so parameters of any
+units are treated alike; a parameter whose Jacobian column is zero, or a
+direction in which ``JᵀJ`` is singular, is *undetermined*: its error is
+reported as null and a warning names it. Correlations of |ρ| ≥
+:data:`DEGENERATE_CORRELATION` are reported as a degenerate pair.
+"""
+
+import warnings
+from functools import cache
+from statistics import NormalDist
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from ..data.samples import Samples
+from ..fitting.losses import Loss
+from ..fitting.problem import Problem, chunks, residuals_at
+from ..fitting.results import FitResult
+from ..physics.models import Model
+from .density import Setup, compiled_chi_squared, setup
+from .layout import (
+    QUANTILES,
+    correlation,
+    matrix_block,
+    quantile_dict,
+    stderr_dict,
+    strongest_correlation,
+    with_block,
+)
+
+#: |correlation| from which a pair of parameters is reported as degenerate (the data fix a combination of them).
+DEGENERATE_CORRELATION = 0.99
+#: Without sigma, warn when a sandwich (robust) error exceeds the reported one by this factor.
+HETEROSCEDASTIC_RATIO = 2.0
+#: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
+SINGULAR = 1e-12
+
+
+def _mapped(gradient: np.ndarray, covariance_v: np.ndarray) -> np.ndarray:
+    """``G C Gᵀ``, with NaN for every physical parameter that depends on an undetermined one (NaN in ``C``)."""
+    unknown = np.isnan(np.diag(covariance_v))
+    covariance = gradient @ np.nan_to_num(covariance_v) @ gradient.T
+    affected = np.any((gradient != 0) & unknown[None, :], axis=1)
+    covariance[affected, :] = np.nan
+    covariance[:, affected] = np.nan
+    return covariance
+
+
+class UncertaintyWarning(UserWarning):
+    """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""
+
+
+def gauss_newton_matrix(posterior: Setup, v) -> np.ndarray:
+    """``JᵀJ`` (k, k) of the residuals with respect to the sampling vector, exact (forward mode), chunk by chunk."""
+    return gauss_newton_and_meat(posterior, v)[0]
+
+
+def gauss_newton_and_meat(posterior: Setup, v) -> tuple[np.ndarray, np.ndarray]:
+    """``JᵀJ`` and ``Σ_i r_i² J_iᵀJ_i`` (the "meat" of the sandwich covariance), both (k, k)."""
+    hessian, meat = compiled_gauss_newton(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem)
+    return np.asarray(hessian), np.asarray(meat)
+
+
+@cache
+def compiled_gauss_newton(model: Model, loss: Loss):
+    """``(v, problem) -> (JᵀJ, Σ r² JᵢᵀJᵢ)``, compiled once per model and loss (and problem shape)."""
+
+    @jit
+    def gauss_newton(v, problem: Problem):
+        c = problem.measured.shape[1]
+
+        def residual(w, chunk):
+            return residuals_at(model, loss, model.from_sampling(w, c), chunk).ravel().astype(jnp.float64)
+
+        def accumulate(totals, chunk):
+            r = residual(v, chunk)
+            jacobian = jax.jacfwd(residual)(v, chunk).astype(jnp.float64)
+            weighted = jacobian * r[:, None]
+            return (totals[0] + jacobian.T @ jacobian, totals[1] + weighted.T @ weighted), None
+
+        zeros = jnp.zeros((v.shape[0], v.shape[0]), jnp.float64)
+        totals, _ = jax.lax.scan(accumulate, (zeros, zeros), chunks(problem))
+        return totals
+
+    return gauss_newton
+
+
+def inverse_with_null_space(matrix: np.ndarray, labels: list[str]) -> tuple[np.ndarray, list[str], float]:
+    """``matrix⁻¹`` in correlation scaling, NaN in the rows and columns of undetermined parameters.
+
+    Returns the inverse, the labels of the undetermined parameters and the
+    condition number of the scaled matrix (over the determined ones).
+    """
+    k = matrix.shape[0]
+    scale = np.sqrt(np.diag(matrix))
+    determined = np.isfinite(scale) & (scale > 0)
+    index = np.flatnonzero(determined)
+    inverse = np.full((k, k), np.nan)
+    condition = float("inf")
+    if index.size:
+        scaled = matrix[np.ix_(index, index)] / np.outer(scale[index], scale[index])
+        eigenvalues, vectors = np.linalg.eigh(scaled)
+        null = eigenvalues <= SINGULAR * eigenvalues[-1]
+        condition = float(eigenvalues[-1] / eigenvalues[0]) if eigenvalues[0] > 0 else float("inf")
+        kept = ~null
+        scaled_inverse = (vectors[:, kept] / eigenvalues[kept]) @ vectors[:, kept].T
+        inverse[np.ix_(index, index)] = scaled_inverse / np.outer(scale[index], scale[index])
+        # A parameter with weight in a null direction has unbounded variance.
+        in_null = np.any(np.abs(vectors[:, null]) > 1e-6, axis=1) if null.any() else np.zeros(index.size, bool)
+        determined[index[in_null]] = False
+    inverse[~determined, :] = np.nan
+    inverse[:, ~determined] = np.nan
+    return inverse, [label for label, ok in zip(labels, determined, strict=True) if not ok], condition
+
+
+def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
+    """``result`` with the Laplace ``uncertainty`` block (SPEC section 5); ``samples`` are those it was fitted to.
+
+    Warns (:class:`UncertaintyWarning`) about degenerate pairs, undetermined
+    parameters and a fit that did not converge; the warnings are also written
+    to the block.
+    """
+    posterior = setup(result, samples)
+    block = laplace_block(result, posterior)
+    for message in block["warnings"]:
+        warnings.warn(message, UncertaintyWarning, stacklevel=2)
+    return with_block(result, block)
+
+
+class Curvature(NamedTuple):
+    """What one pass at the optimum gives: ``Σ r²``, ``(JᵀJ)⁻¹`` and the sandwich's meat, in sampling coordinates."""
+
+    chi2: float
+    inverse: np.ndarray  # (JᵀJ)⁻¹, NaN in the rows and columns of undetermined parameters
+    meat: np.ndarray  # Σ_i r_i² J_iᵀJ_i
+    undetermined: list[str]
+    condition: float  # of the correlation-scaled JᵀJ
+
+
+def curvature_at_optimum(posterior: Setup) -> Curvature:
+    v = jnp.asarray(posterior.optimum)
+    chi2 = float(compiled_chi_squared(posterior.model, posterior.loss)(v, posterior.problem))
+    hessian, meat = gauss_newton_and_meat(posterior, v)
+    inverse, undetermined, condition = inverse_with_null_space(hessian, posterior.labels)
+    return Curvature(chi2, inverse, meat, undetermined, condition)
+
+
+def laplace_block(result: FitResult, posterior: Setup, curvature: Curvature | None = None) -> dict:
+    """The Laplace ``uncertainty`` block; ``curvature``: :func:`curvature_at_optimum`, when already computed."""
+    model, c, labels = posterior.model, posterior.n_channels, posterior.labels
+    v = jnp.asarray(posterior.optimum)
+    k = v.shape[0]
+    chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(posterior)
+    dof = posterior.n_values - k
+    reduced = chi2 / dof if dof > 0 else float("nan")
+    variance_scale = 1.0 if posterior.has_sigma else reduced
+    covariance_v = variance_scale * inverse
+    # The delta method from the sampling coordinates to the physical ones (a no-op except for Lafortune's ψ).
+    to_physical = lambda w: model.to_physical_vector(model.from_sampling(w, c))
+    physical = np.asarray(to_physical(v))
+    gradient = np.asarray(jax.jacfwd(to_physical)(v))
+    covariance = _mapped(gradient, covariance_v)
+    stderr = np.sqrt(np.diag(covariance))
+    # Without sigma, s² assumes one variance for every residual; the sandwich A⁻¹BA⁻¹ (White 1980) does not.
+    robust = np.sqrt(np.diag(_mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))))
+    robust[np.isnan(stderr)] = np.nan
+
+    messages = []
+    if not result.converged:
+        messages.append("the fit did not converge: the uncertainty describes the point where it stopped")
+    if dof <= 0 and not posterior.has_sigma:
+        messages.append(f"{posterior.n_values} values cannot estimate the noise of {k} parameters; give a sigma column")
+    if undetermined:
+        messages.append(
+            f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
+            " its error is reported as null"
+        )
+    names = model.physical_labels(tuple(result.channels))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(np.isfinite(robust / stderr), robust / stderr, 0.0)
+    if not posterior.has_sigma and ratio.max(initial=0.0) > HETEROSCEDASTIC_RATIO:
+        worst = int(np.argmax(ratio))
+        messages.append(
+            f"without sigma the errors assume the same scatter for every residual, but the residuals' scatter varies"
+            f" (e.g. noise proportional to the signal): the heteroscedasticity-robust (sandwich) error of"
+            f" {names[worst]} is {ratio[worst]:.1f}× the reported one (diagnostics.robust_stderr); give a sigma column"
+            " for calibrated errors"
+        )
+    pair = strongest_correlation(labels, correlation(covariance_v))
+    if pair is not None and abs(pair[2]) >= DEGENERATE_CORRELATION:
+        messages.append(
+            f"{pair[0]} and {pair[1]} are nearly degenerate (correlation {pair[2]:+.4f}): the samples fix a"
+            " combination of them, so their errors are large and shared; samples at other angles would separate"
+            " them"
+        )
+    z = np.array([NormalDist().inv_cdf(q) for q in QUANTILES])
+    quantiles = physical[None, :] + z[:, None] * stderr[None, :]
+    # The Gaussian knows no bounds; its quantiles are clipped to each parameter's domain (an albedo stays ≥ 0).
+    bounds = np.array([domain.bounds for domain in model.physical_domains(c)])
+    quantiles = np.clip(quantiles, bounds[:, 0], bounds[:, 1])
+    return {
+        "method": "laplace",
+        "stderr": stderr_dict(model, stderr, c),
+        "quantiles": quantile_dict(model, quantiles, c),
+        "covariance": matrix_block(names, covariance),
+        "correlation": matrix_block(names, correlation(covariance)),
+        "diagnostics": {
+            "reduced_chi2": reduced,
+            "dof": dof,
+            "noise_scale": None if posterior.has_sigma else float(np.sqrt(reduced)),
+            "condition_number": condition,
+            "robust_stderr": None if posterior.has_sigma else stderr_dict(model, robust, c),
+            "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
+        },
+        "warnings": messages,
+    }

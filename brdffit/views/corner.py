@@ -1,0 +1,106 @@
+"""Figures: the corner plot of a fit's posterior (Foreman-Mackey 2016, the ``corner`` package)."""
+
+import logging
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._files import atomic_path
+from ..errors import BrdfInputError
+from ..fitting.results import FitResult
+
+#: File types ``corner_plot`` writes (matplotlib chooses the format by suffix).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+#: Draws taken from the Laplace Gaussian when a result has no MCMC draws.
+GAUSSIAN_DRAWS = 20_000
+
+
+def check_figure_path(path, option: str = "--corner") -> Path:
+    path = Path(path)
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        raise BrdfInputError(f"{option} {path}: the file must end in {', '.join(FIGURE_SUFFIXES)}")
+    if not path.parent.is_dir():
+        raise BrdfInputError(f"{option} {path}: folder {path.parent} does not exist")
+    return path
+
+
+def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, truths=None, seed: int = 0):
+    """The corner plot of ``result``'s posterior: every pair of physical parameters, the LM optimum marked.
+
+    Draws are the MCMC ones (``result.posterior``) or, for a Laplace result,
+    :data:`GAUSSIAN_DRAWS` seeded draws from its Gaussian. Parameters the data
+    do not determine are left out. ``truths``: a flat vector (covariance order)
+    to mark instead of the optimum. ``path``: also save it (atomically).
+    Returns the matplotlib figure.
+    """
+    if path is not None:
+        path = check_figure_path(path)
+    if not result.uncertainty:
+        raise BrdfInputError("a corner plot needs an uncertainty estimate; fit with --uncertainty mcmc (or laplace)")
+    import corner
+
+    names = result.uncertainty["covariance"]["names"]
+    optimum = _flat_parameters(result)
+    if result.posterior is not None:
+        draws = result.posterior
+    else:
+        covariance = np.array(result.uncertainty["covariance"]["matrix"], dtype=float)  # None → NaN
+        known = np.isfinite(np.diag(covariance))
+        draws = np.full((GAUSSIAN_DRAWS, len(names)), np.nan)
+        rng = np.random.default_rng(seed)
+        draws[:, known] = rng.multivariate_normal(
+            optimum[known], covariance[np.ix_(known, known)], GAUSSIAN_DRAWS, method="eigh"
+        )
+    keep = np.all(np.isfinite(draws), axis=0) & (np.std(draws, axis=0) > 0)
+    if keep.sum() < 1:
+        raise BrdfInputError("no parameter has a posterior spread to plot")
+    marked = optimum if truths is None else np.asarray(truths, dtype=float)
+    labels = [name for name, k in zip(names, keep, strict=True) if k]
+    if keep.sum() == 1:  # corner draws a grid of at least 2 × 2
+        figure = _histogram(draws[:, keep][:, 0], labels[0], marked[keep][0])
+    else:
+        root = logging.getLogger()
+        level = root.level
+        root.setLevel(logging.ERROR)  # corner logs "too few points to create valid contours" on the root logger
+        try:
+            figure = corner.corner(
+                draws[:, keep],
+                labels=labels,
+                truths=marked[keep],
+                quantiles=(0.16, 0.5, 0.84),
+                show_titles=True,
+                title_fmt=".4g",
+                label_kwargs={"fontsize": 9},
+                title_kwargs={"fontsize": 7},
+            )
+        finally:
+            root.setLevel(level)
+    method = result.uncertainty.get("method", "")
+    what = "MCMC posterior" if result.posterior is not None else f"{method} Gaussian"
+    figure.suptitle(f"{result.model}: {what} (lines: fitted optimum)", y=1.02)
+    if path is not None:
+        with atomic_path(path) as temporary:
+            figure.savefig(temporary, format=path.suffix[1:].lower(), dpi=110, bbox_inches="tight")
+    return figure
+
+
+def _histogram(draws: np.ndarray, label: str, marked: float):
+    """The one-parameter "corner plot": a histogram with the 16/50/84% quantiles and the optimum."""
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(4, 3))
+    axis.hist(draws, bins=40, histtype="step", color="k")
+    for q in np.quantile(draws, (0.16, 0.5, 0.84)):
+        axis.axvline(q, color="k", linestyle="--", linewidth=1)
+    axis.axvline(marked, color="#4682b4")
+    axis.set_xlabel(label)
+    axis.set_yticks([])
+    return figure
+
+
+def _flat_parameters(result: FitResult) -> np.ndarray:
+    from ..physics.models import get_model
+
+    model = get_model(result.model, **result.model_options)
+    return np.asarray(model.to_physical_vector(model.params_from_dict(result.params)), dtype=float)

@@ -1,0 +1,134 @@
+"""fit_batch and `brdffit fit A B … -o OUTDIR/`: many datasets, one model."""
+
+import os
+
+import numpy as np
+import pytest
+from reference_materials import flat_parameters
+
+import data_synth
+from brdffit import BrdfInputError, fit, fit_batch, save_samples
+from brdffit.cli import main
+from brdffit.fitting.batch import default_strategy
+
+WARD = [{"rho_d": [0.1, 0.2], "rho_s": [0.02 * k, 0.03], "alpha": 0.05 + 0.04 * k} for k in range(1, 5)]
+
+
+def datasets():
+    """Four Ward materials; the last has a different size in the same bucket, the third another bucket."""
+    sizes = [3000, 3000, 5000, 2900]
+    result = []
+    for k, (params, size) in enumerate(zip(WARD, sizes, strict=True)):
+        wi, wo = data_synth.uniform_random(size, seed=k)
+        result.append(data_synth.synthesize("ward", params, wi, wo, noise=0.01, seed=10 + k))
+    return result
+
+
+def test_loop_equals_one_fit_at_a_time():
+    samples = datasets()
+    batch = fit_batch(samples, "ward", strategy="loop")
+    assert batch == [fit(one, "ward") for one in samples]
+
+
+def test_vmap_equals_loop():
+    """The GPU strategy, run here on the CPU: the same optima (parameters to 1e-8, well inside the tolerances
+    the solver stops at; vmapped arithmetic may be ordered differently)."""
+    samples = datasets()
+    looped = fit_batch(samples, "ward", strategy="loop")
+    vmapped = fit_batch(samples, "ward", strategy="vmap")
+    for one, other in zip(looped, vmapped, strict=True):
+        assert other.converged and other.n_samples == one.n_samples
+        assert other.cost == pytest.approx(one.cost, rel=1e-10)
+        for name, value in flat_parameters(one.params).items():
+            assert flat_parameters(other.params)[name] == pytest.approx(value, rel=1e-8), name
+
+
+def test_vmap_with_float32_and_a_start():
+    samples = datasets()[:2]
+    results = fit_batch(samples, "ward", strategy="vmap", dtype="float32", start=WARD[0])
+    assert all(r.converged and r.dtype == "float32" for r in results)
+
+
+def test_one_start_per_dataset():
+    samples = datasets()[:3]
+    for strategy in ("loop", "vmap"):
+        results = fit_batch(samples, "ward", strategy=strategy, start=WARD[:3])
+        assert all(r.converged for r in results)
+    mixed = fit_batch(samples, "ward", strategy="vmap", start=[WARD[0], None, WARD[2]])
+    looped = fit_batch(samples, "ward", strategy="loop", start=[WARD[0], None, WARD[2]])
+    assert [r.cost for r in mixed] == pytest.approx([r.cost for r in looped], rel=1e-10)
+    with pytest.raises(BrdfInputError, match="2 starts for 3 datasets; give one per dataset or one for all"):
+        fit_batch(samples, "ward", start=WARD[:2])
+
+
+def test_strategy_and_arguments_are_checked():
+    assert default_strategy() == "loop"  # the test machine is a CPU
+    with pytest.raises(BrdfInputError, match="strategy 'gpu' is not allowed; choose one of: auto, loop, vmap"):
+        fit_batch(datasets(), "ward", strategy="gpu")
+    with pytest.raises(BrdfInputError, match="fit_batch needs at least one dataset"):
+        fit_batch([], "ward")
+
+
+def test_progress_bar_on_request(capsys):
+    fit_batch(datasets()[:2], "ward", progress=True)
+    assert "/2 [" in capsys.readouterr().err  # tqdm redraws at most every 0.1 s: any frame of a 2-fit bar
+    fit_batch(datasets()[:2], "ward")  # stderr is not a terminal under pytest: no bar
+    assert capsys.readouterr().err == ""
+
+
+def write_inputs(folder):
+    paths = []
+    for k, samples in enumerate(datasets()[:3]):
+        path = folder / f"material{k}.csv"
+        save_samples(samples, path)
+        paths.append(path)
+    return paths
+
+
+def test_command_line_batch(tmp_path, capsys):
+    paths = write_inputs(tmp_path)
+    status = main(["fit", *map(str, paths), "--model", "ward", "-o", str(tmp_path / "out") + "/"])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    assert sorted(os.listdir(tmp_path / "out")) == ["material0.ward.json", "material1.ward.json", "material2.ward.json"]
+    lines = out.splitlines()
+    assert lines[0].split()[:2] == ["samples", "steps"] and len(lines) == 4
+    assert all("converged" in line for line in lines[1:])
+
+
+def test_command_line_batch_checks_every_input_before_writing(tmp_path, capsys):
+    paths = write_inputs(tmp_path)
+    paths[1].write_text("theta_i,phi_i,theta_o,phi_o,value\n10,0,95,0,0.1\n")
+    before = sorted(os.listdir(tmp_path))
+    status = main(["fit", *map(str, paths), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2 and f"{paths[1]}: row 1 (line 2), column theta_o" in err and err.count("\n") == 1
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+@pytest.mark.parametrize(
+    ("names", "output", "message"),
+    [
+        (["a/x.csv", "b/x.csv"], "out/", "a/x.csv and b/x.csv would both write out/x.ward.json"),
+        (["a/x.csv", "a/y.csv"], "file.json", "-o file.json: is a file; with several samples files give a folder"),
+    ],
+)
+def test_command_line_batch_output_errors(names, output, message, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for name in names:
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text("theta_i,phi_i,theta_o,phi_o,value\n10,0,20,0,0.1\n")
+    (tmp_path / "file.json").write_text("{}")
+    status = main(["fit", *names, "-o", output])
+    err = capsys.readouterr().err
+    assert status == 2 and message in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_batch_fits_are_deterministic_and_sizes_share_compiles():
+    """Datasets of 3000 and 2900 samples share the 3072-row bucket: their solves reuse one compilation."""
+    from brdffit.fitting.problem import padded_size
+
+    assert padded_size(3000) == padded_size(2900) == 3072
+    results = fit_batch(datasets(), "ward")
+    np.testing.assert_array_equal([r.n_samples for r in results], [3000, 3000, 5000, 2900])

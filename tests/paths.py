@@ -1,0 +1,11 @@
+"""Where the tests find the project's files, and the reference data that ships beside the project (not in it)."""
+
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "ward-pickled-oak.csv"
+EXAMPLE_PARAMS = ROOT / "examples" / "ward-pickled-oak.params.json"
+#: ../shared/data: absent on a user's machine, where the tests that need it skip with a reason.
+SHARED_DATA = ROOT.parent / "shared" / "data"
+TAPE = SHARED_DATA / "alta" / "retro-gray-tape.dat"
+NGAN_FOLDER = SHARED_DATA / "ngan2005"
