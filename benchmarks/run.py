@@ -118,7 +118,7 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
     search = search_problem(samples, build_problem(samples), "float64", seed=0)
     theta = starting_points(model, loss, search, 1)[0]
     start = folder / f"{model_name}-start.json"
-    start.write_text(json.dumps(model.params_to_dict(model.from_unconstrained(theta, 3))))
+    start.write_text(json.dumps(model.dictionary.from_params(model.unconstrained.to_params(theta, 3))))
     common = ("merl", "--model", model_name, "--data", str(data), "--start", str(start))
 
     cache = str(folder / f"cache-{model_name}")
@@ -175,10 +175,10 @@ def mcmc_section(repeats: int) -> dict:
 
 def merl_load_section(repeats: int, folder: Path) -> dict:
     log("(g) reading a full MERL file")
-    from brdffit.data.merl import write_merl
+    from brdffit.export.merl import write_merl
 
     data = folder / "ward.binary"
-    write_merl(data, "ward", MATERIALS["ward"])  # here, so that the reading process's peak memory is the reader's
+    write_merl("ward", MATERIALS["ward"], data)  # here, so that the reading process's peak memory is the reader's
     return repeated(repeats, "merl-load", "--data", str(data))
 
 

@@ -105,7 +105,7 @@ def merl(args) -> dict:
         result = fit(samples, args.model)
         out = {"cost": result.cost, "steps": result.n_steps, "converged": result.converged}
     else:
-        theta0 = model.to_unconstrained(model.params_from_dict(start))
+        theta0 = model.unconstrained.from_params(model.dictionary.to_params(start))
         out = scipy_fit(args.model, samples, theta0, *SCIPY[args.solver])
     return out | {"seconds": time.perf_counter() - clock, "peak_rss_mb": peak_rss_mb(), "n_samples": samples.n_samples}
 
@@ -123,7 +123,9 @@ def steps(args) -> dict:
     model, loss = get_model(args.model), get_loss(LOSS)
     # The loss's target and scale filled in once, as the solver does before its first step; both are timed on it.
     problem = jit(functools.partial(prepared, loss))(build_problem(samples))
-    theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(json.loads(Path(args.start).read_text()))))
+    theta = jnp.asarray(
+        model.unconstrained.from_params(model.dictionary.to_params(json.loads(Path(args.start).read_text())))
+    )
 
     sums = jit(lambda t, p: normal_equations(model, loss, t, p))  # compiled as the solver is (brdffit's options)
     solve = compiled_solver(model, loss, 256)
@@ -170,7 +172,7 @@ def batch_starts(datasets) -> list[dict]:
     for samples in datasets:
         search = search_problem(samples, build_problem(samples), "float64", seed=0)
         theta = starting_points(model, loss, search, 1)[0]
-        starts.append(model.params_to_dict(model.from_unconstrained(theta, samples.n_channels)))
+        starts.append(model.dictionary.from_params(model.unconstrained.to_params(theta, samples.n_channels)))
     return starts
 
 
@@ -190,7 +192,13 @@ def batch(args) -> dict:
     else:
         method, exact = SCIPY[args.solver]
         outs = [
-            scipy_fit("cook-torrance", samples, model.to_unconstrained(model.params_from_dict(start)), method, exact)
+            scipy_fit(
+                "cook-torrance",
+                samples,
+                model.unconstrained.from_params(model.dictionary.to_params(start)),
+                method,
+                exact,
+            )
             for samples, start in zip(datasets, starts, strict=True)
         ]
         costs = [o["cost"] for o in outs]

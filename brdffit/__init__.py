@@ -23,7 +23,7 @@ from ._version import __version__ as __version__
 _EXPORTS = {
     "BrdfInputError": ".errors",
     "MCMC": ".uncertainty.mcmc",
-    "UncertaintyWarning": ".uncertainty.laplace",
+    "UncertaintyWarning": ".errors",
     "corner_plot": ".views.corner",
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
@@ -34,12 +34,13 @@ _EXPORTS = {
     "Samples": ".data.samples",
     "enable_compilation_cache": ".cache",
     "evaluate": ".physics.evaluate",
-    "fit": ".fitting.fit",
-    "fit_batch": ".fitting.batch",
+    "fit": ".api",
+    "fit_batch": ".api",
     "get_model": ".physics.models",
     "load_result": ".fitting.results",
-    "load_samples": ".data.samples",
-    "save_samples": ".data.samples",
+    "save_result": ".fitting.results",
+    "load_samples": ".data.load",
+    "save_samples": ".data.load",
 }
 
 

@@ -1,17 +1,17 @@
-"""JAX as brdffit uses it: float64, and one ``jit`` with the compiler options that suit these programs.
+"""JAX as brdffit uses it: float64 inside brdffit only, and one ``jit`` with the compiler options that suit it.
 
-brdffit computes in float64 unless asked otherwise (SPEC section 1), and JAX
-only makes float64 arrays with ``jax_enable_x64`` on. It must be on before the
-first array exists, whichever brdffit module is imported first, hence one
-import line in each rather than one switch in ``__init__`` (which stays free
-of imports so that ``import brdffit`` costs nothing).
+brdffit computes in float64 unless asked otherwise, and JAX only makes float64 arrays with
+``jax_enable_x64`` on. Switching that on for the whole process would change a user's own JAX code (their
+``jnp.ones(3)`` would become float64), so brdffit turns it on only around its own work: every public
+function that computes with JAX runs inside :func:`float64`, and every function compiled with :func:`jit`
+traces and runs inside it too (so a caller of a compiled function gets float64 without asking). JAX keeps
+the setting per thread; a thread that brdffit starts enters it itself.
 """
 
 import functools
+from collections.abc import Callable
 
 import jax
-
-jax.config.update("jax_enable_x64", True)
 
 #: XLA options for the CPU backend, measured on the MERL-size Cook-Torrance solver (2-core Xeon, jax 0.10.2):
 #: XLA's newer CPU "fusion emitters" (the default) compile it in 1.3–1.4 s, the classic loop emitters in 0.5–0.6 s,
@@ -24,6 +24,23 @@ CPU_COMPILER_OPTIONS = {
 }
 
 
+def float64(function: Callable | None = None):
+    """``jax_enable_x64`` on for the duration of a block (``with float64():``) or of every call of ``function``.
+
+    The setting is JAX's own context (``jax.enable_x64``), local to the thread; outside it the caller's
+    setting is untouched.
+    """
+    if function is None:
+        return jax.enable_x64(True)
+
+    @functools.wraps(function)
+    def in_float64(*args, **kwargs):
+        with jax.enable_x64(True):
+            return function(*args, **kwargs)
+
+    return in_float64
+
+
 @functools.cache
 def compiler_options() -> dict | None:
     """:data:`CPU_COMPILER_OPTIONS` when JAX's default backend is the CPU, else None (XLA's defaults)."""
@@ -31,7 +48,7 @@ def compiler_options() -> dict | None:
 
 
 def jit(fun=None, **jit_arguments):
-    """``jax.jit`` with :func:`compiler_options`, chosen at the first call so that importing does no work.
+    """``jax.jit`` in :func:`float64` with :func:`compiler_options`, chosen at the first call (importing does no work).
 
     Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
     options only for a program compiled on its own, so inside a traced function (``jit`` or ``vmap`` of a
@@ -47,9 +64,10 @@ def jit(fun=None, **jit_arguments):
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
-        if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
-            return plain(*args, **kwargs)
-        return top_level()(*args, **kwargs)
+        with jax.enable_x64(True):
+            if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
+                return plain(*args, **kwargs)
+            return top_level()(*args, **kwargs)
 
     def precompile(*args, **kwargs) -> None:
         """Trace and compile for the shapes of ``args`` (arrays or ``jax.ShapeDtypeStruct``), without running.
@@ -57,7 +75,8 @@ def jit(fun=None, **jit_arguments):
         A later call with arrays of those shapes reuses JAX's caches; so this
         can run in another thread while the caller does other work.
         """
-        top_level().lower(*args, **kwargs).compile()
+        with jax.enable_x64(True):
+            top_level().lower(*args, **kwargs).compile()
 
     call.precompile = precompile
     return call

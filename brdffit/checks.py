@@ -1,21 +1,39 @@
-"""Checks of option values shared by the API and the command line, with the one-line messages users see."""
+"""Checks of argument values shared by every layer (and ``data_synth``), with the one-line errors users see.
 
-import numpy as np
+Each check names the argument as the library's callers write it (``n_starts``); the command line spells
+the same message with its flag (``--starts``), see :mod:`brdffit.errors`.
+"""
 
-from .errors import BrdfInputError
+import numbers
+from collections.abc import Iterable
+
+from .errors import not_a_choice, not_allowed
 
 
-def whole_number(option: str, value, minimum: int = 1, maximum: int | None = None) -> int:
-    """``value`` as an int if it is a whole number in ``[minimum, maximum]``, else a one-line error naming ``option``.
-
-    ``maximum`` None means no upper bound.
-    """
+def whole_number(name: str, value, minimum: int = 1, maximum: int | None = None) -> int:
+    """``value`` as an int if it is a whole number in ``[minimum, maximum]`` (a float such as ``2000.0`` counts),
+    else a one-line error naming the argument ``name``; ``maximum`` None means no upper bound."""
     allowed = f"from {minimum} to {maximum}" if maximum is not None else f"≥ {minimum}"
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, int | np.integer)
-        or value < minimum
-        or (maximum is not None and value > maximum)
-    ):
-        raise BrdfInputError(f"{option} {value!r} is not allowed; give a whole number {allowed}")
+    whole = not isinstance(value, bool) and (
+        isinstance(value, numbers.Integral) or (isinstance(value, float) and value.is_integer())
+    )
+    if not whole or value < minimum or (maximum is not None and value > maximum):
+        raise not_allowed(name, value, f"give a whole number {allowed}")
     return int(value)
+
+
+def choice(name: str, value, choices: Iterable[str], verb: str = "is not allowed"):
+    """``value`` if it is one of ``choices``, else ``name='x' is not allowed; choose one of: …``."""
+    choices = tuple(choices)
+    if not isinstance(value, str) or value not in choices:
+        raise not_a_choice(name, value, choices, verb)
+    return value
+
+
+def max_theta(value: float | None) -> float | None:
+    """A zenith limit in degrees, in (0, 90] (None: no limit)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 90:
+        raise not_allowed("max_theta", value, "give degrees in (0, 90]")
+    return value

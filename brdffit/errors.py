@@ -1,10 +1,62 @@
-"""The one exception users see for bad input.
+"""The exception and the warning users see.
 
-Every message is a single line that names the file (or option), the row and
-column where there is one, what was wrong and what is allowed; the command line
-prints it after ``brdffit: error:`` and exits with status 2.
+:class:`BrdfInputError` is bad input: one line that names the file (or the argument), the row and column
+where there is one, what was wrong and what is allowed. A message about an argument names it the way the
+caller wrote it: the library speaks of Python arguments (``n_starts=0 is not allowed``), the command line
+of its flags (``--starts 0 is not allowed``). Messages are built from text and :class:`Argument` parts, and
+each interface spells the arguments its own way: Python here, the command line in ``brdffit/cli`` (the one
+place that knows the flags).
+
+:class:`UncertaintyWarning` is an uncertainty estimate that needs care (a degenerate pair, an undetermined
+parameter, a short chain); the same messages are written to the result's ``uncertainty.warnings``.
 """
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Argument:
+    """An argument a message speaks of: its Python name and, where the message quotes it, the value as shown."""
+
+    name: str
+    shown: str | None = None
+
+    @classmethod
+    def given(cls, name: str, value) -> "Argument":
+        """The argument ``name`` with ``value`` shown as Python writes it (``repr``)."""
+        return cls(name, repr(value))
+
+    def in_python(self) -> str:
+        """``n_starts=0``, or ``n_starts`` without a value."""
+        return self.name if self.shown is None else f"{self.name}={self.shown}"
 
 
 class BrdfInputError(ValueError):
-    """Bad input: a file, an option or a parameter value that brdffit cannot accept."""
+    """Bad input: a file, an argument or a parameter value that brdffit cannot accept.
+
+    Built from ``parts``, each a piece of text or an :class:`Argument`; ``str(error)`` spells the
+    arguments as Python does, :meth:`spelled` as any caller wants.
+    """
+
+    def __init__(self, *parts: "str | Argument"):
+        self.parts = parts
+        super().__init__(self.spelled(Argument.in_python))
+
+    def spelled(self, spell: Callable[[Argument], str]) -> str:
+        """The message with every argument written by ``spell``."""
+        return "".join(part if isinstance(part, str) else spell(part) for part in self.parts)
+
+
+def not_allowed(name: str, value, allowed: str, verb: str = "is not allowed") -> BrdfInputError:
+    """``name=value is not allowed; <allowed>``: the usual message for an argument's bad value."""
+    return BrdfInputError(Argument.given(name, value), f" {verb}; {allowed}")
+
+
+def not_a_choice(name: str, value, choices, verb: str = "is not allowed") -> BrdfInputError:
+    """``name='x' is not allowed; choose one of: a, b, c``."""
+    return not_allowed(name, value, f"choose one of: {', '.join(choices)}", verb)
+
+
+class UncertaintyWarning(UserWarning):
+    """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""

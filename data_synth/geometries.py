@@ -8,7 +8,7 @@ midpoints, so no direction lies on the horizon. Random geometries take a seed.
 import numpy as np
 
 from brdffit.checks import whole_number
-from brdffit.errors import BrdfInputError
+from brdffit.errors import not_allowed
 from brdffit.physics.geometry import mirror_direction, spherical_to_direction
 
 
@@ -21,7 +21,7 @@ def _midpoints(count: int, stop: float, start: float = 0.0) -> np.ndarray:
 
 
 def _positive_count(name: str, value) -> int:
-    return whole_number(f"--{name.replace('_', '-')}", value)
+    return whole_number(name, value)
 
 
 def hemisphere_grid(n_incident: int = 8, n_theta: int = 36, n_phi: int = 36) -> tuple[np.ndarray, np.ndarray]:
@@ -77,7 +77,7 @@ def near_specular(
     """
     n_incident, n_samples = _positive_count("n_incident", n_incident), _positive_count("n_samples", n_samples)
     if not (isinstance(spread, int | float) and 0 < spread <= 90):
-        raise BrdfInputError(f"--spread {spread!r} is not allowed; give degrees in (0, 90]")
+        raise not_allowed("spread", spread, "give degrees in (0, 90]")
     rng = np.random.default_rng(seed)
     theta_i = _midpoints(n_incident, np.pi / 2)
     per_light = np.diff(np.linspace(0, n_samples, n_incident + 1).round().astype(int))

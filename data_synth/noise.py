@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from brdffit.errors import BrdfInputError
+from brdffit.errors import not_a_choice, not_allowed
 
 NOISE_KINDS = ("multiplicative", "additive")
 
@@ -18,9 +18,9 @@ def add_noise(
     0 (a reflectance cannot be negative); at 1% multiplicative noise that needs a 100-σ draw.
     """
     if kind not in NOISE_KINDS:
-        raise BrdfInputError(f"--noise-kind {kind!r} is not allowed; choose one of: {', '.join(NOISE_KINDS)}")
+        raise not_a_choice("noise_kind", kind, NOISE_KINDS)
     if not (isinstance(level, int | float) and np.isfinite(level) and level >= 0):
-        raise BrdfInputError(f"--noise {level!r} is not allowed; give a number ≥ 0")
+        raise not_allowed("noise", level, "give a number ≥ 0")
     values = np.asarray(values, dtype=float)
     epsilon = np.random.default_rng(seed).standard_normal(values.shape)
     if kind == "multiplicative":

@@ -1,12 +1,18 @@
-"""Shared test set-up: float64 JAX, warnings as errors (pyproject), a private compilation cache."""
+"""Shared test set-up: float64 for the tests' own JAX arrays, warnings as errors (pyproject), a private cache.
+
+brdffit itself never switches float64 on for the process (``brdffit/_jax.py``); the tests build JAX arrays
+of their own and compare them with brdffit's to 1e-12, so they run with it on, as equinox's tests do.
+``tests/test_float64.py`` checks in a fresh interpreter that brdffit leaves a user's float32 JAX alone.
+"""
 
 import os
 import tempfile
 
+import jax
 import numpy as np
 import pytest
 
-from brdffit import _jax  # noqa: F401  (float64 before any test builds an array)
+jax.config.update("jax_enable_x64", True)
 
 # The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own.
 os.environ.setdefault("BRDFFIT_CACHE_DIR", tempfile.mkdtemp(prefix="brdffit-test-cache-"))

@@ -52,15 +52,16 @@ line in the file where there is one).
 
 import os
 import re
-from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from .._files import reading, write_text_atomic
+from .._files import write_text_atomic
 from ..errors import BrdfInputError
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
-from .samples import UNIT_LENGTH_TOLERANCE, Samples, normalised
+from .checks import UNIT_LENGTH_TOLERANCE, TableChecks, first_bad, named, normalised
+from .samples import Samples
+from .text import format_rows, parse_numbers, read_text
 
 #: ``#PARAM_IN`` names read, with the number of input coordinates each takes.
 PARAMETERISATIONS = {
@@ -82,81 +83,6 @@ _COORDINATES = {
     "CARTESIAN": ("v_x", "v_y", "v_z", "l_x", "l_y", "l_z"),
 }
 _BINARY_MARKERS = (b"#BEGIN_STREAM", b"#FORMAT binary")
-
-
-# ---------------------------------------------------------------------- shared with astm.py
-def read_text(path: Path, what: str) -> str:
-    """The UTF-8 text of ``path``; every failure is a one-line :class:`BrdfInputError`."""
-    with reading(path, what):
-        data = path.read_bytes()
-    if b"\0" in data:
-        raise BrdfInputError(f"{path}: binary content (NUL bytes); {what} is text")
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise BrdfInputError(f"{path}: not a text file (not UTF-8); {what} is text") from None
-    if not text.strip():
-        raise BrdfInputError(f"{path}: empty file; {what} has a header and rows of numbers")
-    return text
-
-
-def is_number(cell: str) -> bool:
-    """Whether ``cell`` is a plain decimal number (``nan`` and ``inf`` included; no ``_`` separators)."""
-    if "_" in cell:
-        return False
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
-
-
-def parse_table(
-    rows: Sequence[Sequence[str]], lines: np.ndarray, column: Callable[[int], str], source: str
-) -> np.ndarray:
-    """``rows`` of equally many cells as an (N, columns) float64 array, every value finite.
-
-    ``lines`` holds each row's line number in the file and ``column(k)`` names column ``k`` in
-    messages. The first cell that is not a number, or not finite, is reported with its line.
-    """
-    width = len(rows[0])
-    flat = [cell for row in rows for cell in row]
-    table = None
-    if not any("_" in cell for cell in flat):
-        try:
-            table = np.array(flat, dtype=np.float64).reshape(len(rows), width)
-        except ValueError:
-            table = None
-    if table is None:
-        for row, cells in enumerate(rows):
-            for index, cell in enumerate(cells):
-                if not is_number(cell):
-                    shown = "an empty cell" if not cell else repr(cell)
-                    raise BrdfInputError(f"{source}: line {lines[row]}, {column(index)}: {shown} is not a number")
-        raise BrdfInputError(f"{source}: the rows could not be read as numbers")  # pragma: no cover
-    bad = ~np.isfinite(table)
-    if np.any(bad):
-        row, index = np.unravel_index(np.argmax(bad), bad.shape)
-        raise BrdfInputError(
-            f"{source}: line {lines[row]}, {column(index)}: {table[row, index]} is not allowed (values must be finite)"
-        )
-    return table
-
-
-def check_non_negative(values: np.ndarray, lines: np.ndarray, names: Sequence[str], source: str) -> None:
-    """Reject the first negative value, naming its line and channel."""
-    bad = values < 0
-    if np.any(bad):
-        row, index = np.unravel_index(np.argmax(bad), bad.shape)
-        raise BrdfInputError(
-            f"{source}: line {lines[row]}, channel {names[index]}: {values[row, index]:g} is negative"
-            " (negative reflectance is not allowed)"
-        )
-
-
-def format_rows(table: np.ndarray, separator: str) -> str:
-    """Rows of numbers with 17 significant digits (exact float64 round trip), one per line."""
-    return "".join(separator.join(f"{x:.17g}" for x in row) + "\n" for row in table)
 
 
 # ---------------------------------------------------------------------- reading
@@ -188,24 +114,27 @@ def read_alta(path: str | os.PathLike) -> Samples:
             f" (with #VS {_vs(header, source)}) means {' or '.join(str(w) for w in sorted(widths))}"
         )
     counts = np.fromiter(map(len, rows), dtype=np.int64, count=len(rows))
-    if np.any(counts != first):
-        row = int(np.argmax(counts != first))
+    uneven = first_bad(counts != first)
+    if uneven is not None:
+        row = uneven[0]
         raise BrdfInputError(
             f"{source}: line {lines[row]}: {counts[row]} numbers, but the rows before have {first}"
             f" (#DIM {n_in} {n_out})"
         )
     names = list(_COORDINATES[parameterisation]) + [f"channel {c}" for c in channels]
     column = lambda k: f"column {k + 1} ({names[k]})" if k < len(names) else f"column {k + 1} (confidence interval)"
-    table = parse_table(rows, lines, column, source)
+    checks = TableChecks(lambda row: f"{source}: line {lines[row]}")
+    table = parse_numbers(rows, checks, column)
 
     values = table[:, n_in : n_in + n_out]
-    check_non_negative(values, lines, channels, source)
+    checks.non_negative(
+        values, named(channels, "channel"), lambda v: f"{v:g} is negative (negative reflectance is not allowed)"
+    )
     with np.errstate(all="ignore"):
         wi, wo = _CONVERTERS[parameterisation](table[:, :n_in])
-    finite = np.isfinite(wi).all(axis=1) & np.isfinite(wo).all(axis=1)
-    if not np.all(finite):
-        row = int(np.argmax(~finite))
-        raise BrdfInputError(f"{source}: line {lines[row]}: the coordinates give no direction (too large)")
+    no_direction = first_bad(~(np.isfinite(wi).all(axis=1) & np.isfinite(wo).all(axis=1)))
+    if no_direction is not None:
+        raise BrdfInputError(f"{checks.locate(no_direction[0])}: the coordinates give no direction (too large)")
     if parameterisation == "CARTESIAN":
         wi, wo = (_unit(w, lines, name, source) for w, name in ((wi, "light (l_x, l_y, l_z)"), (wo, "viewer")))
 
@@ -219,9 +148,9 @@ def read_alta(path: str | os.PathLike) -> Samples:
     if output == "INV_STERADIAN_COSINE_FACTOR":
         with np.errstate(over="ignore"):
             values = values / wi[:, 2:3]
-        if not np.all(np.isfinite(values)):
-            row = int(np.argmax(~np.isfinite(values).all(axis=1)))
-            raise BrdfInputError(f"{source}: line {lines[row]}: the value divided by cos θl overflows")
+        overflow = first_bad(~np.isfinite(values))
+        if overflow is not None:
+            raise BrdfInputError(f"{source}: line {lines[overflow[0]]}: the value divided by cos θl overflows")
     return Samples.from_arrays(wi, wo, values, channels=channels, source=source)
 
 
@@ -424,6 +353,3 @@ def write_alta(samples: Samples, path: str | os.PathLike) -> None:
     source = " ".join(str(samples.source).split())
     header.append(f"#ORIGIN written by brdffit from {source}; angles in radians, values BRDF in 1/sr")
     write_text_atomic(path, "\n".join(header) + "\n" + format_rows(table, " "))
-
-
-__all__ = ["HORIZON", "OUTPUTS", "PARAMETERISATIONS", "read_alta", "write_alta"]

@@ -44,9 +44,10 @@ import numpy as np
 
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
-from ..physics.geometry import direction_to_spherical, spherical_to_direction
-from .alta import check_non_negative, format_rows, is_number, parse_table, read_text
+from ..physics.geometry import direction_to_spherical
+from .checks import TableChecks, first_bad, named
 from .samples import Samples
+from .text import format_rows, is_number, parse_numbers, read_text
 
 #: The geometry columns every ``VARS`` line names.
 ANGLE_NAMES = ("theta_i", "phi_i", "theta_s", "phi_s")
@@ -77,8 +78,9 @@ def read_astm(path: str | os.PathLike) -> Samples:
     lines = np.array([number for number, _ in data])
     rows = [_cells(line) for _, line in data]
     counts = np.fromiter(map(len, rows), dtype=np.int64, count=len(rows))
-    if np.any(counts != len(names)):
-        row = int(np.argmax(counts != len(names)))
+    uneven = first_bad(counts != len(names))
+    if uneven is not None:
+        row = uneven[0]
         raise BrdfInputError(
             f"{source}: line {lines[row]}: {counts[row]} cells, but VARS (line {keywords['VARS'][0]}) names"
             f" {len(names)} columns"
@@ -88,35 +90,25 @@ def read_astm(path: str | os.PathLike) -> Samples:
             f"{source}: NUM_POINTS (line {count_line}) says {int(count_text)} points, but the file has"
             f" {len(rows)} data rows{' (truncated?)' if int(count_text) > len(rows) else ''}"
         )
-    table = parse_table(rows, lines, lambda k: f"column {names[k]}", source)
+    checks = TableChecks(lambda row: f"{source}: line {lines[row]}")
+    table = parse_numbers(rows, checks, named(names))
 
     angles = table[:, angle_columns]
     values = table[:, value_columns]
     radians = bool(np.all(np.abs(angles) <= _TWO_PI + 1e-9))
-    right, full, unit = (math.pi / 2, _TWO_PI, "radians") if radians else (90.0, 360.0, "degrees")
     why = "every angle in the file is within ±2π" if radians else "some angle in the file is beyond ±2π"
-    theta, phi = angles[:, [0, 2]], angles[:, [1, 3]]
-    checks = (
-        (
-            theta,
-            ("theta_i", "theta_s"),
-            (theta < 0) | (theta >= right),
-            f"is outside [0, {right:g}) {unit} (directions must be above the horizon)",
-        ),
-        (phi, ("phi_i", "phi_s"), np.abs(phi) > full, f"is outside [-{full:g}, {full:g}] {unit}"),
+    unit = "radians" if radians else "degrees"
+    wi, wo = checks.angles_to_directions(
+        angles[:, [0, 2]],
+        angles[:, [1, 3]],
+        unit,
+        ("theta_i", "theta_s"),
+        ("phi_i", "phi_s"),
+        because=f"; angles are read as {unit} because {why}",
     )
-    for array, columns, bad, problem in checks:
-        if np.any(bad):
-            row, index = np.unravel_index(np.argmax(bad), bad.shape)
-            raise BrdfInputError(
-                f"{source}: line {lines[row]}, column {columns[index]}: {array[row, index]:g} {problem};"
-                f" angles are read as {unit} because {why}"
-            )
-    check_non_negative(values, lines, channels, source)
-    if not radians:
-        theta, phi = np.radians(theta), np.radians(phi)
-    wi = spherical_to_direction(theta[:, 0], phi[:, 0])
-    wo = spherical_to_direction(theta[:, 1], phi[:, 1])
+    checks.non_negative(
+        values, named(channels, "channel"), lambda v: f"{v:g} is negative (negative reflectance is not allowed)"
+    )
     return Samples.from_arrays(wi, wo, values, channels=channels, source=source)
 
 
@@ -225,6 +217,3 @@ def write_astm(samples: Samples, path: str | os.PathLike) -> None:
         f"VARS {','.join((*ANGLE_NAMES, *written))}\n"
     )
     write_text_atomic(path, header + format_rows(table, ","))
-
-
-__all__ = ["ANGLE_NAMES", "read_astm", "write_astm"]

@@ -1,48 +1,123 @@
-"""Readers and writers of the measurement formats beyond the CSV samples file (SPEC section 4).
+"""The measurement formats brdffit reads and writes, and :func:`load_samples`: the one place that knows them all.
 
-=========  ==========================  =====================================================
-format     files                       module
-=========  ==========================  =====================================================
-csv        ``.csv`` (SPEC section 4)   ``brdffit/samples.py``
-merl       ``.binary``                 ``merl.py`` (Matusik et al. 2003), read and tabulate
-alta       ``.dat`` (``#PARAM_IN``)    ``alta.py`` (ALTA, Belcour et al.)
-astm       ``.astm``, ``.txt``         ``astm.py`` (ASTM E1392, Cornell's measurements)
-=========  ==========================  =====================================================
+=========  ==============================  =====================================================
+format     files                           module
+=========  ==============================  =====================================================
+csv        ``.csv`` (brdffit's own)        ``csv.py``
+merl       ``.binary``                     ``merl.py`` (Matusik et al. 2003)
+alta       ``.dat`` (``#PARAM_IN``)        ``alta.py`` (ALTA, Belcour et al.)
+astm       ``.astm``, ``.txt``             ``astm.py`` (ASTM E1392, Cornell's measurements)
+=========  ==============================  =====================================================
 
-The format comes from ``--format`` or, by default, from the file: its
-extension, then its first line (``#`` headers are ALTA's, ``NUM_POINTS`` or
-``VARS`` lines ASTM's). Spectral value columns (named by wavelength in nm) can
-be converted to XYZ or linear sRGB on loading (``spectral.py``).
+:data:`FORMATS` holds each format's reader, its writer (MERL tables are written from a fitted model,
+``brdffit/export``) and its file suffixes. The format comes from ``format`` or, by default, from the
+file: its suffix, then its first lines (``#`` headers are ALTA's, ``NUM_POINTS`` or ``VARS`` lines
+ASTM's). After reading, the values are turned into BRDF values (``quantities.py``) and spectral
+channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 """
 
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import BrdfInputError
+from ..checks import choice
+from ..errors import Argument, BrdfInputError
+from . import spectral
+from .alta import read_alta, write_alta
+from .astm import read_astm, write_astm
+from .csv import ANGLE_UNITS, read_csv, write_csv
+from .merl import read_merl
+from .quantities import QUANTITIES, to_brdf
+from .samples import Samples
+from .spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
 
-FORMATS = ("csv", "merl", "alta", "astm")
-EXTENSIONS = {".csv": "csv", ".binary": "merl", ".dat": "alta", ".astm": "astm"}
-#: The format each writable extension gets from ``brdffit convert``.
-WRITABLE = {".csv": "csv", ".dat": "alta", ".astm": "astm", ".txt": "astm", ".binary": "merl"}
+
+@dataclass(frozen=True)
+class Format:
+    """A measurement format: ``read(path, **options)``, ``write(samples, path)`` (None: not written from
+    samples) and its file suffixes, the first of which names it when reading."""
+
+    description: str
+    suffixes: tuple[str, ...]
+    read: Callable[..., Samples]
+    write: Callable[[Samples, str | os.PathLike], None] | None
+
+
+#: The formats by name.
+FORMATS = {
+    "csv": Format("brdffit's samples table", (".csv",), read_csv, write_csv),
+    "merl": Format("MERL BRDF table (Matusik et al. 2003)", (".binary",), read_merl, None),
+    "alta": Format("ALTA text data", (".dat",), read_alta, write_alta),
+    "astm": Format("ASTM E1392 scatter data (Cornell)", (".astm", ".txt"), read_astm, write_astm),
+}
 
 
 def detect_format(path: Path, format: str | None = None) -> str:
-    """``format`` when given (checked), else the format of ``path`` from its extension and first line."""
+    """``format`` when given (checked), else the format of ``path`` from its suffix and first lines."""
     if format is not None:
-        if format not in FORMATS:
-            raise BrdfInputError(f"--format {format!r} is not allowed; choose one of: {', '.join(FORMATS)}")
-        return format
-    by_extension = EXTENSIONS.get(path.suffix.lower())
-    if by_extension in ("csv", "merl", "astm"):
-        return by_extension
+        return choice("format", format, FORMATS)
+    by_suffix = next((name for name, kind in FORMATS.items() if path.suffix.lower() == kind.suffixes[0]), None)
+    if by_suffix in ("csv", "merl", "astm"):
+        return by_suffix
     head = _first_lines(path)
-    if by_extension == "alta" or any(line.startswith("#") for line in head[:1]):
+    if by_suffix == "alta" or any(line.startswith("#") for line in head[:1]):
         if any(line.upper().startswith(("#DIM", "#PARAM_IN")) for line in head):
             return "alta"
     if any(line.upper().startswith(("NUM_POINTS", "VARS")) for line in head):
         return "astm"
-    if by_extension == "alta":
+    if by_suffix == "alta":
         return "alta"  # the ALTA reader says what is missing
     return "csv"
+
+
+def format_of_output(path: Path) -> str | None:
+    """The format a file written to ``path`` gets from its suffix (None for a suffix no format uses)."""
+    return next((name for name, kind in FORMATS.items() if path.suffix.lower() in kind.suffixes), None)
+
+
+def load_samples(
+    path: str | os.PathLike,
+    *,
+    format: str | None = None,
+    angles: str = "degrees",
+    quantity: str = "brdf",
+    spectral_to: str = "keep",
+    illuminant: str = DEFAULT_ILLUMINANT,
+    observer: str = DEFAULT_OBSERVER,
+    subsample: int | None = None,
+    subsample_method: str = "random",
+    seed: int = 0,
+) -> Samples:
+    """Read a measurement file into :class:`Samples` holding BRDF values in 1/sr.
+
+    ``format``: one of :data:`FORMATS` (default: from the file's suffix and first lines).
+    ``angles``: ``"degrees"`` (default) or ``"radians"`` for a CSV file's angle columns.
+    ``quantity``: what the values are, one of ``brdf``, ``reflectance-factor``, ``cosine-weighted``
+    (``quantities.py``). ``spectral_to``: for value columns named by wavelength in nm, ``xyz`` or
+    ``rgb`` (linear sRGB) under ``illuminant`` and ``observer`` (colour-science names), or ``keep``
+    every band as a channel (default). ``subsample`` (MERL): keep that many samples,
+    ``subsample_method`` ``random`` or ``stratified`` over θh, seeded by ``seed``.
+    """
+    choice("angles", angles, ANGLE_UNITS)
+    choice("quantity", quantity, QUANTITIES)
+    path = Path(path)
+    kind = detect_format(path, format)
+    if kind != "csv" and angles != "degrees":
+        raise BrdfInputError(Argument("angles"), f" applies to CSV files; {path} is {kind} (its angle units are fixed)")
+    if kind != "merl" and subsample is not None:
+        raise BrdfInputError(Argument("subsample"), f" applies to MERL files; {path} is {kind}")
+    reader_options = {
+        "csv": {"angles": angles},
+        "merl": {"subsample": subsample, "subsample_method": subsample_method, "seed": seed},
+    }
+    samples = FORMATS[kind].read(path, **reader_options.get(kind, {}))
+    return spectral.spectral_to(to_brdf(samples, quantity), spectral_to, illuminant=illuminant, observer=observer)
+
+
+def save_samples(samples: Samples, path: str | os.PathLike) -> None:
+    """Write ``samples`` as a samples file (CSV, ``csv.py``), atomically; :func:`load_samples` reads it back."""
+    write_csv(samples, path)
 
 
 def _first_lines(path: Path, count: int = 64) -> list[str]:

@@ -1,4 +1,4 @@
-"""MERL ``.binary`` BRDF tables: reader and writer.
+"""MERL ``.binary`` BRDF tables: reader and table writer (a fitted model is tabulated by ``brdffit/export``).
 
 The format is that of the MERL BRDF database (Matusik, Pfister, Brand and
 McMillan, "A data-driven reflectance model", SIGGRAPH 2003), as read by MERL's
@@ -28,14 +28,16 @@ half vector ``d' = (-d_x, -d_y, d_z)`` are rotated about the binormal ``y`` by
 """
 
 import math
-import numbers
 import os
 from pathlib import Path
 
 import numpy as np
 
 from .._files import atomic_path, reading
-from ..errors import BrdfInputError
+from ..checks import choice, whole_number
+from ..checks import max_theta as checked_max_theta
+from ..errors import Argument, BrdfInputError
+from .checks import first_bad
 from .samples import Samples
 
 #: Table dimensions (θh, θd, φd bins), as in the header.
@@ -96,52 +98,36 @@ def read_merl(
     :class:`~brdffit.errors.BrdfInputError` with one line naming the file.
     """
     source = str(path)
-    _check_options(max_theta, subsample, subsample_method, seed)
+    checked_max_theta(max_theta)
+    if subsample is not None:
+        subsample = whole_number("subsample", subsample)
+    choice("subsample_method", subsample_method, SUBSAMPLE_METHODS)
+    whole_number("seed", seed, minimum=0)
     table = _read_table(Path(path))  # (3, N) stored numbers
-    bad = ~np.isfinite(table)
-    if np.any(bad):
-        channel, index = np.unravel_index(np.argmax(bad), bad.shape)
+    bad = first_bad(~np.isfinite(table))
+    if bad is not None:
+        channel, index = bad
         where = np.unravel_index(index, SHAPE)
         raise BrdfInputError(
             f"{source}: stored value {table[channel, index]} in channel {CHANNELS[channel]} at bin"
             f" (θh {where[0]}, θd {where[1]}, φd {where[2]}) is not allowed (values must be finite)"
         )
     wi, wo = bin_directions()
-    keep = np.all(table >= 0, axis=0) & (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
-    if max_theta is not None:
-        theta = lambda w: np.degrees(np.arccos(np.clip(w[:, 2], -1.0, 1.0)))  # as Samples.theta_i
-        keep &= (theta(wi) <= max_theta) & (theta(wo) <= max_theta)
-    index = np.flatnonzero(keep)
+    index = np.flatnonzero(np.all(table >= 0, axis=0) & (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON))
     if index.size == 0:
-        limit = "" if max_theta is None else f" or beyond --max-theta {max_theta:g} degrees"
-        raise BrdfInputError(f"{source}: no valid sample (every bin is missing, below the horizon{limit})")
-    if subsample is not None:
-        index = _subsample(index, int(subsample), subsample_method, seed, source)
+        raise BrdfInputError(f"{source}: no valid sample (every bin is missing or below the horizon)")
     values = (table[:, index] * SCALES[:, None]).T
-    return Samples.from_arrays(wi[index], wo[index], values, channels=CHANNELS, source=source)
-
-
-def _check_options(max_theta, subsample, method, seed) -> None:
-    if max_theta is not None:
-        number = isinstance(max_theta, numbers.Real) and not isinstance(max_theta, bool)
-        if not (number and 0 < max_theta <= 90):
-            raise BrdfInputError(f"--max-theta {max_theta!r} is not allowed; give degrees in (0, 90]")
-    if subsample is not None and not _whole_number(subsample, minimum=1):
-        raise BrdfInputError(f"--subsample {subsample!r} is not allowed; give a whole number ≥ 1")
-    if method not in SUBSAMPLE_METHODS:
-        raise BrdfInputError(
-            f"--subsample-method {method!r} is not allowed; choose one of: {', '.join(SUBSAMPLE_METHODS)}"
-        )
-    if not _whole_number(seed, minimum=0):
-        raise BrdfInputError(f"--seed {seed!r} is not allowed; give a whole number ≥ 0")
-
-
-def _whole_number(value, minimum: int) -> bool:
-    if isinstance(value, bool):
-        return False
-    if isinstance(value, numbers.Integral):
-        return int(value) >= minimum
-    return isinstance(value, float) and value.is_integer() and value >= minimum
+    samples = Samples.from_arrays(wi[index], wo[index], values, channels=CHANNELS, source=source)
+    if max_theta is not None:  # selected as Samples.within selects, on the same directions
+        inside = samples.inside(max_theta)
+        if not np.any(inside):
+            raise BrdfInputError(
+                f"{source}: no valid sample within ", Argument("max_theta", f"{max_theta:g}"), " degrees"
+            )
+        samples, index = samples.select(inside), index[inside]
+    if subsample is not None:
+        samples = samples.select(_subsample(index, subsample, subsample_method, seed, source))
+    return samples
 
 
 def _read_table(path: Path) -> np.ndarray:
@@ -165,15 +151,17 @@ def _read_table(path: Path) -> np.ndarray:
 
 
 def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: str) -> np.ndarray:
-    """``count`` of the valid bins ``index`` (sorted, file order), drawn with ``default_rng(seed)``."""
+    """Positions in ``index`` (the valid bins, sorted, file order) of ``count`` of them, drawn with
+    ``default_rng(seed)``, in file order."""
     if count > index.size:
         raise BrdfInputError(
-            f"{source}: --subsample {count:,} is more than the {index.size:,} valid samples;"
-            f" give at most {index.size:,}"
+            f"{source}: ",
+            Argument("subsample", f"{count:,}"),
+            f" is more than the {index.size:,} valid samples; give at most {index.size:,}",
         )
     rng = np.random.default_rng(seed)
     if method == "random":
-        return np.sort(index[rng.choice(index.size, size=count, replace=False)])
+        return np.sort(rng.choice(index.size, size=count, replace=False))
     # Stratified over θh: bin i gets min(n_i, level), the largest level the count allows; the remainder
     # goes one each to bins (chosen at random) that have more. Within a bin, the samples are random.
     stratum = index // (SHAPE[1] * SHAPE[2])
@@ -186,7 +174,7 @@ def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: st
     order = np.lexsort((rng.random(index.size), stratum))  # by stratum, random within it
     ordered = stratum[order]
     rank = np.arange(index.size) - np.searchsorted(ordered, ordered, side="left")
-    return np.sort(index[order[rank < share[ordered]]])
+    return np.sort(order[rank < share[ordered]])
 
 
 def _water_level(available: np.ndarray, count: int) -> int:
@@ -202,29 +190,7 @@ def _water_level(available: np.ndarray, count: int) -> int:
 
 
 # ---------------------------------------------------------------------- writing
-def write_merl(path: str | os.PathLike, model, params: dict, **model_options) -> None:
-    """Tabulate ``model`` with ``params`` (SPEC section 5) into a MERL ``.binary`` file for renderers.
-
-    The model (three channels, r, g, b) is evaluated with :func:`brdffit.evaluate` at every bin's
-    directions (Matusik et al. 2003 table, Rusinkiewicz 1998 angles); bins with a direction below the
-    horizon, which MERL never looks up, hold 0. ``model_options`` are the model's options (``fresnel=``).
-    """
-    from ..physics.evaluate import evaluate
-
-    wi, wo = bin_directions()
-    above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
-    values = np.zeros((N_BINS, len(CHANNELS)))
-    computed = evaluate(model, params, wi[above], wo[above], **model_options)
-    if computed.ndim != 2 or computed.shape[1] != len(CHANNELS):
-        name = getattr(model, "name", model)
-        raise BrdfInputError(
-            f"{path}: model {name!s} gives {computed.shape[-1]} channel(s); a MERL file holds 3 (r, g, b)"
-        )
-    values[above] = computed
-    write_merl_values(path, values)
-
-
-def write_merl_values(path: str | os.PathLike, values_rgb) -> None:
+def write_merl_table(values_rgb, path: str | os.PathLike) -> None:
     """Write BRDF values (1/sr) as a MERL ``.binary`` file (Matusik et al. 2003), atomically.
 
     ``values_rgb``: shape (90, 90, 180, 3) indexed ``[θh bin, θd bin, φd bin, channel]``, or

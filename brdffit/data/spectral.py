@@ -46,7 +46,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import BrdfInputError
+from ..checks import choice
+from ..errors import Argument, BrdfInputError, not_allowed
+from .checks import first_bad
 from .samples import Samples
 
 #: What :func:`spectral_to` turns spectral samples into.
@@ -145,27 +147,28 @@ def spectral_to(
     bands = wavelengths(samples.channels)
     if bands is None:
         raise BrdfInputError(
-            f"{samples.source}: --spectral-to {target} needs value columns named by wavelength in nm;"
-            f" got {', '.join(samples.channels)}"
+            f"{samples.source}: ",
+            Argument("spectral_to", target),
+            f" needs value columns named by wavelength in nm; got {', '.join(samples.channels)}",
         )
     weights = _weights(bands, target, illuminant, observer, f"{samples.source}: ")
     names = TARGET_CHANNELS[target]
     values = np.asarray(samples.values, dtype=np.float64) @ weights
-    negative = values < 0
-    if np.any(negative):
-        row, column = np.unravel_index(np.argmax(negative), negative.shape)
+    negative = first_bad(values < 0)
+    if negative is not None:
+        row, column = negative
         if target == "rgb":
             what = (
                 f"linear sRGB {names[column]} = {values[row, column]:.4g} < 0 (the spectrum is outside the sRGB gamut)"
             )
-            instead = "use --spectral-to xyz or --spectral-to keep"
+            instead = ["use ", Argument("spectral_to", "xyz"), " or ", Argument("spectral_to", "keep")]
         else:
             what = (
                 f"CIE {names[column].upper()} = {values[row, column]:.4g} < 0 (the interpolated spectrum dips below 0)"
             )
-            instead = "use --spectral-to keep"
+            instead = ["use ", Argument("spectral_to", "keep")]
         raise BrdfInputError(
-            f"{samples.source}: sample {row + 1}: {what}, and negative reflectance is not allowed; {instead}"
+            f"{samples.source}: sample {row + 1}: {what}, and negative reflectance is not allowed; ", *instead
         )
     sigma = None
     if samples.sigma is not None:
@@ -175,8 +178,7 @@ def spectral_to(
 
 # ------------------------------------------------------------------ checks
 def _check_target(target: str) -> None:
-    if target not in SPECTRAL_TARGETS:
-        raise BrdfInputError(f"--spectral-to {target!r} is not known; choose one of: {', '.join(SPECTRAL_TARGETS)}")
+    choice("spectral_to", target, SPECTRAL_TARGETS, verb="is not known")
 
 
 def _check_wavelengths(values) -> np.ndarray:
@@ -205,7 +207,7 @@ def _colour():
         import colour
     except ImportError:  # pragma: no cover - colour-science is installed where the tests run
         raise BrdfInputError(
-            "--spectral-to xyz and rgb need colour-science; install it (pip install colour-science)"
+            Argument("spectral_to"), " xyz and rgb need colour-science; install it (pip install colour-science)"
         ) from None
     return colour
 
@@ -229,17 +231,15 @@ def _observer(colour, observer: str):
     from colour.colorimetry import MSDS_CMFS_STANDARD_OBSERVER
 
     if not isinstance(observer, str) or observer not in MSDS_CMFS_STANDARD_OBSERVER:
-        raise BrdfInputError(
-            f"--observer {observer!r} is not known; choose one of: {_choices(MSDS_CMFS_STANDARD_OBSERVER.keys())}"
-        )
+        choices = _choices(MSDS_CMFS_STANDARD_OBSERVER.keys())
+        raise not_allowed("observer", observer, f"choose one of: {choices}", verb="is not known")
     return MSDS_CMFS_STANDARD_OBSERVER[observer]
 
 
 def _illuminant(colour, illuminant: str):
     if not isinstance(illuminant, str) or illuminant not in colour.SDS_ILLUMINANTS:
-        raise BrdfInputError(
-            f"--illuminant {illuminant!r} is not known; choose one of: {_choices(colour.SDS_ILLUMINANTS.keys())}"
-        )
+        choices = _choices(colour.SDS_ILLUMINANTS.keys())
+        raise not_allowed("illuminant", illuminant, f"choose one of: {choices}", verb="is not known")
     return colour.SDS_ILLUMINANTS[illuminant]
 
 
@@ -252,7 +252,8 @@ def _weights(bands: np.ndarray, target: str, illuminant: str, observer: str, whe
     if not np.any((bands >= low) & (bands <= high)):
         raise BrdfInputError(
             f"{where}bands {bands[0]:g}–{bands[-1]:g} nm miss the {observer} colour-matching functions"
-            f" ({low:g}–{high:g} nm); use --spectral-to keep"
+            f" ({low:g}–{high:g} nm); use ",
+            Argument("spectral_to", "keep"),
         )
     weights = _xyz_weights(tuple(bands.tolist()), illuminant, observer)
     if target == "rgb":

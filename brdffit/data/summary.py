@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..physics.geometry import half_vector, zenith_degrees
 from .samples import Samples
 
 #: Cell size of the coverage count, degrees, over Rusinkiewicz's (θh, θd) (each 0–90°).
@@ -10,11 +11,9 @@ CELL = 10
 
 def half_difference_angles(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
     """θh (half vector from the normal) and θd (light from the half vector), degrees (Rusinkiewicz 1998)."""
-    half = samples.wi + samples.wo
-    half /= np.linalg.norm(half, axis=1, keepdims=True)
-    theta_h = np.degrees(np.arccos(np.clip(half[:, 2], -1.0, 1.0)))
+    half = half_vector(samples.wi, samples.wo)
     theta_d = np.degrees(np.arccos(np.clip(np.sum(half * samples.wi, axis=1), -1.0, 1.0)))
-    return theta_h, theta_d
+    return zenith_degrees(half), theta_d
 
 
 def describe(samples: Samples, format_name: str) -> str:

@@ -1,0 +1,1 @@
+"""Fitted models in the forms renderers read: ``merl.py`` (a MERL table)."""

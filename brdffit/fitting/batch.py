@@ -12,23 +12,20 @@ Two strategies, chosen by the backend unless asked:
 """
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _jax  # noqa: F401  (float64 before any array)
-from ..checks import whole_number
+from .._jax import float64
+from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import BrdfInputError
-from .fit import MAX_STEPS, N_STARTS, _checked, compiled_solver, fit, result_of, search_problem, start_vector
+from .fit import MAX_STEPS, N_STARTS, checked, compiled_solver, fit_one, result_of, search_problem, start_vector
 from .problem import build_problem, padded_size
 from .results import FitResult
 from .starts import starting_points
-
-if TYPE_CHECKING:
-    from ..uncertainty.mcmc import MCMC
 
 STRATEGIES = ("auto", "loop", "vmap")
 
@@ -38,7 +35,8 @@ def default_strategy() -> str:
     return "vmap" if jax.default_backend() in ("gpu", "cuda", "rocm") else "loop"
 
 
-def fit_batch(
+@float64
+def fit_many(
     samples: Sequence[Samples],
     model: str = "ward",
     loss: str = "log",
@@ -51,25 +49,10 @@ def fit_batch(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
-    uncertainty: str | None = None,
-    mcmc: "MCMC | None" = None,
     **model_options: Any,
 ) -> list[FitResult]:
-    """Fit ``model`` to each of ``samples``; the results come in the same order.
-
-    The options are those of :func:`brdffit.fit`, applied to every dataset;
-    ``start`` may also be a list with one parameter dictionary per dataset.
-    ``strategy``: ``auto`` (``vmap`` on a GPU, ``loop`` otherwise), ``loop`` or
-    ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
-    terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
-    settings) adds each result's ``uncertainty`` block after the fits.
-    """
-    if uncertainty is not None or mcmc is not None:
-        from ..uncertainty.methods import check_options, with_uncertainty
-
-        check_options(uncertainty, mcmc)
-    if strategy not in STRATEGIES:
-        raise BrdfInputError(f"strategy {strategy!r} is not allowed; choose one of: {', '.join(STRATEGIES)}")
+    """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch`."""
+    choice("strategy", strategy, STRATEGIES)
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
@@ -83,18 +66,12 @@ def fit_batch(
         if strategy == "loop":
             results = []
             for one, one_start in zip(samples, starts, strict=True):
-                results.append(fit(one, model, loss, start=one_start, **options, **model_options))
+                results.append(fit_one(one, model, loss, start=one_start, **options, **model_options))
                 bar.update(1)
-        else:
-            results = _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
+            return results
+        return _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
     finally:
         bar.close()
-    if uncertainty is None:
-        return results
-    return [
-        with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
-        for result, one in zip(results, samples, strict=True)
-    ]
 
 
 def _progress_bar(total: int, enabled: bool | None):
@@ -106,11 +83,11 @@ def _progress_bar(total: int, enabled: bool | None):
 
 def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_steps, dtype, seed, **model_options):
     """Every dataset of a bucket (same padded size and channel count) solved at once, each start in parallel."""
-    checked = [_checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
-    model, loss = checked[0][0], checked[0][1]
-    kept = [one for _, _, one in checked]
-    n_starts = whole_number("--starts", n_starts)
-    max_steps = whole_number("--max-steps", max_steps)
+    kept_by_check = [checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
+    model, loss = kept_by_check[0][0], kept_by_check[0][1]
+    kept = [one for _, _, one in kept_by_check]
+    n_starts = whole_number("n_starts", n_starts)
+    max_steps = whole_number("max_steps", max_steps)
     solve = jax.vmap(compiled_solver(model, loss, max_steps, dtype))
     results: list[FitResult | None] = [None] * len(kept)
     # One bucket per padded size, channel count and optional columns: its problems stack into one pytree.
@@ -123,7 +100,7 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
         if any(starts[i] is None for i in indices):
             thetas = _best_starts(model, loss, [kept[i] for i in indices], problems, n_starts, solve, dtype, seed)
         else:
-            thetas = np.zeros((len(indices), model.n_parameters(kept[indices[0]].n_channels)))
+            thetas = np.zeros((len(indices), model.unconstrained.size(kept[indices[0]].n_channels)))
         for position, index in enumerate(indices):
             if starts[index] is not None:  # a given start replaces the searched one
                 thetas[position] = start_vector(model, starts[index], kept[index].n_channels)

@@ -1,35 +1,34 @@
-"""Fit a model to samples: Levenberg-Marquardt (optimistix) from data-driven starts.
+"""Fit a model to one set of samples: Levenberg-Marquardt (optimistix) from data-driven starts.
 
-The parameters move in unconstrained coordinates (``domains.py``), so every
-step is physically valid. The solver (``solver.py``) is compiled once per
-model, loss and bucketed data size (``problem.padded_size``) and reused for
-every start and every dataset of that size. On large data the starts are
-searched on a subset (``starts.search_subset``) and only the winner is refined
-on all of them.
+The parameters move in unconstrained coordinates (``Model.unconstrained``), so every step is physically
+valid. The solver (``solver.py``) is compiled once per model, loss and bucketed data size
+(``problem.padded_size``) and reused for every start and every dataset of that size. On large data the
+starts are searched on a subset (``starts.search_subset``) and only the winner is refined on all of them.
+
+The compiled solve is differentiable with respect to the data: its derivatives are those of the optimum
+(the implicit function theorem, ``implicit.py``), never of the solver's iterations.
 """
 
 import threading
 from functools import cache, partial
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
-from ..checks import whole_number
+from .._jax import float64, jit
+from ..checks import choice, whole_number
 from ..data.samples import Samples
-from ..errors import BrdfInputError
-from ..physics.models import Model, Params, get_model
+from ..errors import Argument, BrdfInputError
+from ..physics.models import MODELS, Model, Params, get_model, model_option_names
+from .implicit import at_optimum, computed_as
 from .losses import Loss, get_loss
-from .problem import DTYPES, Problem, build_problem, normal_equations, prepared
+from .problem import DTYPES, Problem, build_problem, cost, normal_equations, prepared, residuals
 from .results import FitResult
-from .solver import LevenbergMarquardt
+from .solver import OnePassLevenbergMarquardt
 from .starts import search_subset, starting_points
-
-if TYPE_CHECKING:
-    from ..uncertainty.mcmc import MCMC
 
 #: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -42,7 +41,8 @@ MAX_STEPS = 256
 N_STARTS = 3
 
 
-def fit(
+@float64
+def fit_one(
     samples: Samples,
     model: str | Model = "ward",
     loss: str = "log",
@@ -53,39 +53,12 @@ def fit(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
-    uncertainty: str | None = None,
-    mcmc: "MCMC | None" = None,
-    chain: str | None = None,
-    progress: bool = False,
     **model_options: Any,
 ) -> FitResult:
-    """Fit ``model`` to ``samples`` by minimising ``loss`` (SPEC section 3).
-
-    ``max_theta``: drop samples with θi or θo above this many degrees.
-    ``start``: parameters (SPEC section 5 dictionary) to start from instead of
-    the data-driven starts. ``n_starts``: how many of the best grid starts to
-    run Levenberg-Marquardt from; the lowest cost wins. ``dtype``: ``float32``
-    runs the solve with the model in single precision (sums stay float64) and
-    then refines the optimum in float64 (mixed-precision iterative refinement,
-    usually one or two steps), so the result is float64's.
-    ``seed``: the random part of the subset the starts are searched on (for
-    more than ``starts.SEARCH_SAMPLES`` samples). ``uncertainty``: ``"laplace"``
-    or ``"mcmc"`` adds the result's ``uncertainty`` block (``laplace.py``,
-    ``mcmc.py``); ``mcmc`` (:class:`brdffit.MCMC`: walkers, steps, burn, thin,
-    seed), ``chain`` (a ``.npz`` or ``.h5`` file for the chain) and ``progress``
-    (a progress bar) apply to ``"mcmc"``. ``model_options``: ``fresnel=`` for
-    cook-torrance, ``lobes=`` for lafortune.
-    """
-    if uncertainty is not None or mcmc is not None or chain is not None:  # imported only when asked for
-        from ..uncertainty.mcmc import MCMC, check_walkers
-        from ..uncertainty.methods import check_options, with_uncertainty
-
-        check_options(uncertainty, mcmc, chain)
-    model, loss, samples = _checked(samples, model, loss, max_theta, dtype, **model_options)
-    if uncertainty == "mcmc":
-        check_walkers(mcmc or MCMC(), model, samples)
-    n_starts = whole_number("--starts", n_starts)
-    max_steps = whole_number("--max-steps", max_steps)
+    """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
+    model, loss, samples = checked(samples, model, loss, max_theta, dtype, **model_options)
+    n_starts = whole_number("n_starts", n_starts)
+    max_steps = whole_number("max_steps", max_steps)
     full = build_problem(samples, dtype)
     solve = compiled_solver(model, loss, max_steps, dtype)
     if start is not None:
@@ -95,17 +68,14 @@ def fit(
         compiling = None if search is full else _compile_in_background(solve, model, full)
         starts = starting_points(model, loss, search, n_starts)
         if search is not full and len(starts) > 1:
-            starts = [_best([solve(theta, search) for theta in starts]).theta]
+            starts = [best([solve(theta, search) for theta in starts]).theta]
         if compiling is not None:
             compiling.join()
-    solved = _best([solve(theta, full) for theta in starts])
+    solved = best([solve(theta, full) for theta in starts])
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples))
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
-    result = result_of(model, loss, samples, solved, max_steps, dtype)
-    if uncertainty is None:
-        return result
-    return with_uncertainty(result, samples, uncertainty, mcmc=mcmc, chain=chain, progress=progress)
+    return result_of(model, loss, samples, solved, max_steps, dtype)
 
 
 def _compile_in_background(solve, model: Model, problem: Problem) -> threading.Thread:
@@ -117,7 +87,7 @@ def _compile_in_background(solve, model: Model, problem: Problem) -> threading.T
     call to report.
     """
     shapes = jax.tree.map(lambda leaf: jax.ShapeDtypeStruct(leaf.shape, leaf.dtype), problem)
-    theta = jax.ShapeDtypeStruct((model.n_parameters(problem.measured.shape[1]),), jnp.float64)
+    theta = jax.ShapeDtypeStruct((model.unconstrained.size(problem.measured.shape[1]),), jnp.float64)
 
     def compile_quietly():
         try:
@@ -136,16 +106,16 @@ def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Pr
     return full if subset is None else build_problem(samples.select(subset), dtype)
 
 
-def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
+def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
     """The model, the loss and the samples kept by ``max_theta``, after every check of the arguments."""
+    _check_option_names(model, model_options)
     model = get_model(model, **model_options)
     loss = get_loss(loss)
     if not isinstance(samples, Samples):
         raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
-    if dtype not in DTYPES:
-        raise BrdfInputError(f"--dtype {dtype!r} is not allowed; choose one of: {', '.join(DTYPES)}")
+    choice("dtype", dtype, DTYPES)
     samples = samples.within(max_theta)
-    n_parameters = model.n_parameters(samples.n_channels)
+    n_parameters = model.unconstrained.size(samples.n_channels)
     if samples.values.size < n_parameters:
         raise BrdfInputError(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
@@ -154,20 +124,32 @@ def _checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[M
     return model, loss, samples
 
 
+def _check_option_names(model, options: dict[str, Any]) -> None:
+    """A keyword no model takes is a misspelt argument, not a model option (``max_step`` for ``max_steps``)."""
+    known = {name for each in MODELS for name in model_option_names(each)}
+    for key in options:
+        if key not in known:
+            raise BrdfInputError(
+                Argument(key),
+                f" is not an argument of the fit, nor an option of any model ({', '.join(sorted(known))})",
+            )
+
+
 def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.ndarray:
-    params = model.params_from_dict(start)
+    """The unconstrained vector of the parameter dictionary ``start``, checked against the samples' channels."""
+    params = model.dictionary.to_params(start)
     if params.diffuse.size != n_channels:
         raise BrdfInputError(
-            f"start parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
+            Argument("start"), f" parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
         )
-    return model.to_unconstrained(params)
+    return model.unconstrained.from_params(params)
 
 
 class Solved(NamedTuple):
     """What a compiled solve returns: the optimum in both forms and how the solve went."""
 
     theta: Any  # the unconstrained optimum
-    cost: Any  # rᵀr there
+    cost: Any  # Σr² there (not ½Σr² as scipy and optimistix report it)
     n_steps: Any
     result: Any  # optimistix.RESULTS
     converged: Any  # result == RESULTS.successful, decided in the compiled solve, not by a host program
@@ -179,7 +161,7 @@ class Solved(NamedTuple):
 SAME_COST = 1e-12
 
 
-def _best(runs: list[Solved]) -> Solved:
+def best(runs: list[Solved]) -> Solved:
     """The run of lowest cost; runs within :data:`SAME_COST` of it tie, and the first (the better start) wins.
 
     Without the tie rule, rounding picked the winner among starts that found the same optimum, so the
@@ -197,7 +179,7 @@ def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_st
         model=model.name,
         model_options=model.model_options,
         channels=samples.channels,
-        params=model.params_to_dict(jax.tree.map(np.asarray, solved.params)),
+        params=model.dictionary.from_params(jax.tree.map(np.asarray, solved.params)),
         loss=loss.name,
         cost=float(solved.cost),
         rmse=float(solved.rmse),
@@ -214,7 +196,8 @@ def _residual_shape(theta, problem: Problem):
 
     The solver only calls ``normal_equations``; handing optimistix the real
     residual function would make it trace the model once more for nothing
-    (0.13 s of the first fit of a Cook-Torrance model).
+    (0.13 s of the first fit of a Cook-Torrance model). Nothing differentiates
+    it either: the solve's derivatives come from ``implicit.py``.
     """
     return jnp.zeros(problem.measured.shape, theta.dtype)
 
@@ -223,30 +206,51 @@ def _failure_message(result, max_steps: int) -> str:
     if result == optx.RESULTS.nonlinear_max_steps_reached:
         return (
             f"the maximum number of solver steps ({max_steps}) was reached before the tolerances were met;"
-            " raise --max-steps"
+            " raise the limit (max_steps, --max-steps)"
         )
     return optx.RESULTS[result]
 
 
 @cache
 def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
-    """``solve(theta0, problem) -> Solved``, compiled once per problem size."""
+    """``solve(theta0, problem) -> Solved``, compiled once per problem size.
+
+    Differentiable with respect to ``problem`` (its measurements, sigma, weights, directions): ``theta``,
+    ``params``, ``cost`` and ``rmse`` carry the derivatives of the optimum (``implicit.py``); the start
+    ``theta0`` has none, the optimum does not depend on it.
+    """
     ftol, gtol, atol = TOLERANCES[dtype]
-    solver = LevenbergMarquardt(
-        normal_equations=partial(normal_equations, model, loss), rtol=ftol, atol=atol, gtol=gtol
-    )
+    equations = partial(normal_equations, model, loss)
+    solver = OnePassLevenbergMarquardt(normal_equations=equations, rtol=ftol, atol=atol, gtol=gtol)
+
+    def gradient(theta, problem: Problem):
+        return equations(theta, problem).gradient
+
+    def squared_error(theta, problem: Problem):
+        n_channels = problem.measured.shape[1]
+
+        def error(t, chunk):
+            predicted = model.brdf(model.unconstrained.to_params(t, n_channels), chunk.wi, chunk.wo)
+            return jnp.where(chunk.real[:, None], predicted - chunk.measured, 0.0)
+
+        return cost(error, theta, problem)
 
     @jit
     def solve(theta0, problem: Problem):
         problem = prepared(loss, problem)
-        solution = optx.least_squares(_residual_shape, solver, theta0, args=problem, max_steps=max_steps, throw=False)
-        theta = solution.value
-        params = model.from_unconstrained(theta, problem.measured.shape[1])
-        cost = 2.0 * solution.state.f_info.f
+        frozen_theta0, frozen_problem = jax.lax.stop_gradient((theta0, problem))
+        solution = optx.least_squares(
+            _residual_shape, solver, frozen_theta0, args=frozen_problem, max_steps=max_steps, throw=False
+        )
+        theta = at_optimum(gradient, solution.value, problem)
+        n_channels = problem.measured.shape[1]
+        params = model.unconstrained.to_params(theta, n_channels)
+        sum_of_squares = partial(cost, partial(residuals, model, loss))
+        total = computed_as(sum_of_squares, 2.0 * solution.state.f_info.f, theta, problem)
         # rmse: sqrt(mean((f - y)²)) over the real samples, from the pass at the point returned.
-        n_values = jnp.sum(problem.real) * problem.measured.shape[1]
-        rmse = jnp.sqrt(solution.state.squared_error / n_values)
+        n_values = jnp.sum(problem.real) * n_channels
+        rmse = jnp.sqrt(computed_as(squared_error, solution.state.squared_error, theta, problem) / n_values)
         converged = solution.result == optx.RESULTS.successful
-        return Solved(theta, cost, solution.stats["num_steps"], solution.result, converged, params, rmse)
+        return Solved(theta, total, solution.stats["num_steps"], solution.result, converged, params, rmse)
 
     return solve

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import jax
 import jax.numpy as jnp
 
-from .. import _jax  # noqa: F401  (float64 before any array)
 from ..errors import BrdfInputError
 
 #: ε of the ``relative`` loss, in 1/sr: values below it count as if they were ε.

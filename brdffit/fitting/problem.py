@@ -3,7 +3,7 @@
 The residual of sample ``n``, channel ``c`` is
 ``scale[n, c] · (T(f(wi_n, wo_n))[c] - T(y)[n, c])`` with ``T`` the loss transform
 (``losses.py``) and ``f`` the model at the parameters the unconstrained vector
-``theta`` maps to (``models/base.py``).
+``theta`` maps to (``Model.unconstrained``).
 
 Sizes are *bucketed*: a problem of N samples is padded to ``padded_size(N)``
 (N rounded up to 4 significant bits, at most 1/8 more) with rows of scale 0,
@@ -22,6 +22,7 @@ import numpy as np
 from ..data.samples import Samples
 from ..physics.geometry import NORMAL
 from ..physics.models import Model
+from .basis import jacobian_coefficients, value_and_basis
 from .losses import Loss, residual_scale
 
 #: Most samples per chunk of the normal-equation pass: 2¹⁴ × 3 channels × 8 parameters is a 3 MB Jacobian block.
@@ -134,13 +135,13 @@ def target_and_scale(loss: Loss, problem: Problem):
 
 def residuals(model: Model, loss: Loss, theta, problem: Problem):
     """Residuals (N, C) at the unconstrained parameters ``theta``, computed in the problem's dtype."""
-    return residuals_at(model, loss, model.from_unconstrained(theta, problem.measured.shape[1]), problem)
+    return residuals_at(model, loss, model.unconstrained.to_params(theta, problem.measured.shape[1]), problem)
 
 
 def residuals_at(model: Model, loss: Loss, params, problem: Problem):
     """Residuals (N, C) at the parameters ``params`` (:class:`~brdffit.models.Params`), in the problem's dtype."""
     params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
-    predicted = model.evaluate(params, problem.wi, problem.wo)
+    predicted = model.brdf(params, problem.wi, problem.wo)
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
     target, scale = target_and_scale(loss, problem)
     return (transformed - target) * scale
@@ -150,9 +151,9 @@ def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):
     """Residuals ``r`` (N, C), their weights ``w = scale·T'(f)`` (N, C), the model's basis (N, M) and values (N, C).
 
     The residual Jacobian is ``∂r[n, c]/∂θ = w[n, c] · Σ_m basis[n, m] · A[c, m]``
-    with ``A`` from :meth:`Model.jacobian_coefficients`; ``T'`` by forward mode.
+    with ``A`` from :func:`basis.jacobian_coefficients`; ``T'`` by forward mode.
     """
-    values, basis = model.value_and_basis(theta, problem.wi, problem.wo, problem.measured.shape[1])
+    values, basis = value_and_basis(model, theta, problem.wi, problem.wo, problem.measured.shape[1])
     transformed, slope = loss.value_and_slope(values, problem.measured, problem.wi[:, 2:3])
     target, scale = target_and_scale(loss, problem)
     return (transformed - target) * scale, slope * scale, basis, values
@@ -205,7 +206,7 @@ def normal_equations(model: Model, loss: Loss, theta, problem: Problem) -> Sums:
         ), None
 
     c = problem.measured.shape[1]
-    coefficients = model.jacobian_coefficients(theta, c)
+    coefficients = jacobian_coefficients(model, theta, c)
     m = coefficients.shape[1]
     zero = jnp.zeros((), jnp.float64)
     start = (zero, jnp.zeros((c, m), jnp.float64), jnp.zeros((c, m, m), jnp.float64), zero)

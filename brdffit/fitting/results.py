@@ -1,9 +1,14 @@
-"""The result of a fit: :class:`FitResult`, its JSON file (SPEC section 5) and its printed table."""
+"""The result of a fit: :class:`FitResult` and its :class:`Uncertainty`, and the result file they are written to.
+
+The file is JSON (``docs/results.md``): the model, its options and channels, the fitted ``params``, how the
+fit went (``fit``: loss, cost, rmse, counts, convergence) and, when asked for, the ``uncertainty`` block.
+``cost`` is the sum of squared residuals ``Σ r²`` (scipy's ``least_squares`` and optimistix report ``½ Σ r²``).
+"""
 
 import json
-import math
 import os
-from dataclasses import dataclass, field, replace
+from collections.abc import Iterator, Mapping
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -16,20 +21,60 @@ from ..physics.evaluate import evaluate
 
 
 @dataclass(frozen=True)
+class Uncertainty(Mapping[str, Any]):
+    """The uncertainty of a fit's parameters, by one ``method`` (``laplace`` or ``mcmc``), as the result file holds it.
+
+    ``stderr`` and ``quantiles`` (0.025, 0.16, 0.5, 0.84, 0.975) take the layout of ``params`` (an undetermined
+    value is None); ``covariance`` and ``correlation`` are ``{"names": [...], "matrix": [[...]]}`` over the flat
+    physical parameters (``rho_d[r]``, ``lobes[0].cxy``); ``diagnostics`` depend on the method; ``warnings`` say
+    what a user must know about the estimate. Also a read-only mapping of those names, as the JSON has them
+    (``result.uncertainty["stderr"]``).
+    """
+
+    method: str
+    stderr: dict[str, Any]
+    quantiles: dict[str, Any]
+    covariance: dict[str, Any]
+    correlation: dict[str, Any]
+    diagnostics: dict[str, Any]
+    warnings: list[str]
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, content: Mapping[str, Any]) -> "Uncertainty":
+        """The block of a result file; a missing entry is empty (older files)."""
+        values = {item.name: content.get(item.name) for item in fields(cls)}
+        return cls(**{name: ({} if value is None and name != "method" else value) for name, value in values.items()})
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self.__dataclass_fields__:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.__dataclass_fields__)
+
+    def __len__(self) -> int:
+        return len(self.__dataclass_fields__)
+
+
+@dataclass(frozen=True)
 class FitResult:
     """Fitted parameters and how the fit went.
 
-    ``params`` is the SPEC-section-5 dictionary (per-channel albedos as lists in
-    ``channels`` order). ``cost`` is the sum of squared residuals of ``loss``;
+    ``params`` is the model's parameter dictionary (per-channel albedos as lists in
+    ``channels`` order). ``cost`` is the sum of squared residuals of ``loss``, ``Σ r²``;
     ``rmse`` the root-mean-square of ``f - y`` over the fitted samples and
     channels, in 1/sr, whatever the loss. ``n_steps`` counts Levenberg-Marquardt
     steps of the winning start; ``converged`` is False when the solver stopped
     without meeting its tolerances, and ``message`` then says why. ``dtype`` is
     the precision the model was evaluated in (``float32``: solved in single
     precision, then refined in double, so the optimum is float64's).
-    ``uncertainty`` is the SPEC-section-5 block when one was asked for
-    (``laplace.py``, ``mcmc.py``); ``posterior`` the MCMC draws of the physical
-    parameters (S, p), in the order of ``uncertainty["covariance"]["names"]``,
+    ``uncertainty`` is the :class:`Uncertainty` when one was asked for
+    (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
+    parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
     kept in memory only.
     """
 
@@ -45,13 +90,13 @@ class FitResult:
     converged: bool
     message: str = ""
     dtype: str = "float64"
-    uncertainty: dict[str, Any] | None = None
+    uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
-    posterior: np.ndarray | None = field(default=None, repr=False, compare=False)
+    draws: np.ndarray | None = field(default=None, repr=False, compare=False)
 
-    def with_posterior(self, draws: np.ndarray) -> "FitResult":
-        """This result carrying the posterior ``draws`` (S, p)."""
-        return replace(self, posterior=draws)
+    def with_uncertainty(self, uncertainty: Uncertainty, draws: np.ndarray | None = None) -> "FitResult":
+        """This result carrying ``uncertainty`` (and the MCMC ``draws`` (S, p) it came from)."""
+        return replace(self, uncertainty=uncertainty, draws=draws)
 
     def predict(self, wi, wo) -> np.ndarray:
         """The fitted model's BRDF (N, C) in 1/sr at directions ``wi``, ``wo`` (N, 3)."""
@@ -59,7 +104,7 @@ class FitResult:
 
     # ------------------------------------------------------------------ JSON
     def to_dict(self) -> dict[str, Any]:
-        """The result file's content (SPEC section 5) as plain Python objects."""
+        """The result file's content as plain Python objects."""
         result = {
             "brdffit_version": self.brdffit_version,
             "model": self.model,
@@ -78,7 +123,7 @@ class FitResult:
             },
         }
         if self.uncertainty is not None:
-            result["uncertainty"] = self.uncertainty
+            result["uncertainty"] = self.uncertainty.to_dict()
         return result
 
     def to_json(self) -> str:
@@ -86,8 +131,8 @@ class FitResult:
         return _to_json(self.to_dict()) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the result file atomically (a temporary file renamed into place)."""
-        write_text_atomic(path, self.to_json())
+        """Write the result file atomically (:func:`save_result`)."""
+        save_result(self, path)
 
     @classmethod
     def from_dict(cls, content: dict[str, Any], source: str = "result") -> "FitResult":
@@ -106,7 +151,9 @@ class FitResult:
                 converged=bool(fit["converged"]),
                 message=str(fit.get("message", "")),
                 dtype=str(fit.get("dtype", "float64")),
-                uncertainty=content.get("uncertainty"),
+                uncertainty=None
+                if content.get("uncertainty") is None
+                else Uncertainty.from_dict(content["uncertainty"]),
                 brdffit_version=str(content.get("brdffit_version", "")),
             )
         except (KeyError, TypeError, ValueError) as error:
@@ -114,42 +161,22 @@ class FitResult:
 
     # ------------------------------------------------------------ the table
     def table(self, source: str | None = None) -> str:
-        """A readable report: one row per parameter, one column per channel, and the fit's figures."""
-        what = f" of {source}" if source else ""
-        options = ", ".join(f"{key} {value}" for key, value in self.model_options.items())
-        options = f" ({options})" if options else ""
-        size = f"{self.n_samples} samples × {len(self.channels)} channel(s)"
-        lines = [f"{self.model}{options} fit{what}: {size}, loss {self.loss}"]
-        rows = list(_parameter_rows(self.params))
-        errors = dict(_parameter_rows(self.uncertainty["stderr"])) if self.uncertainty else {}
-        label_width = max(len("parameter"), *(len(label) for label, _ in rows))
-        columns = [str(c) for c in self.channels]
-        cells = {
-            label: [
-                _number(v, e, bool(errors))
-                for v, e in zip(
-                    _as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True
-                )
-            ]
-            for label, value in rows
-        }
-        cell = max(12, *(len(c) + 2 for c in columns), *(len(text) + 2 for texts in cells.values() for text in texts))
-        lines.append("  " + "parameter".ljust(label_width) + "".join(c.rjust(cell) for c in columns))
-        for label, texts in cells.items():
-            lines.append("  " + label.ljust(label_width) + "".join(text.rjust(cell) for text in texts))
-        status = "converged" if self.converged else f"NOT converged: {self.message}"
-        precision = " · float32, refined in float64" if self.dtype == "float32" else ""
-        lines.append(f"  cost {self.cost:.6g} · rmse {self.rmse:.4g} 1/sr · {self.n_steps} steps{precision} · {status}")
-        if self.uncertainty:
-            lines.append("  " + _uncertainty_line(self.uncertainty))
-        return "\n".join(lines)
+        """The printed report (``table.py``): one row per parameter, one column per channel, and the fit's figures."""
+        from .table import result_table
+
+        return result_table(self, source)
 
     def __str__(self) -> str:
         return self.table()
 
 
+def save_result(result: FitResult, path: str | os.PathLike) -> None:
+    """Write ``result``'s file atomically (a temporary file renamed into place); :func:`load_result` reads it."""
+    write_text_atomic(path, result.to_json())
+
+
 def load_result(path: str | os.PathLike) -> FitResult:
-    """Read a result file written by :meth:`FitResult.save` or ``brdffit fit``."""
+    """Read a result file written by :func:`save_result` or ``brdffit fit``."""
     path = Path(path)
     try:
         content = json.loads(path.read_text(encoding="utf-8"))
@@ -172,53 +199,3 @@ def _to_json(value: Any, indent: str = "") -> str:
         inner = indent + "  "
         return "[\n" + ",\n".join(inner + _to_json(item, inner) for item in value) + "\n" + indent + "]"
     return json.dumps(value, allow_nan=False)
-
-
-def _parameter_rows(params: dict[str, Any]):
-    """(label, value) pairs in file order; Lafortune lobes become ``lobe 1 rho_s`` and so on."""
-    for name, value in params.items():
-        if name == "lobes":
-            for index, lobe in enumerate(value, start=1):
-                for lobe_name, lobe_value in lobe.items():
-                    yield f"lobe {index} {lobe_name}", lobe_value
-        else:
-            yield name, value
-
-
-def _as_list(value) -> list:
-    return value if isinstance(value, list) else [value]
-
-
-def _number(value: float, error: float | None = None, has_error: bool = False) -> str:
-    """``value`` to 6 significant digits, or ``value ± error`` with the error to 2 digits and the value to match.
-
-    ``has_error`` with ``error`` None (undetermined) gives ``value ± ?``.
-    """
-    if not math.isfinite(value):
-        return str(value)
-    if error is None or not math.isfinite(error) or error <= 0:
-        return f"{value:.6g}" + (" ± ?" if has_error and error is None else "")
-    decimals = max(0, 1 - math.floor(math.log10(error)))
-    if decimals > 7 or abs(value) >= 1e6:  # fixed point would be long: the value to its error's digits, in e-form
-        digits = max(0, math.floor(math.log10(abs(value))) - math.floor(math.log10(error))) + 1 if value else 1
-        return f"{value:.{min(digits, 12)}e} ± {error:.1e}"
-    return f"{value:.{decimals}f} ± {error:.{decimals}f}"
-
-
-def _uncertainty_line(block: dict[str, Any]) -> str:
-    """One line on how the errors were found."""
-    diagnostics = block.get("diagnostics", {})
-    if block.get("method") == "mcmc":
-        tau = max((t for t in diagnostics.get("autocorr_time", []) if t is not None), default=float("nan"))
-        ess = min((e for e in diagnostics.get("effective_samples", []) if e is not None), default=float("nan"))
-        return (
-            f"± posterior standard deviation (emcee: {diagnostics.get('n_walkers')} walkers × "
-            f"{diagnostics.get('n_steps')} steps, {diagnostics.get('burn')} burn-in; acceptance "
-            f"{diagnostics.get('acceptance', float('nan')):.2f}, τ ≤ {tau:.0f} steps, ≥ {ess:.0f} effective samples)"
-        )
-    noise, chi2 = diagnostics.get("noise_scale"), diagnostics.get("reduced_chi2")
-    if noise is not None:
-        how = f"no sigma: scaled by the residuals' scatter, {noise:.3g} in the loss's units"
-    else:
-        how = f"sigma given; reduced χ² {chi2:.4g}" if isinstance(chi2, float) else "sigma given"
-    return f"± Laplace standard error (Gauss-Newton covariance at the optimum; {how})"

@@ -44,8 +44,6 @@ import lineax as lx
 import optimistix as optx
 from optimistix import RESULTS
 
-from .. import _jax  # noqa: F401  (float64 before any array)
-
 
 class _DescentState(eqx.Module):
     live: Any  # (k,) bool: columns of J that can change the residuals
@@ -139,8 +137,11 @@ def _function_info(cost, gradient, gram):
     return optx.FunctionInfo.EvalGradHessian(0.5 * cost, gradient, hessian)
 
 
-class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
-    """Levenberg-Marquardt for ``least_squares(fn, solver, y0, args)`` where ``args`` is a :class:`Problem`.
+class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
+    """Levenberg-Marquardt on normal equations, for ``least_squares(fn, solver, y0, args)`` with ``args`` a
+    :class:`~brdffit.fitting.problem.Problem`.
+
+    Not optimistix's ``LevenbergMarquardt``: its contract differs (it never evaluates ``fn``).
 
     ``normal_equations(theta, problem) -> problem.Sums`` supplies ``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²``
     (``problem.normal_equations``); ``fn`` itself is only used by optimistix for shapes. The state's
@@ -153,13 +154,17 @@ class LevenbergMarquardt(optx.AbstractLeastSquaresSolver):
     rtol: float
     atol: float
     gtol: float
-    norm: Callable = eqx.field(static=True, default=optx.max_norm)
     descent: ScaledTrustRegionDescent = ScaledTrustRegionDescent()
     #: MINPACK's thresholds: accept when the actual reduction is ≥ 1e-4 of the predicted one, enlarge the
     #: trust region when ≥ 0.75 (optimistix's defaults, 0.01 and 0.99, rarely enlarge it and the fit crawls).
     search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion(
         high_cutoff=0.75, low_cutoff=1e-4, high_constant=4.0, low_constant=0.25
     )
+
+    @property
+    def norm(self) -> Callable:
+        """Required by optimistix's solver interface; the stopping tests here need no norm."""
+        return optx.max_norm
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
         k = y.size

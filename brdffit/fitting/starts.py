@@ -63,7 +63,7 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
     diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
     if not model.n_lobes:
         diffuse = _albedos(*(np.asarray(x) for x in _gram(diffuse_basis, weight, problem.measured)))[0]
-        return [model.to_unconstrained(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
+        return [model.unconstrained.from_params(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
 
     grid = model.lobe.grid
     stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
@@ -78,7 +78,7 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
             albedos = _floored(_albedos(grams[index], rhs[index]))
             shapes = [*chosen, shape]
             shape_arrays = {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
-            thetas.append(partial_model.to_unconstrained(Params(albedos[0], albedos[1:], shape_arrays)))
+            thetas.append(partial_model.unconstrained.from_params(Params(albedos[0], albedos[1:], shape_arrays)))
         costs = np.asarray(_grid_costs(partial_model, loss, jnp.asarray(np.stack(thetas)), problem))
         order = np.argsort(costs, kind="stable")
         chosen.append(grid[order[0]])

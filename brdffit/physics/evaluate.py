@@ -1,10 +1,10 @@
-"""Evaluate a model with SPEC-style parameters at given directions (SPEC section 6)."""
+"""Evaluate a model with the result file's parameters at given directions: the public, checked entry point."""
 
 from typing import Any
 
 import numpy as np
 
-from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from .._jax import jit
 from ..errors import BrdfInputError
 from .models import Model, Params, get_model
 
@@ -12,22 +12,22 @@ from .models import Model, Params, get_model
 def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any) -> np.ndarray:
     """BRDF values (N, C) in 1/sr of ``model`` with ``params`` at directions ``wi``, ``wo`` (N, 3).
 
-    ``params`` is the dictionary of SPEC section 5; ``options`` are the model's
-    options (``fresnel=``, ``lobes=``). Directions are unit vectors in the local
-    frame; pairs with either ``z ≤ 0`` give 0.
+    ``params`` is the result file's parameter dictionary; ``options`` are the model's options
+    (``fresnel=``, ``lobes=``). Directions are unit vectors in the local frame; pairs with either
+    ``z ≤ 0`` give 0. Returns a float64 numpy array; :meth:`Model.brdf` is the JAX computation behind it.
     """
     model = get_model(model, **options)
-    checked = model.params_from_dict(params)
+    checked = model.dictionary.to_params(params)
     wi = _directions(wi, "wi")
     wo = _directions(wo, "wo")
     if wi.shape != wo.shape:
         raise BrdfInputError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
-    return np.asarray(_evaluate(model, checked, wi, wo))
+    return np.asarray(_brdf(model, checked, wi, wo))
 
 
 @jit(static_argnums=0)
-def _evaluate(model: Model, params: Params, wi, wo):
-    return model.evaluate(params, wi, wo)
+def _brdf(model: Model, params: Params, wi, wo):
+    return model.brdf(params, wi, wo)
 
 
 def _directions(value, name: str) -> np.ndarray:

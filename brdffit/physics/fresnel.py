@@ -1,13 +1,18 @@
-"""Fresnel reflectance of a smooth interface, unpolarised, as a function of ``cos β``.
+"""Fresnel reflectance of a smooth interface, unpolarised, as a function of ``cos β``, and the registry of kinds.
 
-``cos β = wi·h`` is the cosine of the angle between the light and the
-microfacet normal (SPEC section 1). All functions return a value in [0, 1] and
-have finite derivatives for ``cos β ∈ (0, 1]``.
+``cos β = wi·h`` is the cosine of the angle between the light and the microfacet normal. All functions
+return a value in [0, 1] and have finite derivatives for ``cos β ∈ (0, 1]``. :data:`FRESNEL` maps the
+names Cook-Torrance's ``fresnel`` option takes to a :class:`Fresnel`: its parameters (with their domains
+and the values the fit starts from) and its reflectance.
 """
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
 
 import jax.numpy as jnp
 
-from .. import _jax  # noqa: F401  (float64 before any array)
+from .domains import POSITIVE, UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
 
 
 def fresnel_schlick(cos_beta, f0):
@@ -18,7 +23,7 @@ def fresnel_schlick(cos_beta, f0):
 def fresnel_dielectric(cos_beta, eta):
     """Exact unpolarised Fresnel reflectance of a dielectric with relative index ``eta > 1``.
 
-    Cook & Torrance 1982, eq. in their appendix (SPEC section 2)::
+    Cook & Torrance 1982, eq. in their appendix::
 
         g = sqrt(eta² + c² - 1)
         F = ½ (g-c)²/(g+c)² · (1 + (c(g+c) - 1)² / (c(g-c) + 1)²)
@@ -55,3 +60,31 @@ def fresnel_conductor(cos_beta, eta, k):
     t4 = t2 * sin2
     rp = rs * (t3 - t4) / (t3 + t4)
     return 0.5 * (rs + rp)
+
+
+@dataclass(frozen=True)
+class Fresnel:
+    """A kind of Fresnel term: its parameters ``(name, domain, starting values)`` and ``reflectance(cos β, shape)``."""
+
+    summary: str
+    parameters: tuple[tuple[str, MappedDomain, tuple[float, ...]], ...]
+    reflectance: Callable[[Any, Mapping[str, Any]], Any]
+
+
+#: The kinds of Fresnel term, by the name the ``fresnel`` option takes; the first is the default.
+FRESNEL = {
+    "schlick": Fresnel(
+        "Schlick 1994", (("f0", UNIT_INTERVAL, (0.04, 0.3, 0.9)),), lambda c, shape: fresnel_schlick(c, shape["f0"])
+    ),
+    "dielectric": Fresnel(
+        "exact, real index eta",
+        (("eta", GreaterThan(1.0), (1.5, 3.0)),),
+        lambda c, shape: fresnel_dielectric(c, shape["eta"]),
+    ),
+    "conductor": Fresnel(
+        "exact, complex index eta + i k",
+        (("eta", POSITIVE, (0.5, 1.5)), ("k", Positive(allow_zero=True), (1.0, 4.0))),
+        lambda c, shape: fresnel_conductor(c, shape["eta"], shape["k"]),
+    ),
+    "none": Fresnel("F = 1", (), lambda c, shape: jnp.ones_like(c)),
+}

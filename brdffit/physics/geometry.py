@@ -1,57 +1,83 @@
 """Directions in the local shading frame.
 
-Frame (SPEC section 1): ``z`` is the surface normal, ``x`` the tangent (azimuth
-``phi = 0``), ``y = z × x``. ``wi`` points from the surface towards the light,
-``wo`` towards the viewer. Angles are in radians here; files use degrees.
+Frame: ``z`` is the surface normal, ``x`` the tangent (azimuth ``phi = 0``), ``y = z × x``. ``wi`` points
+from the surface towards the light, ``wo`` towards the viewer. Angles are in radians unless a name says
+degrees; files use degrees.
 
-These functions work on numpy and JAX arrays alike and broadcast over leading
-axes; the last axis holds ``(x, y, z)``. The conversions to and from angles
-compute with numpy when given numpy arrays: readers and writers run them on the
-host, where ``jax.numpy`` would compile and dispatch a program per operation
-(~0.1 s when the command line reads a 10k-row CSV).
+Every function works on numpy and JAX arrays alike (:func:`brdffit._arrays.namespace`) and broadcasts
+over leading axes; the last axis holds ``(x, y, z)``. Host code (readers, writers, ``data_synth``) gets
+numpy back, so this module imports no JAX of its own.
 """
 
-import jax.numpy as jnp
-import numpy as np
+from __future__ import annotations  # the jaxtyping annotations stay unevaluated: importing jax costs ~0.5 s
 
-from .. import _jax  # noqa: F401  (float64 before any array)
+from typing import TYPE_CHECKING
+
+from .._arrays import namespace
+
+if TYPE_CHECKING:
+    import numpy as np
+    from jaxtyping import Array, Bool, Float
+
+    Directions = Float[Array, "*batch 3"] | Float[np.ndarray, "*batch 3"]
 
 #: The surface normal, used to stand in for directions the models must ignore.
 NORMAL = (0.0, 0.0, 1.0)
 
 
-def _namespace(*arrays):
-    """numpy when every argument is a numpy array or a Python number, else ``jax.numpy``."""
-    return np if all(isinstance(a, np.ndarray | float | int) for a in arrays) else jnp
-
-
-def spherical_to_direction(theta, phi):
+def spherical_to_direction(theta, phi) -> Directions:
     """Unit vector ``(sin θ cos φ, sin θ sin φ, cos θ)`` for zenith ``θ`` and azimuth ``φ`` (radians)."""
-    xp = _namespace(theta, phi)
+    xp = namespace(theta, phi)
     sin_theta = xp.sin(theta)
     return xp.stack([sin_theta * xp.cos(phi), sin_theta * xp.sin(phi), xp.cos(theta)], axis=-1)
 
 
-def direction_to_spherical(direction):
+def direction_to_spherical(direction: Directions):
     """Zenith ``θ ∈ [0, π]`` and azimuth ``φ ∈ (-π, π]`` (radians) of a unit vector."""
-    xp = _namespace(direction)
+    xp = namespace(direction)
     x, y, z = direction[..., 0], direction[..., 1], direction[..., 2]
     return xp.arctan2(xp.hypot(x, y), z), xp.arctan2(y, x)
 
 
-def half_vector(wi, wo):
+def zenith_degrees(direction: Directions):
+    """The zenith angle ``θ = acos(z)`` of unit vectors, in degrees.
+
+    The one place θ is computed from a direction: every selection by angle (``max_theta``, MERL's
+    reader, ``brdffit info``) uses it, so that two code paths cannot disagree at a boundary.
+    """
+    xp = namespace(direction)
+    return xp.degrees(xp.arccos(xp.clip(direction[..., 2], -1.0, 1.0)))
+
+
+def half_vector(wi: Directions, wo: Directions) -> Directions:
     """``h = normalize(wi + wo)``, the microfacet normal that mirrors ``wi`` into ``wo``.
 
     Finite (with finite derivatives) whenever ``wi + wo ≠ 0``, which holds for any
     two directions in the upper hemisphere.
     """
+    xp = namespace(wi, wo)
     summed = wi + wo
-    return summed / jnp.sqrt(jnp.sum(summed * summed, axis=-1, keepdims=True))
+    return summed / xp.sqrt(xp.sum(summed * summed, axis=-1, keepdims=True))
 
 
-def mirror_direction(w):
+def mirror_direction(w: Directions) -> Directions:
     """Mirror image of ``w`` about the normal: ``(-x, -y, z)``."""
-    return w * jnp.asarray([-1.0, -1.0, 1.0], dtype=w.dtype)
+    xp = namespace(w)
+    return w * xp.asarray([-1.0, -1.0, 1.0], dtype=w.dtype)
+
+
+def above_horizon(wi: Directions, wo: Directions) -> tuple[Bool[Array, " n"], Directions, Directions]:
+    """Which pairs have both directions above the horizon, and the directions with every other pair
+    replaced by the normal.
+
+    A model is zero below the horizon; computing it there on the normal instead keeps its values and
+    derivatives finite, where the ``where`` that zeroes them would otherwise multiply an infinite
+    derivative by 0 (and give NaN). ``wi``, ``wo``: (N, 3).
+    """
+    xp = namespace(wi, wo)
+    visible = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+    normal = xp.asarray(NORMAL, dtype=wi.dtype)
+    return visible, xp.where(visible[:, None], wi, normal), xp.where(visible[:, None], wo, normal)
 
 
 def tan2_from_cos(cos_theta):
@@ -67,7 +93,8 @@ def safe_power(base, exponent):
     normal float and as 0 elsewhere, so that neither ``ln 0`` nor ``1/0`` ever
     enters a derivative. Exponents of 10⁴ and more simply underflow to 0.
     """
-    tiny = jnp.finfo(jnp.result_type(base)).tiny
+    xp = namespace(base, exponent)
+    tiny = xp.finfo(xp.result_type(base)).tiny
     positive = base > tiny
-    safe_base = jnp.where(positive, base, 1.0)
-    return jnp.where(positive, jnp.exp(exponent * jnp.log(safe_base)), 0.0)
+    safe_base = xp.where(positive, base, 1.0)
+    return xp.where(positive, xp.exp(exponent * xp.log(safe_base)), 0.0)

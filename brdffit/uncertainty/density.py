@@ -1,6 +1,6 @@
-"""The posterior of a fit's parameters: priors, a likelihood consistent with the loss, and its log density.
+"""The posterior density of a fit's parameters: priors, a likelihood consistent with the loss, and its logarithm.
 
-Coordinates are the model's *sampling vector* (``models/base.py``): the
+Coordinates are the model's *sampling vector* (``Model.sampling``): the
 physical parameters themselves, except that a Lafortune lobe's direction is
 its angle ``psi``. When the samples carry no ``sigma``, one more coordinate,
 ``ln s``, scales the noise.
@@ -13,7 +13,7 @@ deviation ``s`` (a nuisance parameter)::
 
     ln L = -½ Σ r² / s² - n ln s            (n: fitted values, samples × channels)
 
-Priors (``domains.py``): flat on albedos and bounded parameters (``f0``,
+Priors (``physics/domains.py``): flat on albedos and bounded parameters (``f0``,
 ``psi``), log-uniform on scales (roughness, exponents, ``eta - 1``) and on
 ``s``. They are improper where unbounded; the likelihood makes the posterior
 proper whenever the fit is determined.
@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from .._jax import float64, jit
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..fitting.losses import Loss, get_loss
@@ -42,8 +42,9 @@ from ..physics.models import Model, get_model
 LOG_NOISE = "ln_noise"
 
 
-class Setup(NamedTuple):
-    """Everything a posterior of ``result`` on ``samples`` needs."""
+class Density(NamedTuple):
+    """The posterior density of ``result``'s parameters given the ``samples`` it was fitted to: what
+    Laplace's approximation and the sampler both start from."""
 
     model: Model
     loss: Loss
@@ -55,7 +56,7 @@ class Setup(NamedTuple):
     n_values: int  # fitted values: real samples × channels with a nonzero weight
 
 
-def setup(result: FitResult, samples: Samples) -> Setup:
+def density_of(result: FitResult, samples: Samples) -> Density:
     """The model, loss and problem of ``result``, checked against ``samples`` (the samples it was fitted to)."""
     if not isinstance(samples, Samples):
         raise BrdfInputError(f"expected Samples (from brdffit.load_samples), got {type(samples).__name__}")
@@ -72,10 +73,10 @@ def setup(result: FitResult, samples: Samples) -> Setup:
     model = get_model(result.model, **result.model_options)
     loss = get_loss(result.loss)
     problem = build_problem(samples)
-    optimum = model.to_sampling(model.params_from_dict(result.params))
+    optimum = model.sampling.from_params(model.dictionary.to_params(result.params))
     n_values = int(_count_weighted(loss, problem))
-    labels = model.sampling_labels(tuple(result.channels))
-    return Setup(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
+    labels = model.sampling.labels(tuple(result.channels))
+    return Density(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
 
 
 @jit(static_argnums=0)
@@ -87,7 +88,7 @@ def _count_weighted(loss: Loss, problem: Problem):
 def chi_squared(model: Model, loss: Loss, v, problem: Problem):
     """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk (JAX)."""
     c = problem.measured.shape[1]
-    return cost(lambda w, chunk: residuals_at(model, loss, model.from_sampling(w, c), chunk), v, problem)
+    return cost(lambda w, chunk: residuals_at(model, loss, model.sampling.to_params(w, c), chunk), v, problem)
 
 
 @cache
@@ -98,7 +99,7 @@ def compiled_chi_squared(model: Model, loss: Loss):
 
 def log_prior(model: Model, v, n_channels: int):
     """Sum of the domains' log priors at the sampling vector ``v`` (JAX); ``-inf`` outside the support."""
-    return sum(domain.log_prior(v[i]) for i, domain in enumerate(model.sampling_domains(n_channels)))
+    return sum(domain.log_prior(v[i]) for i, domain in enumerate(model.sampling.domains(n_channels)))
 
 
 @cache
@@ -107,7 +108,7 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
 
     def one(x, problem, n_values):
         c = problem.measured.shape[1]
-        k = len(model.sampling_domains(c))
+        k = len(model.sampling.domains(c))
         v = x[:k]
         chi2 = chi_squared(model, loss, v, problem)
         if has_sigma:
@@ -121,17 +122,19 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
     return jit(lambda x, problem, n_values: walkers(x, prepared(loss, problem), n_values))
 
 
-def log_probability_function(posterior: Setup):
+def log_probability_function(density: Density):
     """``log_prob(walkers) -> (W,)`` for a (W, D) numpy batch, D the sampling vector's length (+1 for ``ln s``)."""
-    density = compiled_log_density(posterior.model, posterior.loss, posterior.has_sigma)
+    compiled = compiled_log_density(density.model, density.loss, density.has_sigma)
 
+    @float64
     def log_prob(walkers):
-        return np.asarray(density(jnp.asarray(walkers, dtype=jnp.float64), posterior.problem, posterior.n_values))
+        return np.asarray(compiled(jnp.asarray(walkers, dtype=jnp.float64), density.problem, density.n_values))
 
     return log_prob
 
 
+@float64
 def physical_draws(model: Model, draws: np.ndarray, n_channels: int) -> np.ndarray:
     """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical_labels`` order."""
-    convert = jit(jax.vmap(lambda v: model.to_physical_vector(model.from_sampling(v, n_channels))))
+    convert = jit(jax.vmap(lambda v: model.physical.from_params(model.sampling.to_params(v, n_channels))))
     return np.asarray(convert(jnp.asarray(draws, dtype=jnp.float64)))

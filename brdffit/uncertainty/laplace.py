@@ -2,7 +2,7 @@
 
 At the optimum ``v̂`` the posterior is approximated by a Gaussian with
 covariance ``s² (JᵀJ)⁻¹``, with ``J`` the exact Jacobian of the residuals
-(``posterior.py``) and ``s² = Σ r² / (n - k)`` (the reduced χ², n fitted
+(``density.py``) and ``s² = Σ r² / (n - k)`` (the reduced χ², n fitted
 values, k parameters) when the samples carry no ``sigma``; ``s² = 1`` when
 they do, since the residuals are then already in units of σ (Bard 1974,
 *Nonlinear Parameter Estimation*, ch. 7; Press et al., *Numerical Recipes*,
@@ -30,22 +30,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from .._jax import float64, jit
 from ..data.samples import Samples
+from ..errors import UncertaintyWarning
 from ..fitting.losses import Loss
 from ..fitting.problem import Problem, chunks, residuals_at
-from ..fitting.results import FitResult
+from ..fitting.results import FitResult, Uncertainty
 from ..physics.models import Model
-from .density import Setup, compiled_chi_squared, setup
-from .layout import (
-    QUANTILES,
-    correlation,
-    matrix_block,
-    quantile_dict,
-    stderr_dict,
-    strongest_correlation,
-    with_block,
-)
+from . import findings as codes
+from .density import Density, compiled_chi_squared, density_of
+from .findings import Finding
+from .layout import QUANTILES, correlation, stderr_dict, strongest_correlation, uncertainty
 
 #: |correlation| from which a pair of parameters is reported as degenerate (the data fix a combination of them).
 DEGENERATE_CORRELATION = 0.99
@@ -65,18 +60,14 @@ def _mapped(gradient: np.ndarray, covariance_v: np.ndarray) -> np.ndarray:
     return covariance
 
 
-class UncertaintyWarning(UserWarning):
-    """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""
-
-
-def gauss_newton_matrix(posterior: Setup, v) -> np.ndarray:
+def gauss_newton_matrix(density: Density, v) -> np.ndarray:
     """``JᵀJ`` (k, k) of the residuals with respect to the sampling vector, exact (forward mode), chunk by chunk."""
-    return gauss_newton_and_meat(posterior, v)[0]
+    return gauss_newton_and_meat(density, v)[0]
 
 
-def gauss_newton_and_meat(posterior: Setup, v) -> tuple[np.ndarray, np.ndarray]:
+def gauss_newton_and_meat(density: Density, v) -> tuple[np.ndarray, np.ndarray]:
     """``JᵀJ`` and ``Σ_i r_i² J_iᵀJ_i`` (the "meat" of the sandwich covariance), both (k, k)."""
-    hessian, meat = compiled_gauss_newton(posterior.model, posterior.loss)(jnp.asarray(v), posterior.problem)
+    hessian, meat = compiled_gauss_newton(density.model, density.loss)(v, density.problem)
     return np.asarray(hessian), np.asarray(meat)
 
 
@@ -89,7 +80,7 @@ def compiled_gauss_newton(model: Model, loss: Loss):
         c = problem.measured.shape[1]
 
         def residual(w, chunk):
-            return residuals_at(model, loss, model.from_sampling(w, c), chunk).ravel().astype(jnp.float64)
+            return residuals_at(model, loss, model.sampling.to_params(w, c), chunk).ravel().astype(jnp.float64)
 
         def accumulate(totals, chunk):
             r = residual(v, chunk)
@@ -133,17 +124,17 @@ def inverse_with_null_space(matrix: np.ndarray, labels: list[str]) -> tuple[np.n
 
 
 def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
-    """``result`` with the Laplace ``uncertainty`` block (SPEC section 5); ``samples`` are those it was fitted to.
+    """``result`` with its Laplace :class:`~brdffit.fitting.results.Uncertainty`; ``samples`` are those it was
+    fitted to.
 
-    Warns (:class:`UncertaintyWarning`) about degenerate pairs, undetermined
-    parameters and a fit that did not converge; the warnings are also written
-    to the block.
+    Warns (:class:`~brdffit.UncertaintyWarning`) about degenerate pairs, undetermined parameters and a fit
+    that did not converge; the warnings are also the block's ``warnings``.
     """
-    posterior = setup(result, samples)
-    block = laplace_block(result, posterior)
-    for message in block["warnings"]:
-        warnings.warn(message, UncertaintyWarning, stacklevel=2)
-    return with_block(result, block)
+    with float64():
+        estimate, found = laplace_estimate(result, density_of(result, samples))
+    for finding in found:
+        warnings.warn(finding.message, UncertaintyWarning, stacklevel=2)
+    return result.with_uncertainty(estimate)
 
 
 class Curvature(NamedTuple):
@@ -156,26 +147,30 @@ class Curvature(NamedTuple):
     condition: float  # of the correlation-scaled JᵀJ
 
 
-def curvature_at_optimum(posterior: Setup) -> Curvature:
-    v = jnp.asarray(posterior.optimum)
-    chi2 = float(compiled_chi_squared(posterior.model, posterior.loss)(v, posterior.problem))
-    hessian, meat = gauss_newton_and_meat(posterior, v)
-    inverse, undetermined, condition = inverse_with_null_space(hessian, posterior.labels)
+@float64
+def curvature_at_optimum(density: Density) -> Curvature:
+    v = np.asarray(density.optimum)
+    chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem))
+    hessian, meat = gauss_newton_and_meat(density, v)
+    inverse, undetermined, condition = inverse_with_null_space(hessian, density.labels)
     return Curvature(chi2, inverse, meat, undetermined, condition)
 
 
-def laplace_block(result: FitResult, posterior: Setup, curvature: Curvature | None = None) -> dict:
-    """The Laplace ``uncertainty`` block; ``curvature``: :func:`curvature_at_optimum`, when already computed."""
-    model, c, labels = posterior.model, posterior.n_channels, posterior.labels
-    v = jnp.asarray(posterior.optimum)
+@float64
+def laplace_estimate(
+    result: FitResult, density: Density, curvature: Curvature | None = None
+) -> tuple[Uncertainty, list[Finding]]:
+    """The Laplace estimate and what it warns about; ``curvature``: :func:`curvature_at_optimum`, when known."""
+    model, c, labels = density.model, density.n_channels, density.labels
+    v = jnp.asarray(density.optimum)
     k = v.shape[0]
-    chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(posterior)
-    dof = posterior.n_values - k
+    chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(density)
+    dof = density.n_values - k
     reduced = chi2 / dof if dof > 0 else float("nan")
-    variance_scale = 1.0 if posterior.has_sigma else reduced
+    variance_scale = 1.0 if density.has_sigma else reduced
     covariance_v = variance_scale * inverse
     # The delta method from the sampling coordinates to the physical ones (a no-op except for Lafortune's ψ).
-    to_physical = lambda w: model.to_physical_vector(model.from_sampling(w, c))
+    to_physical = lambda w: model.physical.from_params(model.sampling.to_params(w, c))
     physical = np.asarray(to_physical(v))
     gradient = np.asarray(jax.jacfwd(to_physical)(v))
     covariance = _mapped(gradient, covariance_v)
@@ -184,52 +179,73 @@ def laplace_block(result: FitResult, posterior: Setup, curvature: Curvature | No
     robust = np.sqrt(np.diag(_mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))))
     robust[np.isnan(stderr)] = np.nan
 
-    messages = []
+    found = []
     if not result.converged:
-        messages.append("the fit did not converge: the uncertainty describes the point where it stopped")
-    if dof <= 0 and not posterior.has_sigma:
-        messages.append(f"{posterior.n_values} values cannot estimate the noise of {k} parameters; give a sigma column")
-    if undetermined:
-        messages.append(
-            f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
-            " its error is reported as null"
+        found.append(
+            Finding(
+                codes.NOT_CONVERGED, "the fit did not converge: the uncertainty describes the point where it stopped"
+            )
         )
-    names = model.physical_labels(tuple(result.channels))
+    if dof <= 0 and not density.has_sigma:
+        found.append(
+            Finding(
+                codes.NO_DEGREES_OF_FREEDOM,
+                f"{density.n_values} values cannot estimate the noise of {k} parameters; give a sigma column",
+            )
+        )
+    if undetermined:
+        found.append(
+            Finding(
+                codes.UNDETERMINED,
+                f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
+                " its error is reported as null",
+            )
+        )
+    names = model.physical.labels(tuple(result.channels))
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(np.isfinite(robust / stderr), robust / stderr, 0.0)
-    if not posterior.has_sigma and ratio.max(initial=0.0) > HETEROSCEDASTIC_RATIO:
+    if not density.has_sigma and ratio.max(initial=0.0) > HETEROSCEDASTIC_RATIO:
         worst = int(np.argmax(ratio))
-        messages.append(
-            f"without sigma the errors assume the same scatter for every residual, but the residuals' scatter varies"
-            f" (e.g. noise proportional to the signal): the heteroscedasticity-robust (sandwich) error of"
-            f" {names[worst]} is {ratio[worst]:.1f}× the reported one (diagnostics.robust_stderr); give a sigma column"
-            " for calibrated errors"
+        found.append(
+            Finding(
+                codes.HETEROSCEDASTIC,
+                "without sigma the errors assume the same scatter for every residual, but the residuals' scatter"
+                " varies (e.g. noise proportional to the signal): the heteroscedasticity-robust (sandwich) error of"
+                f" {names[worst]} is {ratio[worst]:.1f}× the reported one (diagnostics.robust_stderr); give a sigma"
+                " column for calibrated errors",
+            )
         )
     pair = strongest_correlation(labels, correlation(covariance_v))
     if pair is not None and abs(pair[2]) >= DEGENERATE_CORRELATION:
-        messages.append(
-            f"{pair[0]} and {pair[1]} are nearly degenerate (correlation {pair[2]:+.4f}): the samples fix a"
-            " combination of them, so their errors are large and shared; samples at other angles would separate"
-            " them"
+        found.append(
+            Finding(
+                codes.DEGENERATE,
+                f"{pair[0]} and {pair[1]} are nearly degenerate (correlation {pair[2]:+.4f}): the samples fix a"
+                " combination of them, so their errors are large and shared; samples at other angles would separate"
+                " them",
+            )
         )
     z = np.array([NormalDist().inv_cdf(q) for q in QUANTILES])
     quantiles = physical[None, :] + z[:, None] * stderr[None, :]
     # The Gaussian knows no bounds; its quantiles are clipped to each parameter's domain (an albedo stays ≥ 0).
-    bounds = np.array([domain.bounds for domain in model.physical_domains(c)])
+    bounds = np.array([domain.bounds for domain in model.physical.domains(c)])
     quantiles = np.clip(quantiles, bounds[:, 0], bounds[:, 1])
-    return {
-        "method": "laplace",
-        "stderr": stderr_dict(model, stderr, c),
-        "quantiles": quantile_dict(model, quantiles, c),
-        "covariance": matrix_block(names, covariance),
-        "correlation": matrix_block(names, correlation(covariance)),
-        "diagnostics": {
-            "reduced_chi2": reduced,
-            "dof": dof,
-            "noise_scale": None if posterior.has_sigma else float(np.sqrt(reduced)),
-            "condition_number": condition,
-            "robust_stderr": None if posterior.has_sigma else stderr_dict(model, robust, c),
-            "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
-        },
-        "warnings": messages,
+    diagnostics = {
+        "reduced_chi2": reduced,
+        "dof": dof,
+        "noise_scale": None if density.has_sigma else float(np.sqrt(reduced)),
+        "condition_number": condition,
+        "robust_stderr": None if density.has_sigma else stderr_dict(model, robust, c),
+        "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
     }
+    estimate = uncertainty(
+        "laplace",
+        model,
+        tuple(result.channels),
+        stderr=stderr,
+        quantiles=quantiles,
+        covariance=covariance,
+        diagnostics=diagnostics,
+        findings=found,
+    )
+    return estimate, found

@@ -1,33 +1,39 @@
-"""The ``uncertainty`` block of the result file (SPEC section 5), from draws or a covariance.
+"""An uncertainty estimate laid out as the result file holds it, from draws or a covariance.
 
 Standard errors and quantiles take the layout of ``params`` (per-channel
 values as lists in channel order, Lafortune lobes as a list); the covariance
 and correlation matrices are over the flat physical parameters
-(``Model.physical_labels``). Values that cannot be determined (a parameter the
+(``Model.physical``). Values that cannot be determined (a parameter the
 data do not constrain) are written as ``null``.
 """
 
 import math
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from ..fitting.results import FitResult
+from ..fitting.results import Uncertainty
 from ..physics.models import Model
+from .findings import Finding, messages
 
 #: The quantiles written for every parameter: the median and the central 68% and 95% intervals.
 QUANTILES = (0.025, 0.16, 0.5, 0.84, 0.975)
 
 
+def params_layout(model: Model, values: np.ndarray, n_channels: int) -> dict[str, Any]:
+    """A flat physical vector (one value per ``model.physical.labels``) in the layout of ``params``."""
+    physical = model.physical.to_params(np.asarray(values, dtype=float), n_channels)
+    return model.dictionary.from_params(physical)
+
+
 def stderr_dict(model: Model, stderr: np.ndarray, n_channels: int) -> dict[str, Any]:
     """Standard errors in the layout of ``params``."""
-    return json_ready(model.dict_from_physical_vector(stderr, n_channels))
+    return json_ready(params_layout(model, stderr, n_channels))
 
 
 def quantile_dict(model: Model, values_per_quantile: np.ndarray, n_channels: int) -> dict[str, Any]:
     """``{name: {"0.16": value-or-list, …}}`` from a (len(QUANTILES), p) array of physical vectors."""
-    layouts = [model.dict_from_physical_vector(row, n_channels) for row in values_per_quantile]
+    layouts = [params_layout(model, row, n_channels) for row in values_per_quantile]
 
     def nest(items):
         first = items[0]
@@ -79,6 +85,26 @@ def json_ready(value: Any) -> Any:
     return value if math.isfinite(value) else None
 
 
-def with_block(result: FitResult, block: dict[str, Any]) -> FitResult:
-    """``result`` carrying ``block`` as its ``uncertainty`` (made JSON-ready)."""
-    return replace(result, uncertainty=json_ready(block))
+def uncertainty(
+    method: str,
+    model: Model,
+    channels: tuple[str, ...],
+    *,
+    stderr: np.ndarray,
+    quantiles: np.ndarray,
+    covariance: np.ndarray,
+    diagnostics: dict[str, Any],
+    findings: list[Finding],
+) -> Uncertainty:
+    """An :class:`Uncertainty` from flat physical vectors: ``stderr`` (p,), ``quantiles`` (len(QUANTILES), p) and
+    the ``covariance`` (p, p), laid out as the result file holds them (NaN becomes None)."""
+    names, n_channels = model.physical.labels(tuple(channels)), len(channels)
+    return Uncertainty(
+        method=method,
+        stderr=stderr_dict(model, stderr, n_channels),
+        quantiles=quantile_dict(model, quantiles, n_channels),
+        covariance=matrix_block(names, covariance),
+        correlation=matrix_block(names, correlation(covariance)),
+        diagnostics=json_ready(diagnostics),
+        warnings=messages(findings),
+    )

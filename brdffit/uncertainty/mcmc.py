@@ -3,11 +3,13 @@
 The walkers of emcee's affine-invariant ensemble sampler (Goodman & Weare
 2010) start in a small Gaussian ball around the Levenberg-Marquardt optimum
 (a tenth of the Laplace standard errors wide, ``laplace.py``) and move over
-the posterior of ``posterior.py``, whose log density is jit-compiled and
+the posterior of ``density.py``, whose log density is jit-compiled and
 evaluates every walker of a move at once. The first ``burn`` steps are
 discarded and the rest thinned by ``thin``.
 
-Diagnostics: the mean acceptance fraction, the integrated autocorrelation
+Three steps, one function each: :func:`run_chain` samples (and writes the chain file),
+:func:`diagnose` judges the chain, :func:`mcmc_estimate` lays the draws out as the result's
+uncertainty. Diagnostics: the mean acceptance fraction, the integrated autocorrelation
 time τ of each coordinate (emcee's estimator, Sokal 1989) and the effective
 sample size ``walkers · (steps - burn) / τ``. emcee's own guideline is a chain
 of at least 50 τ; a shorter one gets a warning.
@@ -17,25 +19,21 @@ import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-from .. import _jax  # noqa: F401  (float64 before any array)
 from .._files import atomic_path
+from .._jax import float64
 from ..checks import whole_number
 from ..data.samples import Samples
-from ..errors import BrdfInputError
-from ..fitting.results import FitResult
-from .density import LOG_NOISE, Setup, log_probability_function, physical_draws, setup
-from .laplace import Curvature, UncertaintyWarning, curvature_at_optimum, laplace_block
-from .layout import (
-    QUANTILES,
-    correlation,
-    matrix_block,
-    quantile_dict,
-    stderr_dict,
-    with_block,
-)
+from ..errors import Argument, BrdfInputError, UncertaintyWarning
+from ..fitting.results import FitResult, Uncertainty
+from . import findings as codes
+from .density import LOG_NOISE, Density, density_of, log_probability_function, physical_draws
+from .findings import Finding
+from .laplace import Curvature, curvature_at_optimum, laplace_estimate
+from .layout import QUANTILES, uncertainty
 
 #: emcee's guideline: a chain should be at least this many autocorrelation times long.
 MIN_AUTOCORRELATION_TIMES = 50
@@ -43,11 +41,13 @@ MIN_AUTOCORRELATION_TIMES = 50
 BALL = 0.1
 #: Chain file suffixes: numpy's .npz, or emcee's HDF5 backend.
 CHAIN_SUFFIXES = (".npz", ".h5", ".hdf5")
+#: Below this mean acceptance fraction the walkers hardly move.
+LOW_ACCEPTANCE = 0.1
 
 
 @dataclass(frozen=True)
 class MCMC:
-    """Settings of the posterior sampler (``--walkers``, ``--steps``, ``--burn``, ``--thin``, ``--seed``).
+    """Settings of the posterior sampler.
 
     ``walkers`` must be at least twice the number of sampled coordinates
     (emcee's requirement); ``burn`` steps are discarded, the rest kept every
@@ -61,44 +61,46 @@ class MCMC:
     seed: int = 0
 
     def __post_init__(self):
-        whole_number("--walkers", self.walkers, 2)
-        whole_number("--steps", self.steps, 1)
-        whole_number("--burn", self.burn, 0)
-        whole_number("--thin", self.thin, 1)
-        whole_number("--seed", self.seed, 0)
+        for name, minimum in (("walkers", 2), ("steps", 1), ("burn", 0), ("thin", 1), ("seed", 0)):
+            object.__setattr__(self, name, whole_number(name, getattr(self, name), minimum))
         if self.burn >= self.steps:
-            raise BrdfInputError(f"--burn {self.burn} must be less than --steps {self.steps}")
+            raise BrdfInputError(
+                Argument("burn", str(self.burn)), " must be less than ", Argument("steps", str(self.steps))
+            )
         if (self.steps - self.burn) // self.thin < 1:
-            raise BrdfInputError(f"--thin {self.thin} keeps no step of the {self.steps - self.burn} after burn-in")
+            raise BrdfInputError(
+                Argument("thin", str(self.thin)), f" keeps no step of the {self.steps - self.burn} after burn-in"
+            )
 
 
-def sampled_labels(model, samples: Samples) -> list[str]:
-    """The coordinates the walkers move on ``samples``: the sampling vector, and ``ln s`` without sigma."""
-    return model.sampling_labels(tuple(samples.channels)) + ([] if samples.sigma is not None else [LOG_NOISE])
+def sampled_labels(sampling_labels: list[str], has_sigma: bool) -> list[str]:
+    """The coordinates the walkers move: the sampling vector's, and the noise's ``ln s`` without sigma."""
+    return sampling_labels + ([] if has_sigma else [LOG_NOISE])
 
 
 def check_walkers(settings: MCMC, model, samples: Samples) -> None:
     """emcee needs at least two walkers per sampled coordinate."""
-    n_dimensions = len(sampled_labels(model, samples))
+    n_dimensions = len(sampled_labels(model.sampling.labels(samples.channels), samples.sigma is not None))
     if settings.walkers < 2 * n_dimensions:
         raise BrdfInputError(
-            f"--walkers {settings.walkers} is too few for {n_dimensions} sampled parameters; give at least"
-            f" {2 * n_dimensions}"
+            Argument("walkers", str(settings.walkers)),
+            f" is too few for {n_dimensions} sampled parameters; give at least {2 * n_dimensions}",
         )
 
 
 def check_chain_path(path) -> Path:
     """``path`` if its suffix names a chain format and its folder exists; a one-line error otherwise."""
     path = Path(path)
+    where = Argument("chain", str(path))
     if path.suffix.lower() not in CHAIN_SUFFIXES:
-        raise BrdfInputError(f"--chain {path}: the file must end in {', '.join(CHAIN_SUFFIXES)}")
+        raise BrdfInputError(where, f": the file must end in {', '.join(CHAIN_SUFFIXES)}")
     if not path.parent.is_dir():
-        raise BrdfInputError(f"--chain {path}: folder {path.parent} does not exist")
+        raise BrdfInputError(where, f": folder {path.parent} does not exist")
     if path.suffix.lower() != ".npz":
         try:
             import h5py  # noqa: F401
         except ImportError:
-            raise BrdfInputError(f"--chain {path}: HDF5 needs h5py (pip install h5py), or use .npz") from None
+            raise BrdfInputError(where, ": HDF5 needs h5py (pip install h5py), or use .npz") from None
     return path
 
 
@@ -110,28 +112,49 @@ def sample_posterior(
     chain: str | os.PathLike | None = None,
     progress: bool = False,
 ) -> FitResult:
-    """``result`` with the MCMC ``uncertainty`` block (SPEC section 5) and its posterior draws.
+    """``result`` with its MCMC :class:`~brdffit.fitting.results.Uncertainty` and the draws behind it.
 
     ``samples`` are those ``result`` was fitted to. ``chain``: save the whole
     chain (burn-in included) to a ``.npz`` file or emcee's HDF5 backend
     (``.h5``). ``progress``: show a progress bar. Warns
-    (:class:`~brdffit.laplace.UncertaintyWarning`) when the chain is shorter
-    than 50 autocorrelation times; the warnings are also written to the block.
+    (:class:`~brdffit.UncertaintyWarning`) when the chain is shorter
+    than 50 autocorrelation times; the warnings are also the estimate's ``warnings``.
     The draws (physical parameters, burn-in dropped, thinned) are
-    ``result.posterior``, in the order of ``uncertainty["covariance"]["names"]``.
+    ``result.draws``, in the order of ``uncertainty.covariance["names"]``.
     """
     settings = settings or MCMC()
     chain_path = None if chain is None else check_chain_path(chain)
-    posterior = setup(result, samples)
-    check_walkers(settings, posterior.model, samples)
-    block, draws = mcmc_block(result, posterior, settings, chain_path, progress)
-    for message in block["warnings"]:
-        warnings.warn(message, UncertaintyWarning, stacklevel=2)
-    return with_block(result, block).with_posterior(draws)
+    with float64():
+        density = density_of(result, samples)
+        check_walkers(settings, density.model, samples)
+        estimate, found, draws = posterior_estimate(result, density, settings, chain_path, progress)
+    for finding in found:
+        warnings.warn(finding.message, UncertaintyWarning, stacklevel=2)
+    return result.with_uncertainty(estimate, draws)
+
+
+def posterior_estimate(
+    result: FitResult, density: Density, settings: MCMC, chain_path: Path | None, progress: bool
+) -> tuple[Uncertainty, list[Finding], np.ndarray]:
+    """Sample, diagnose and lay out: the estimate, what it warns about, and the draws (S, p)."""
+    curvature = curvature_at_optimum(density)  # one pass: the start ball's widths and Laplace's findings
+    chain = run_chain(density, curvature, settings, chain_path, progress)
+    diagnosis = diagnose(chain, settings, sampled_labels(density.labels, density.has_sigma))
+    # What Laplace's approximation finds at the optimum holds for the posterior too: an undetermined parameter
+    # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
+    _, at_optimum = laplace_estimate(result, density, curvature)
+    found = [finding for finding in at_optimum if finding.code != codes.NOT_CONVERGED]
+    if not result.converged:
+        found.insert(
+            0,
+            Finding(codes.NOT_CONVERGED, "the fit did not converge: the chain started from the point where it stopped"),
+        )
+    found += diagnosis.findings
+    return mcmc_estimate(result, density, settings, chain, diagnosis, found)
 
 
 def start_ball(
-    posterior: Setup, curvature: Curvature, settings: MCMC, n_dimensions: int, rng: np.random.Generator, log_prob
+    density: Density, curvature: Curvature, settings: MCMC, n_dimensions: int, rng: np.random.Generator, log_prob
 ) -> np.ndarray:
     """Walker starts (W, D) with finite posterior density: the optimum plus Gaussian offsets of :data:`BALL`
     Laplace standard errors, no wider than a tenth of a bounded domain or of a positive value's magnitude.
@@ -139,11 +162,11 @@ def start_ball(
     A walker that still lands outside the prior's support (an optimum on a bound) is drawn again, in a ball
     halved each time; a walker with density ``-inf`` would never move and would poison the draws.
     """
-    v = posterior.optimum
-    noise2 = 1.0 if posterior.has_sigma else curvature.chi2 / max(posterior.n_values - v.size, 1)
+    v = density.optimum
+    noise2 = 1.0 if density.has_sigma else curvature.chi2 / max(density.n_values - v.size, 1)
     width = BALL * np.sqrt(noise2 * np.diag(curvature.inverse))
     limits = []
-    for value, domain in zip(v, posterior.model.sampling_domains(posterior.n_channels), strict=True):
+    for value, domain in zip(v, density.model.sampling.domains(density.n_channels), strict=True):
         lower, upper = domain.bounds
         limits.append(BALL * (upper - lower) if np.isfinite(upper) else BALL * max(abs(value), 1e-3))
     fallback = 1e-4 * np.maximum(np.abs(v), 1e-3)  # where the Laplace error is undetermined
@@ -151,7 +174,7 @@ def start_ball(
     centre = v
     if n_dimensions > v.size:  # ln s, known to about 1/sqrt(2n)
         centre = np.append(v, 0.5 * np.log(noise2))
-        width = np.append(width, BALL / np.sqrt(2.0 * posterior.n_values))
+        width = np.append(width, BALL / np.sqrt(2.0 * density.n_values))
     walkers = centre + width * rng.standard_normal((settings.walkers, n_dimensions))
     for attempt in range(1, 60):
         bad = ~np.isfinite(log_prob(walkers))
@@ -161,91 +184,110 @@ def start_ball(
     raise BrdfInputError("the posterior density is -inf around the fitted parameters; the fit cannot be sampled")
 
 
-def mcmc_block(
-    result: FitResult, posterior: Setup, settings: MCMC, chain_path: Path | None, progress: bool
-) -> tuple[dict, np.ndarray]:
+class Chain(NamedTuple):
+    """A sampler's whole run: positions (steps, walkers, D) and each walker's acceptance fraction."""
+
+    positions: np.ndarray
+    acceptance: np.ndarray
+
+
+def run_chain(density: Density, curvature: Curvature, settings: MCMC, chain_path: Path | None, progress: bool) -> Chain:
+    """Run emcee from the start ball; with ``chain_path``, the whole chain is written there (atomically)."""
     import emcee
 
-    model, c = posterior.model, posterior.n_channels
-    labels = posterior.labels + ([] if posterior.has_sigma else [LOG_NOISE])
+    labels = sampled_labels(density.labels, density.has_sigma)
     n_dimensions = len(labels)
     rng = np.random.default_rng(settings.seed)
-    log_prob = log_probability_function(posterior)
-    curvature = curvature_at_optimum(posterior)  # one pass: the start ball's widths and Laplace's warnings
-    start = start_ball(posterior, curvature, settings, n_dimensions, rng, log_prob)
-
+    log_prob = log_probability_function(density)
+    start = start_ball(density, curvature, settings, n_dimensions, rng, log_prob)
     if chain_path is None:
-        chain, accepted = _chain_of(run_sampler(settings, start, log_prob, progress))
-    else:
-        with atomic_path(chain_path) as temporary:
-            if chain_path.suffix.lower() == ".npz":
-                sampler = run_sampler(settings, start, log_prob, progress)
-                save_chain(temporary, sampler, labels, settings)
-            else:  # emcee's HDF5 backend writes as it goes, into the temporary file
-                temporary.unlink()
-                backend = emcee.backends.HDFBackend(str(temporary))
-                backend.reset(settings.walkers, n_dimensions)
-                sampler = run_sampler(settings, start, log_prob, progress, backend)
-            chain, accepted = _chain_of(sampler)  # read before the file is renamed
+        return _chain_of(run_sampler(settings, start, log_prob, progress))
+    with atomic_path(chain_path) as temporary:
+        if chain_path.suffix.lower() == ".npz":
+            sampler = run_sampler(settings, start, log_prob, progress)
+            save_chain(temporary, sampler, labels, settings)
+        else:  # emcee's HDF5 backend writes as it goes, into the temporary file
+            temporary.unlink()
+            backend = emcee.backends.HDFBackend(str(temporary))
+            backend.reset(settings.walkers, n_dimensions)
+            sampler = run_sampler(settings, start, log_prob, progress, backend)
+        return _chain_of(sampler)  # read before the file is renamed
+
+
+class Diagnosis(NamedTuple):
+    """How well a chain explored the posterior."""
+
+    autocorr_time: np.ndarray  # τ per coordinate, steps
+    effective_samples: np.ndarray  # walkers · (steps - burn) / τ
+    acceptance: float  # the mean acceptance fraction
+    findings: list[Finding]
+
+
+def diagnose(chain: Chain, settings: MCMC, labels: list[str]) -> Diagnosis:
+    """Autocorrelation times, effective sample sizes and acceptance, with a warning for a short or stuck chain."""
+    import emcee
 
     after_burn = settings.steps - settings.burn
-    kept = chain[settings.burn + settings.thin - 1 :: settings.thin].reshape(-1, n_dimensions)  # as emcee's get_chain
-    draws = physical_draws(model, kept[:, : posterior.optimum.size], c)
-    tau = emcee.autocorr.integrated_time(chain[settings.burn :], tol=0)
+    tau = emcee.autocorr.integrated_time(chain.positions[settings.burn :], tol=0)
     effective = settings.walkers * after_burn / tau
-    acceptance = float(np.mean(accepted))
-
-    messages = []
-    if not result.converged:
-        messages.append("the fit did not converge: the chain started from the point where it stopped")
-    # What the Laplace approximation finds at the optimum holds for the posterior too: an undetermined parameter
-    # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
-    messages += [
-        message
-        for message in laplace_block(result, posterior, curvature)["warnings"]
-        if "did not converge" not in message
-    ]
+    acceptance = float(np.mean(chain.acceptance))
+    found = []
     longest = int(np.argmax(tau))
     if after_burn < MIN_AUTOCORRELATION_TIMES * tau[longest]:
         needed = int(np.ceil(MIN_AUTOCORRELATION_TIMES * tau[longest])) + settings.burn
-        messages.append(
-            f"the chain is shorter than {MIN_AUTOCORRELATION_TIMES} autocorrelation times ({after_burn} steps after"
-            f" burn-in, τ = {tau[longest]:.0f} steps for {labels[longest]}): the quantiles are rough; run"
-            f" --steps {needed} or more"
+        found.append(
+            Finding(
+                codes.SHORT_CHAIN,
+                f"the chain is shorter than {MIN_AUTOCORRELATION_TIMES} autocorrelation times ({after_burn} steps"
+                f" after burn-in, τ = {tau[longest]:.0f} steps for {labels[longest]}): the quantiles are rough;"
+                f" run {needed} steps or more",
+            )
         )
-    if acceptance < 0.1:
-        messages.append(f"the acceptance fraction is {acceptance:.2f}: the walkers hardly move")
+    if acceptance < LOW_ACCEPTANCE:
+        found.append(
+            Finding(codes.LOW_ACCEPTANCE, f"the acceptance fraction is {acceptance:.2f}: the walkers hardly move")
+        )
+    return Diagnosis(tau, effective, acceptance, found)
 
-    names = model.physical_labels(tuple(result.channels))
+
+def mcmc_estimate(
+    result: FitResult, density: Density, settings: MCMC, chain: Chain, diagnosis: Diagnosis, found: list[Finding]
+) -> tuple[Uncertainty, list[Finding], np.ndarray]:
+    """The draws after burn-in and thinning as the result's uncertainty; returns it, ``found`` and the draws."""
+    model, c = density.model, density.n_channels
+    n_dimensions = chain.positions.shape[2]
+    kept = chain.positions[settings.burn + settings.thin - 1 :: settings.thin].reshape(-1, n_dimensions)  # as emcee
+    draws = physical_draws(model, kept[:, : density.optimum.size], c)
     covariance = np.atleast_2d(np.cov(draws, rowvar=False))
-    noise = {} if posterior.has_sigma else {"noise_scale": _noise_quantiles(kept[:, -1])}
-    block = {
-        "method": "mcmc",
-        "stderr": stderr_dict(model, np.std(draws, axis=0, ddof=1), c),
-        "quantiles": quantile_dict(model, np.quantile(draws, QUANTILES, axis=0), c),
-        "covariance": matrix_block(names, covariance),
-        "correlation": matrix_block(names, correlation(covariance)),
-        "diagnostics": {
-            "acceptance": acceptance,
-            "sampled": labels,
-            "autocorr_time": tau.tolist(),
-            "effective_samples": effective.tolist(),
-            "n_walkers": settings.walkers,
-            "n_steps": settings.steps,
-            "burn": settings.burn,
-            "thin": settings.thin,
-            "seed": settings.seed,
-            "n_draws": int(kept.shape[0]),
-        }
-        | noise,
-        "warnings": messages,
-    }
-    return block, draws
+    noise = {} if density.has_sigma else {"noise_scale": _noise_quantiles(kept[:, -1])}
+    diagnostics = {
+        "acceptance": diagnosis.acceptance,
+        "sampled": sampled_labels(density.labels, density.has_sigma),
+        "autocorr_time": diagnosis.autocorr_time.tolist(),
+        "effective_samples": diagnosis.effective_samples.tolist(),
+        "n_walkers": settings.walkers,
+        "n_steps": settings.steps,
+        "burn": settings.burn,
+        "thin": settings.thin,
+        "seed": settings.seed,
+        "n_draws": int(kept.shape[0]),
+    } | noise
+    estimate = uncertainty(
+        "mcmc",
+        model,
+        tuple(result.channels),
+        stderr=np.std(draws, axis=0, ddof=1),
+        quantiles=np.quantile(draws, QUANTILES, axis=0),
+        covariance=covariance,
+        diagnostics=diagnostics,
+        findings=found,
+    )
+    return estimate, found, draws
 
 
-def _chain_of(sampler) -> tuple[np.ndarray, np.ndarray]:
+def _chain_of(sampler) -> Chain:
     """The whole chain (steps, walkers, D) and each walker's acceptance fraction, in memory."""
-    return sampler.get_chain(), np.asarray(sampler.acceptance_fraction)
+    return Chain(sampler.get_chain(), np.asarray(sampler.acceptance_fraction))
 
 
 def run_sampler(settings: MCMC, start: np.ndarray, log_prob, progress: bool, backend=None):

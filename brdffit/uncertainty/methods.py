@@ -1,9 +1,14 @@
-"""Uncertainty of a fit, by either method: ``laplace`` (``laplace.py``) or ``mcmc`` (``mcmc.py``)."""
+"""The uncertainty of a fit, by either method: ``laplace`` (``laplace.py``) or ``mcmc`` (``mcmc.py``).
+
+:func:`with_uncertainty` is the one place that applies a method to a result; the public ``brdffit.fit``
+and ``brdffit.fit_batch`` (``brdffit/api.py``) and the command line all come through it.
+"""
 
 import os
 
+from ..checks import choice
 from ..data.samples import Samples
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
 from .laplace import laplace_uncertainty
 from .mcmc import MCMC, check_chain_path, sample_posterior
@@ -11,18 +16,19 @@ from .mcmc import MCMC, check_chain_path, sample_posterior
 METHODS = ("laplace", "mcmc")
 
 
-def check_method(method: str | None) -> str | None:
-    if isinstance(method, MCMC):
-        raise BrdfInputError("uncertainty takes 'laplace' or 'mcmc'; pass MCMC settings as mcmc=brdffit.MCMC(...)")
-    if method is not None and method not in METHODS:
-        raise BrdfInputError(f"--uncertainty {method!r} is not allowed; choose one of: {', '.join(METHODS)}")
-    return method
-
-
 def check_options(method: str | None, mcmc: MCMC | None = None, chain: str | os.PathLike | None = None) -> None:
-    """The API's uncertainty arguments, checked before any work: the method, MCMC settings only with ``"mcmc"``,
+    """The uncertainty arguments, checked before any work: the method, MCMC settings only with ``"mcmc"``,
     and a chain file the sampler can write."""
-    check_method(method)
+    if isinstance(method, MCMC):
+        raise BrdfInputError(
+            Argument("uncertainty"),
+            " takes 'laplace' or 'mcmc'; pass MCMC settings as ",
+            Argument("mcmc", "brdffit.MCMC(...)"),
+        )
+    if method is not None:
+        choice("uncertainty", method, METHODS)
+    if mcmc is not None and not isinstance(mcmc, MCMC):
+        raise BrdfInputError(Argument("mcmc"), f" must be brdffit.MCMC(...), got {type(mcmc).__name__}")
     if method != "mcmc" and (mcmc is not None or chain is not None):
         raise BrdfInputError("mcmc settings and chain apply only to uncertainty='mcmc'")
     if chain is not None:
@@ -38,10 +44,9 @@ def with_uncertainty(
     chain: str | os.PathLike | None = None,
     progress: bool = False,
 ) -> FitResult:
-    """``result`` with its ``uncertainty`` block by ``method``; ``samples`` are those it was fitted to.
+    """``result`` with its uncertainty by ``method``; ``samples`` are those it was fitted to (after ``max_theta``).
 
-    ``mcmc``, ``chain`` and ``progress`` apply to ``method="mcmc"`` (see
-    :func:`brdffit.sample_posterior`).
+    ``mcmc``, ``chain`` and ``progress`` apply to ``method="mcmc"`` (see :func:`brdffit.sample_posterior`).
     """
     check_options(method, mcmc, chain)
     if method == "laplace":

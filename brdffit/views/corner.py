@@ -1,4 +1,4 @@
-"""Figures: the corner plot of a fit's posterior (Foreman-Mackey 2016, the ``corner`` package)."""
+"""The corner plot of a fit's posterior (Foreman-Mackey 2016, the ``corner`` package)."""
 
 import logging
 import os
@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from .._files import atomic_path
-from ..errors import BrdfInputError
+from .._jax import float64
+from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
 
 #: File types ``corner_plot`` writes (matplotlib chooses the format by suffix).
@@ -16,19 +17,21 @@ FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 GAUSSIAN_DRAWS = 20_000
 
 
-def check_figure_path(path, option: str = "--corner") -> Path:
+def check_figure_path(path, argument: str = "path") -> Path:
+    """``path`` if matplotlib can write its suffix and its folder exists; ``argument`` names it in errors."""
     path = Path(path)
+    where = Argument(argument, str(path))
     if path.suffix.lower() not in FIGURE_SUFFIXES:
-        raise BrdfInputError(f"{option} {path}: the file must end in {', '.join(FIGURE_SUFFIXES)}")
+        raise BrdfInputError(where, f": the file must end in {', '.join(FIGURE_SUFFIXES)}")
     if not path.parent.is_dir():
-        raise BrdfInputError(f"{option} {path}: folder {path.parent} does not exist")
+        raise BrdfInputError(where, f": folder {path.parent} does not exist")
     return path
 
 
 def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, truths=None, seed: int = 0):
     """The corner plot of ``result``'s posterior: every pair of physical parameters, the LM optimum marked.
 
-    Draws are the MCMC ones (``result.posterior``) or, for a Laplace result,
+    Draws are the MCMC ones (``result.draws``) or, for a Laplace result,
     :data:`GAUSSIAN_DRAWS` seeded draws from its Gaussian. Parameters the data
     do not determine are left out. ``truths``: a flat vector (covariance order)
     to mark instead of the optimum. ``path``: also save it (atomically).
@@ -37,13 +40,15 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
     if path is not None:
         path = check_figure_path(path)
     if not result.uncertainty:
-        raise BrdfInputError("a corner plot needs an uncertainty estimate; fit with --uncertainty mcmc (or laplace)")
+        raise BrdfInputError(
+            "a corner plot needs an uncertainty estimate; fit with ", Argument("uncertainty", "mcmc"), " (or laplace)"
+        )
     import corner
 
     names = result.uncertainty["covariance"]["names"]
     optimum = _flat_parameters(result)
-    if result.posterior is not None:
-        draws = result.posterior
+    if result.draws is not None:
+        draws = result.draws
     else:
         covariance = np.array(result.uncertainty["covariance"]["matrix"], dtype=float)  # None → NaN
         known = np.isfinite(np.diag(covariance))
@@ -77,7 +82,7 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
         finally:
             root.setLevel(level)
     method = result.uncertainty.get("method", "")
-    what = "MCMC posterior" if result.posterior is not None else f"{method} Gaussian"
+    what = "MCMC posterior" if result.draws is not None else f"{method} Gaussian"
     figure.suptitle(f"{result.model}: {what} (lines: fitted optimum)", y=1.02)
     if path is not None:
         with atomic_path(path) as temporary:
@@ -99,8 +104,9 @@ def _histogram(draws: np.ndarray, label: str, marked: float):
     return figure
 
 
+@float64
 def _flat_parameters(result: FitResult) -> np.ndarray:
     from ..physics.models import get_model
 
     model = get_model(result.model, **result.model_options)
-    return np.asarray(model.to_physical_vector(model.params_from_dict(result.params)), dtype=float)
+    return np.asarray(model.physical.from_params(model.dictionary.to_params(result.params)), dtype=float)

@@ -17,8 +17,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import brdffit
-from brdffit.data.merl import bin_directions, read_merl, write_merl, write_merl_values
+from brdffit.data.merl import bin_directions, read_merl, write_merl_table
 from brdffit.errors import BrdfInputError
+from brdffit.export.merl import write_merl
 
 SHAPE = (90, 90, 180)
 N_BINS = 90 * 90 * 180
@@ -90,7 +91,7 @@ def folder(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def ward_file(folder) -> Path:
     path = folder / "ward.binary"
-    write_merl(path, "ward", WARD)
+    write_merl("ward", WARD, path)
     return path
 
 
@@ -137,7 +138,7 @@ def test_writer_lays_out_header_and_planes_as_the_format(folder):
     values = rng.random((N_BINS, 3))
     values[rng.random(N_BINS) < 0.01] = -1.0  # missing bins
     path = folder / "values.binary"
-    write_merl_values(path, values.reshape(*SHAPE, 3))
+    write_merl_table(values.reshape(*SHAPE, 3), path)
     assert path.read_bytes() == merl_bytes((values / SCALES).T)
     assert not [p for p in folder.iterdir() if p.name.startswith(".values.")]  # no temporary left behind
 
@@ -288,24 +289,24 @@ def test_no_valid_sample_is_an_error(folder, index_file):
     stored = np.ones((3, N_BINS))
     stored[:, : 90 * 180] = -1  # only θh bin 0 is missing; every other bin has θh ≥ 0.011°
     path.write_bytes(merl_bytes(stored))
-    one_line_error(lambda: read_merl(path, max_theta=0.001), str(path), "no valid sample", "--max-theta 0.001")
+    one_line_error(lambda: read_merl(path, max_theta=0.001), str(path), "no valid sample", "max_theta=0.001")
 
 
 @pytest.mark.parametrize(
     ("options", "fragment"),
     [
-        ({"subsample": 0}, "subsample 0 is not allowed; give a whole number ≥ 1"),
-        ({"subsample": -5}, "subsample -5"),
-        ({"subsample": 2.5}, "subsample 2.5"),
-        ({"subsample": "100"}, "subsample '100'"),
-        ({"subsample": True}, "subsample True"),
-        ({"subsample": 100, "subsample_method": "grid"}, "--subsample-method 'grid' is not allowed"),
-        ({"max_theta": 0}, "--max-theta 0 is not allowed; give degrees in (0, 90]"),
-        ({"max_theta": -10}, "--max-theta -10"),
-        ({"max_theta": 90.5}, "--max-theta 90.5"),
-        ({"max_theta": math.nan}, "--max-theta nan"),
-        ({"max_theta": "60"}, "--max-theta '60'"),
-        ({"seed": -1}, "--seed -1"),
+        ({"subsample": 0}, "subsample=0 is not allowed; give a whole number ≥ 1"),
+        ({"subsample": -5}, "subsample=-5"),
+        ({"subsample": 2.5}, "subsample=2.5"),
+        ({"subsample": "100"}, "subsample='100'"),
+        ({"subsample": True}, "subsample=True"),
+        ({"subsample": 100, "subsample_method": "grid"}, "subsample_method='grid' is not allowed"),
+        ({"max_theta": 0}, "max_theta=0 is not allowed; give degrees in (0, 90]"),
+        ({"max_theta": -10}, "max_theta=-10"),
+        ({"max_theta": 90.5}, "max_theta=90.5"),
+        ({"max_theta": math.nan}, "max_theta=nan"),
+        ({"max_theta": "60"}, "max_theta='60'"),
+        ({"seed": -1}, "seed=-1"),
     ],
 )
 def test_bad_options_are_rejected(ward_file, options, fragment):
@@ -316,7 +317,7 @@ def test_subsample_larger_than_available_names_both_counts(ward_file):
     one_line_error(
         lambda: read_merl(ward_file, max_theta=10, subsample=10**6),
         str(ward_file),
-        "subsample 1,000,000 is more than the ",
+        "subsample=1,000,000 is more than the ",
         " valid samples",
     )
     assert read_merl(ward_file, subsample=2000.0, subsample_method="stratified").n_samples == 2000
@@ -328,12 +329,11 @@ def test_subsample_larger_than_available_names_both_counts(ward_file):
 
 def test_writer_errors(folder):
     path = folder / "written.binary"
-    one_line_error(lambda: write_merl(path, "lambert", {"rho_d": 0.5}), str(path), "1 channel(s)", "3 (r, g, b)")
     values = np.zeros((N_BINS, 3))
     values[7, 1] = math.nan
-    one_line_error(lambda: write_merl_values(path, values), str(path), "NaN or infinity")
-    one_line_error(lambda: write_merl_values(path, np.zeros((10, 3))), str(path), "shape")
-    one_line_error(lambda: write_merl_values(folder / "no" / "such.binary", np.zeros((N_BINS, 3))), "cannot be written")
+    one_line_error(lambda: write_merl_table(values, path), str(path), "NaN or infinity")
+    one_line_error(lambda: write_merl_table(np.zeros((10, 3)), path), str(path), "shape")
+    one_line_error(lambda: write_merl_table(np.zeros((N_BINS, 3)), folder / "no" / "such.binary"), "cannot be written")
     assert not path.exists()
 
 

@@ -110,9 +110,9 @@ def test_within_max_theta(rng):
     samples = Samples.from_arrays(wi, wo, [1.0, 2.0, 3.0])
     assert samples.within(None) is samples
     np.testing.assert_array_equal(samples.within(60).values[:, 0], [1.0, 2.0])
-    with pytest.raises(BrdfInputError, match=r"no samples have θi and θo ≤ --max-theta 5 degrees"):
+    with pytest.raises(BrdfInputError, match=r"no samples have θi and θo ≤ max_theta=5 degrees"):
         samples.within(5)
-    with pytest.raises(BrdfInputError, match=r"--max-theta 95 is not allowed; give degrees in \(0, 90\]"):
+    with pytest.raises(BrdfInputError, match=r"^max_theta=95 is not allowed; give degrees in \(0, 90\]"):
         samples.within(95)
 
 

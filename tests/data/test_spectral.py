@@ -244,7 +244,7 @@ def test_not_wavelengths(target):
     with pytest.raises(BrdfInputError) as error:
         spectral_to(rgb, target)
     assert one_line(error) == (
-        f"a.csv: --spectral-to {target} needs value columns named by wavelength in nm; got r, g, b"
+        f"a.csv: spectral_to={target} needs value columns named by wavelength in nm; got r, g, b"
     )
 
 
@@ -253,14 +253,14 @@ def test_unknown_illuminant_observer_target():
     with pytest.raises(BrdfInputError) as error:
         spectral_to(samples, "xyz", illuminant="D99")
     message = one_line(error)
-    assert message.startswith("--illuminant 'D99' is not known; choose one of: A, ")
+    assert message.startswith("illuminant='D99' is not known; choose one of: A, ")
     assert "D65" in message and "…" in message
     with pytest.raises(BrdfInputError) as error:
         conversion_matrix(EVERY_10_NM, "rgb", observer="CIE 1931 3 Degree")
-    assert one_line(error).startswith("--observer 'CIE 1931 3 Degree' is not known; choose one of: CIE 1931 2 Degree")
+    assert one_line(error).startswith("observer='CIE 1931 3 Degree' is not known; choose one of: CIE 1931 2 Degree")
     with pytest.raises(BrdfInputError) as error:
         spectral_to(samples, "lab")
-    assert one_line(error) == "--spectral-to 'lab' is not known; choose one of: xyz, rgb, keep"
+    assert one_line(error) == "spectral_to='lab' is not known; choose one of: xyz, rgb, keep"
     assert SPECTRAL_TARGETS == ("xyz", "rgb", "keep")
 
 
@@ -292,6 +292,6 @@ def test_negative_rgb_suggests_xyz():
         spectral_to(samples, "rgb")
     message = one_line(error)
     assert message.startswith("spec.csv: sample 3: linear sRGB r = -")
-    assert "--spectral-to xyz" in message and "keep" in message
+    assert "spectral_to=xyz" in message and "keep" in message
     xyz = spectral_to(samples, "xyz")
     assert np.all(xyz.values >= 0)

@@ -63,7 +63,7 @@ def test_one_start_per_dataset():
 
 def test_strategy_and_arguments_are_checked():
     assert default_strategy() == "loop"  # the test machine is a CPU
-    with pytest.raises(BrdfInputError, match="strategy 'gpu' is not allowed; choose one of: auto, loop, vmap"):
+    with pytest.raises(BrdfInputError, match=r"^strategy='gpu' is not allowed; choose one of: auto, loop, vmap"):
         fit_batch(datasets(), "ward", strategy="gpu")
     with pytest.raises(BrdfInputError, match="fit_batch needs at least one dataset"):
         fit_batch([], "ward")

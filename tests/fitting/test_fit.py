@@ -148,7 +148,7 @@ def test_bad_calls():
         fit("samples.csv", "ward")
     with pytest.raises(BrdfInputError, match="'wrd' is not a model"):
         fit(samples, "wrd")
-    with pytest.raises(BrdfInputError, match="--max-steps 0 is not allowed"):
+    with pytest.raises(BrdfInputError, match=r"^max_steps=0 is not allowed"):
         fit(samples, "ward", max_steps=0)
     with pytest.raises(BrdfInputError, match="not a brdffit result file"):
         FitResult.from_dict({"model": "ward"})
@@ -200,9 +200,9 @@ def test_starts_that_reach_one_optimum_tie_and_the_first_wins():
     wins, so the reported step count does not depend on how a sum was rounded; a real improvement still wins."""
     from types import SimpleNamespace
 
-    from brdffit.fitting.fit import _best
+    from brdffit.fitting.fit import best
 
     runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.2728725253445340e-03, 3.2728725253445335e-03])]
-    assert _best(runs).name == 0
+    assert best(runs).name == 0
     runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.27287252534e-03, 3.27287252530e-03, 1.0])]
-    assert _best(runs).name == 1
+    assert best(runs).name == 1

@@ -44,11 +44,11 @@ def assert_normal_equations_match(model, options, params, loss_name):
     built, loss = get_model(model, **options), get_loss(loss_name)
     wi, wo = data_synth.uniform_random(3000, seed=2)
     samples = data_synth.synthesize(model, params, wi, wo, noise=0.02, seed=3, **options)
-    theta = jnp.asarray(built.to_unconstrained(built.params_from_dict(params))) * 1.01
+    theta = jnp.asarray(built.unconstrained.from_params(built.dictionary.to_params(params))) * 1.01
     problem = build_problem(samples)
     assert problem.wi.shape[0] == 3072 and chunk_size(3072) == 256
     squares, gradient, gram, squared_error = jax.jit(partial(normal_equations, built, loss))(theta, problem)
-    error = built.evaluate(built.from_unconstrained(theta, 3), samples.wi, samples.wo) - samples.values
+    error = built.brdf(built.unconstrained.to_params(theta, 3), samples.wi, samples.wo) - samples.values
     np.testing.assert_allclose(squared_error, np.sum(error**2), rtol=1e-11)  # the 72 padded rows excluded
     residual_fn = partial(residuals, built, loss)
     r = residual_fn(theta, problem).ravel()
@@ -90,12 +90,12 @@ def test_residuals_follow_the_loss_formula_on_samples_and_vanish_on_padding(colu
     samples = Samples.from_arrays(wi, wo, clean.values, channels=clean.channels, sigma=sigma, weight=weight)
     problem = build_problem(samples)
     assert problem.wi.shape[0] == 1024
-    theta = jnp.asarray(model.to_unconstrained(model.params_from_dict(params))) * 1.02
+    theta = jnp.asarray(model.unconstrained.from_params(model.dictionary.to_params(params))) * 1.02
     on_the_fly = np.asarray(jax.jit(partial(residuals, model, loss))(theta, problem))
     once = np.asarray(jax.jit(lambda t, q: residuals(model, loss, t, prepared(loss, q)))(theta, problem))
 
     ci, y = wi[:, 2:3], clean.values
-    f = model.evaluate(model.from_unconstrained(theta, 3), wi, wo)
+    f = model.brdf(model.unconstrained.to_params(theta, 3), wi, wo)
     if loss_name == "log":
         transform, slope = (lambda v: np.log1p(v * ci)), (lambda v: ci / (1.0 + v * ci))
     else:

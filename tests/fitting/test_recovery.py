@@ -63,11 +63,11 @@ def predicted_errors(model_name: str, params: dict) -> dict[str, float]:
     computed in the unconstrained coordinates and mapped to the physical ones by the delta method.
     """
     model = get_model(model_name)
-    truth = model.params_from_dict(params)
+    truth = model.dictionary.to_params(params)
     # An albedo of exactly 0 has no log; its error is judged absolutely, so any tiny stand-in does.
     floored = truth._replace(diffuse=np.maximum(truth.diffuse, 1e-9), specular=np.maximum(truth.specular, 1e-9))
-    theta = jnp.asarray(model.to_unconstrained(floored))
-    clean = np.asarray(model.evaluate(floored, WI, WO))
+    theta = jnp.asarray(model.unconstrained.from_params(floored))
+    clean = np.asarray(model.brdf(floored, WI, WO))
     cos_i = WI[:, 2:3]
     noise_variance = (NOISE * clean * cos_i / (1 + clean * cos_i)).ravel() ** 2
     jacobian, mapping = (np.asarray(a) for a in _jacobians(model, theta, jnp.asarray(clean)))
@@ -86,7 +86,7 @@ def _jacobians(model, theta, clean):
     loss = get_loss("log")
 
     def residuals(t):
-        return loss.transform(model.evaluate(model.from_unconstrained(t, 3), WI, WO), clean, WI[:, 2:3]).ravel()
+        return loss.transform(model.brdf(model.unconstrained.to_params(t, 3), WI, WO), clean, WI[:, 2:3]).ravel()
 
     def physical(t):
         return jnp.stack(list(_physical_vector(model, t).values()))
@@ -96,7 +96,7 @@ def _jacobians(model, theta, clean):
 
 def _physical_vector(model, theta) -> dict:
     """Every physical parameter as a traced scalar, in the order of the parameter dictionary."""
-    params = model.from_unconstrained(theta, 3)
+    params = model.unconstrained.to_params(theta, 3)
     vector = {f"{model.diffuse_name}[{c}]": params.diffuse[c] for c in range(3)}
     for k in range(model.n_lobes):
         prefix = f"lobes[{k}]." if model.lobes_as_list else ""

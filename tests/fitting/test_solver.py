@@ -69,7 +69,7 @@ def test_step_counts_match_minpack():
         }
         samples = data_synth.synthesize("cook-torrance", truth, wi, wo, noise=0.01, seed=index)
         theta0 = starting_points(model, LOG, build_problem(samples), 1)[0]
-        start = model.params_to_dict(model.from_unconstrained(jnp.asarray(theta0), 3))
+        start = model.dictionary.from_params(model.unconstrained.to_params(jnp.asarray(theta0), 3))
         ours = fit(samples, "cook-torrance", start=start, n_starts=1)
         minpack = _minpack(model, samples, theta0)
         assert ours.converged and ours.cost <= 2 * minpack.cost * (1 + 1e-9), index

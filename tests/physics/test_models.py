@@ -12,6 +12,7 @@ from numpy.polynomial.legendre import leggauss
 
 import brdffit
 from brdffit import BrdfInputError, evaluate, get_model
+from brdffit.fitting.basis import jacobian_coefficients, value_and_basis
 
 # -------------------------------------------------------------------- physics
 
@@ -274,16 +275,16 @@ def test_finite_values_and_gradients_at_the_edges(model, options, params, rng):
     """Values and gradients with respect to the parameters (physical and unconstrained) and to
     both directions are finite for every upper-hemisphere pair, grazing ones included."""
     built = get_model(model, **options)
-    physical = jax.tree.map(jnp.asarray, built.params_from_dict(params))
+    physical = jax.tree.map(jnp.asarray, built.dictionary.to_params(params))
     wi, wo = (jnp.asarray(d) for d in _hard_directions(rng))
-    values = built.evaluate(physical, wi, wo)
+    values = built.brdf(physical, wi, wo)
     assert np.all(np.isfinite(values)) and np.all(values >= 0)
 
-    total = lambda p, a, b: jnp.sum(built.evaluate(p, a, b))
+    total = lambda p, a, b: jnp.sum(built.brdf(p, a, b))
     for gradient in jax.tree.leaves(jax.grad(total, argnums=(0, 1, 2))(physical, wi, wo)):
         assert np.all(np.isfinite(gradient))
-    theta = jnp.asarray(built.to_unconstrained(jax.tree.map(np.asarray, physical)))
-    unconstrained = jax.grad(lambda t: jnp.sum(built.evaluate(built.from_unconstrained(t, 1), wi, wo)))(theta)
+    theta = jnp.asarray(built.unconstrained.from_params(jax.tree.map(np.asarray, physical)))
+    unconstrained = jax.grad(lambda t: jnp.sum(built.brdf(built.unconstrained.to_params(t, 1), wi, wo)))(theta)
     assert np.all(np.isfinite(unconstrained))
 
 
@@ -294,9 +295,9 @@ def test_gradients_match_finite_differences(model, options, params, rng):
     Step h = 1e-6: truncation ~h² = 1e-12 relative, rounding ~ε/h = 2e-10 relative to the values;
     tolerance rtol 1e-6 with atol 1e-8·max|f| covers both with margin."""
     built = get_model(model, **options)
-    theta0 = built.to_unconstrained(built.params_from_dict(params))
+    theta0 = built.unconstrained.from_params(built.dictionary.to_params(params))
     wi, wo = random_directions(rng, 300, min_cos=0.2), random_directions(rng, 300, min_cos=0.2)
-    f = lambda t: built.evaluate(built.from_unconstrained(t, 3), wi, wo).ravel()
+    f = lambda t: built.brdf(built.unconstrained.to_params(t, 3), wi, wo).ravel()
     analytic = np.asarray(jax.jacfwd(f)(jnp.asarray(theta0)))
     h = 1e-6
     numeric = np.stack(
@@ -315,11 +316,11 @@ def test_structured_jacobian_equals_forward_mode(model, options, params, rng):
     """The normal equations use ∂f/∂θ = basis · coefficients (albedos in closed form, lobe shapes by forward
     mode); it must equal jax.jacfwd of the plain evaluation, to rounding."""
     built = get_model(model, **options)
-    theta = jnp.asarray(built.to_unconstrained(built.params_from_dict(params)))
+    theta = jnp.asarray(built.unconstrained.from_params(built.dictionary.to_params(params)))
     wi, wo = jnp.asarray(random_directions(rng, 300)), jnp.asarray(random_directions(rng, 300))
-    values, basis = built.value_and_basis(theta, wi, wo, 3)
-    structured = jnp.einsum("nm,cmp->ncp", basis, built.jacobian_coefficients(theta, 3))
-    plain = lambda t: built.evaluate(built.from_unconstrained(t, 3), wi, wo)
+    values, basis = value_and_basis(built, theta, wi, wo, 3)
+    structured = jnp.einsum("nm,cmp->ncp", basis, jacobian_coefficients(built, theta, 3))
+    plain = lambda t: built.brdf(built.unconstrained.to_params(t, 3), wi, wo)
     np.testing.assert_allclose(values, plain(theta), rtol=1e-14, atol=1e-300)
     reference = jax.jacfwd(plain)(theta)
     np.testing.assert_allclose(structured, reference, rtol=1e-12, atol=1e-14 * float(jnp.max(jnp.abs(reference))))
@@ -334,11 +335,11 @@ def test_models_jit_and_vmap(rng):
         specular=jnp.array([[[0.3]], [[0.4]]]),
         shape={"m": jnp.array([[0.1], [0.3]]), "f0": jnp.array([[0.04], [0.9]])},
     )
-    batched = jax.jit(jax.vmap(built.evaluate, in_axes=(0, None, None)))(batch, wi, wo)
+    batched = jax.jit(jax.vmap(built.brdf, in_axes=(0, None, None)))(batch, wi, wo)
     for index in range(2):
         one = jax.tree.map(lambda leaf, i=index: leaf[i], batch)
         # XLA fuses and reorders the compiled arithmetic: a few ulp, amplified by exp(-tan²θh/m²).
-        np.testing.assert_allclose(batched[index], built.evaluate(one, wi, wo), rtol=1e-13)
+        np.testing.assert_allclose(batched[index], built.brdf(one, wi, wo), rtol=1e-13)
 
 
 def test_values_are_float64(rng):
@@ -350,16 +351,16 @@ def test_values_are_float64(rng):
 @parametrize_cases()
 def test_parameter_forms_round_trip(model, options, params):
     built = get_model(model, **options)
-    physical = built.params_from_dict(params)
-    again = built.from_unconstrained(jnp.asarray(built.to_unconstrained(physical)), len(physical.diffuse))
-    back = built.params_to_dict(jax.tree.map(np.asarray, again))
-    expected = built.params_to_dict(physical)
+    physical = built.dictionary.to_params(params)
+    again = built.unconstrained.to_params(jnp.asarray(built.unconstrained.from_params(physical)), len(physical.diffuse))
+    back = built.dictionary.from_params(jax.tree.map(np.asarray, again))
+    expected = built.dictionary.from_params(physical)
     assert list(back) == list(expected) == list(params)
     for name, value in expected.items():
         np.testing.assert_allclose(
             np.asarray(jax.tree.leaves(back[name])), np.asarray(jax.tree.leaves(value)), rtol=1e-12
         )
-    assert len(built.unconstrained_labels(("r", "g", "b"))) == built.n_parameters(3)
+    assert len(built.unconstrained.labels(("r", "g", "b"))) == built.unconstrained.size(3)
 
 
 @pytest.mark.parametrize(
@@ -390,13 +391,13 @@ def test_parameter_forms_round_trip(model, options, params):
 )
 def test_bad_parameters_are_named(model, options, params, message):
     with pytest.raises(BrdfInputError) as error:
-        get_model(model, **options).params_from_dict(params)
+        get_model(model, **options).dictionary.to_params(params)
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
 def test_lafortune_direction_is_rescaled_within_rounding():
     """Published tables round (cxy, cz) to 3 digits (2cxy² + cz² = 0.9988); the lobe only depends on their ratio."""
-    params = get_model("lafortune").params_from_dict(
+    params = get_model("lafortune").dictionary.to_params(
         {"rho_d": [0.1], "lobes": [{"rho_s": [0.1], "cxy": -0.577, "cz": 0.577, "n": 5.0}]}
     )
     assert 2 * params.shape["cxy"][0] ** 2 + params.shape["cz"][0] ** 2 == pytest.approx(1.0, abs=1e-15)
@@ -416,11 +417,11 @@ def test_registry_names_models_and_options():
     ]
     with pytest.raises(BrdfInputError, match=r"^'lafortun' is not a model; choose one of: lambert, ward, ward-aniso"):
         get_model("lafortun")
-    with pytest.raises(BrdfInputError, match=r"--fresnel does not apply to model ward; it takes no options"):
+    with pytest.raises(BrdfInputError, match=r"^fresnel does not apply to model ward; it takes no options"):
         get_model("ward", fresnel="schlick")
-    with pytest.raises(BrdfInputError, match=r"--fresnel 'fresnell' is not known; choose one of: schlick, dielectric"):
+    with pytest.raises(BrdfInputError, match=r"^fresnel='fresnell' is not known; choose one of: schlick, dielectric"):
         get_model("cook-torrance", fresnel="fresnell")
-    with pytest.raises(BrdfInputError, match=r"--lobes 0 is not allowed; give a whole number from 1 to 8"):
+    with pytest.raises(BrdfInputError, match=r"^lobes=0 is not allowed; give a whole number from 1 to 8"):
         get_model("lafortune", lobes=0)
     assert get_model("lafortune", lobes=3).n_lobes == 3
     assert get_model("cook-torrance").model_options == {"fresnel": "schlick"}

@@ -21,7 +21,7 @@ from brdffit import (
 )
 from brdffit.fitting.problem import residuals_at
 from brdffit.physics.domains import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, GreaterThan, Interval
-from brdffit.uncertainty.density import log_probability_function, setup
+from brdffit.uncertainty.density import density_of, log_probability_function
 from brdffit.uncertainty.laplace import gauss_newton_matrix, inverse_with_null_space
 
 #: Ngan et al. 2005's Ward fit of MERL pickled-oak-260: a realistic material.
@@ -95,13 +95,13 @@ def test_gauss_newton_matrix_matches_finite_differences():
     ~h², rounding ~1e-16/h, so agreement to 1e-6 relative)."""
     samples = oak_samples(seed=1)
     result = fit(samples, "ward")
-    posterior = setup(result, samples)
-    v = posterior.optimum
-    exact = gauss_newton_matrix(posterior, v)
+    density = density_of(result, samples)
+    v = density.optimum
+    exact = gauss_newton_matrix(density, v)
 
     def residual(w):
-        params = posterior.model.from_sampling(jnp.asarray(w), 3)
-        return np.asarray(residuals_at(posterior.model, posterior.loss, params, posterior.problem)).ravel()
+        params = density.model.sampling.to_params(jnp.asarray(w), 3)
+        return np.asarray(residuals_at(density.model, density.loss, params, density.problem)).ravel()
 
     columns = []
     for i in range(v.size):
@@ -183,7 +183,7 @@ def test_mcmc_agrees_with_laplace(calibration_fits):
     diagnostics = posterior.uncertainty["diagnostics"]
     assert 0.2 < diagnostics["acceptance"] < 0.8
     assert len(diagnostics["autocorr_time"]) == 7 and diagnostics["n_draws"] == 32 * 4500
-    assert posterior.posterior.shape == (32 * 4500, 7)
+    assert posterior.draws.shape == (32 * 4500, 7)
 
 
 def _median(quantiles):
@@ -234,9 +234,9 @@ def test_priors(domain, inside, outside):
 def test_log_probability_is_minus_infinity_never_nan(with_sigma):
     samples = data_synth.synthesize("ward", OAK, *SMALL_GRID, noise=0.02, seed=4, with_sigma=with_sigma)
     result = fit(samples, "ward")
-    posterior = setup(result, samples)
-    log_prob = log_probability_function(posterior)
-    centre = np.append(posterior.optimum, [] if with_sigma else [np.log(0.01)])
+    density = density_of(result, samples)
+    log_prob = log_probability_function(density)
+    centre = np.append(density.optimum, [] if with_sigma else [np.log(0.01)])
     walkers = np.tile(centre, (6, 1))
     walkers[1, 0] = -0.1  # negative albedo
     walkers[2, 6] = 0.0  # alpha on its boundary
@@ -249,7 +249,7 @@ def test_log_probability_is_minus_infinity_never_nan(with_sigma):
     if with_sigma:
         step = np.zeros_like(centre)
         step[6] = 1e-4
-        curvature = gauss_newton_matrix(posterior, posterior.optimum)[6, 6]
+        curvature = gauss_newton_matrix(density, density.optimum)[6, 6]
         change = log_prob(np.stack([centre + step, centre]))
         prior = -np.log((centre + step)[6]) + np.log(centre[6])
         assert change[0] - change[1] == pytest.approx(-0.5 * curvature * 1e-8 + prior, rel=0.05, abs=1e-6)
@@ -265,7 +265,7 @@ def test_lafortune_is_sampled_on_its_direction_angle():
     names = result.uncertainty["covariance"]["names"]
     assert names == ["rho_d[value]", "lobes[0].rho_s[value]", "lobes[0].cxy", "lobes[0].cz", "lobes[0].n"]
     assert result.uncertainty["diagnostics"]["sampled"][-2:] == ["lobes[0].n", "ln_noise"]
-    draws = result.posterior
+    draws = result.draws
     np.testing.assert_allclose(2 * draws[:, 2] ** 2 + draws[:, 3] ** 2, 1.0, rtol=1e-12)  # every draw on the circle
     lobe = result.uncertainty["quantiles"]["lobes"][0]
     assert set(lobe) == {"rho_s", "cxy", "cz", "n"} and set(lobe["n"]) == {"0.025", "0.16", "0.5", "0.84", "0.975"}
@@ -289,7 +289,7 @@ def test_mcmc_is_deterministic_and_saves_its_chain(tmp_path):
     assert list(saved["names"]) == ["rho_d[r]", "rho_d[g]", "rho_d[b]", "rho_s[r]", "rho_s[g]", "rho_s[b]", "alpha"]
     assert int(saved["burn"]) == 50 and int(saved["thin"]) == 2
     # emcee keeps steps discard + thin - 1, discard + 2·thin - 1, …
-    np.testing.assert_allclose(saved["chain"][51::2].reshape(-1, 7), first.posterior, rtol=1e-12)
+    np.testing.assert_allclose(saved["chain"][51::2].reshape(-1, 7), first.draws, rtol=1e-12)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chain.npz"]  # no temporary file left
 
 
@@ -318,13 +318,13 @@ def test_short_chain_warns():
 @pytest.mark.parametrize(
     "settings, message",
     [
-        (dict(walkers=1), "--walkers 1 is not allowed"),
-        (dict(steps=0), "--steps 0 is not allowed"),
-        (dict(burn=-1), "--burn -1 is not allowed"),
-        (dict(steps=100, burn=100), "--burn 100 must be less than --steps 100"),
-        (dict(thin=0), "--thin 0 is not allowed"),
-        (dict(steps=100, burn=50, thin=60), "--thin 60 keeps no step"),
-        (dict(seed=1.5), "--seed 1.5 is not allowed"),
+        (dict(walkers=1), "^walkers=1 is not allowed"),
+        (dict(steps=0), "^steps=0 is not allowed"),
+        (dict(burn=-1), "^burn=-1 is not allowed"),
+        (dict(steps=100, burn=100), "^burn=100 must be less than steps=100"),
+        (dict(thin=0), "^thin=0 is not allowed"),
+        (dict(steps=100, burn=50, thin=60), "^thin=60 keeps no step"),
+        (dict(seed=1.5), "^seed=1.5 is not allowed"),
     ],
 )
 def test_bad_mcmc_settings(settings, message):
@@ -335,13 +335,13 @@ def test_bad_mcmc_settings(settings, message):
 def test_too_few_walkers_and_mismatched_samples():
     samples = oak_samples(seed=10)
     result = fit(samples, "ward")
-    with pytest.raises(BrdfInputError, match="--walkers 8 is too few for 7 sampled parameters; give at least 14"):
+    with pytest.raises(BrdfInputError, match=r"^walkers=8 is too few for 7 sampled parameters; give at least 14"):
         sample_posterior(result, samples, MCMC(walkers=8))
     with pytest.raises(BrdfInputError, match="the fit used 432"):
         laplace_uncertainty(result, samples.within(45))
     with pytest.raises(BrdfInputError, match="pass MCMC settings as mcmc="):
         fit(samples, "ward", uncertainty=MCMC())
-    with pytest.raises(BrdfInputError, match="uncertainty 'bootstrap' is not allowed"):
+    with pytest.raises(BrdfInputError, match=r"^uncertainty='bootstrap' is not allowed"):
         fit(samples, "ward", uncertainty="bootstrap")
     with pytest.raises(BrdfInputError, match="mcmc settings and chain apply only"):
         fit(samples, "ward", uncertainty="laplace", mcmc=MCMC())
@@ -439,7 +439,7 @@ def test_mcmc_near_a_bound_stays_in_the_domain_and_keeps_laplace_warnings():
             samples, "cook-torrance", max_theta=45, uncertainty="mcmc", mcmc=MCMC(walkers=16, steps=300, burn=100)
         )
     names = result.uncertainty["covariance"]["names"]
-    f0 = result.posterior[:, names.index("f0")]
+    f0 = result.draws[:, names.index("f0")]
     assert np.all((f0 >= 0) & (f0 <= 1))
     assert all(0 <= q <= 1 for q in result.uncertainty["quantiles"]["f0"].values())
     assert any("nearly degenerate" in message for message in result.uncertainty["warnings"])

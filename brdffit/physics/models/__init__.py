@@ -1,22 +1,26 @@
-"""The reflectance models and the registry that maps ``--model`` names to them.
+"""The reflectance models, one module per lobe family, and the registry that names them.
 
-``MODELS[name](**options)`` builds a :class:`Model`; :func:`get_model` does the
-same with one-line errors for unknown names and options.
+``MODELS[name](**options)`` builds a :class:`~brdffit.physics.models.model.Model`; :func:`get_model`
+does the same with one-line errors for unknown names and options. The parts every model shares:
+``model.py`` (the model: diffuse plus lobes), ``lobe.py`` (a lobe family and its shape's coordinates),
+``params.py``, ``dictionary.py`` and ``coordinates.py`` (the forms its parameters take), ``grids.py``
+(the shapes the fit starts from).
 """
 
 import inspect
 from typing import Any
 
-from ...errors import BrdfInputError
-from .base import Lobe as Lobe
-from .base import Model as Model
-from .base import Params as Params
+from ...errors import Argument, BrdfInputError
 from .cook_torrance import cook_torrance
 from .lafortune import lafortune
 from .lambert import lambert
+from .lobe import Lobe as Lobe
+from .model import Model as Model
+from .params import Params as Params
 from .phong import blinn_phong, phong
 from .ward import ward, ward_aniso, ward_duer
 
+#: The models by name: each builds a :class:`Model` from its options (``fresnel``, ``lobes``).
 MODELS = {
     "lambert": lambert,
     "ward": ward,
@@ -49,6 +53,15 @@ def get_model(model: "str | Model", **options: Any) -> Model:
     accepted = model_option_names(model)
     for key in options:
         if key not in accepted:
-            takes = f"it takes --{', --'.join(accepted)}" if accepted else "it takes no options"
-            raise BrdfInputError(f"--{key} does not apply to model {model}; {takes}")
+            takes = ["it takes no options"] if not accepted else ["it takes ", *_listed(accepted)]
+            raise BrdfInputError(Argument(key), f" does not apply to model {model}; ", *takes)
     return MODELS[model](**options)
+
+
+def _listed(names: tuple[str, ...]) -> list:
+    """``a, b`` as message parts, each an :class:`Argument`."""
+    parts: list = []
+    for index, name in enumerate(names):
+        parts += [", "] if index else []
+        parts.append(Argument(name))
+    return parts

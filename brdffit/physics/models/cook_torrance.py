@@ -2,34 +2,28 @@
 
 Cook & Torrance, "A reflectance model for computer graphics", ACM TOG 1982,
 normalised as in Walter et al., "Microfacet models for refraction through
-rough surfaces", EGSR 2007 (SPEC section 2)::
+rough surfaces", EGSR 2007::
 
     lobe = F(cos β) · D · G / (4 ci co)
     D    = exp(-tan²θh / m²) / (π m² ch⁴)                     (Beckmann; m is the rms slope)
     G    = min(1, 2 ch co / (wo·h), 2 ch ci / (wo·h))       (V-groove, Torrance & Sparrow 1967)
 
-With ``ks = 1`` and ``F = 1`` the lobe's directional albedo is at most 1.
+It equals the seeds' ``F/π · D'G/(ci co)`` with ``D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)``. The Fresnel
+term is one of ``fresnel.FRESNEL``. With ``ks = 1`` and ``F = 1`` the lobe's directional albedo is at most 1.
 """
 
 from dataclasses import dataclass
+from typing import final
 
 import jax.numpy as jnp
 
-from ... import _jax  # noqa: F401  (float64 before any array)
-from ...errors import BrdfInputError
-from ..domains import POSITIVE, UNIT_INTERVAL, GreaterThan, Positive
-from ..fresnel import fresnel_conductor, fresnel_dielectric, fresnel_schlick
+from ...checks import choice
+from ..domains import POSITIVE
+from ..fresnel import FRESNEL
 from ..geometry import half_vector, tan2_from_cos
-from .base import Lobe, Model
 from .grids import ROUGHNESS_GRID
-
-#: ``--fresnel`` choices: the Fresnel parameters each one adds, with their domains and starting values.
-FRESNEL_PARAMETERS = {
-    "schlick": (("f0", UNIT_INTERVAL, (0.04, 0.3, 0.9)),),
-    "dielectric": (("eta", GreaterThan(1.0), (1.5, 3.0)),),
-    "conductor": (("eta", POSITIVE, (0.5, 1.5)), ("k", Positive(allow_zero=True), (1.0, 4.0))),
-    "none": (),
-}
+from .lobe import Lobe
+from .model import Model
 
 
 def beckmann_distribution(cos_theta_h, m):
@@ -46,6 +40,7 @@ def v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta):
     return jnp.minimum(1.0, 2.0 * cos_theta_h * jnp.minimum(cos_i, cos_o) / cos_beta)
 
 
+@final
 @dataclass(frozen=True)
 class CookTorranceLobe(Lobe):
     """Cook-Torrance lobe with rms slope ``m`` and the Fresnel term named by ``fresnel``."""
@@ -53,10 +48,7 @@ class CookTorranceLobe(Lobe):
     fresnel: str = "schlick"
 
     def __post_init__(self):
-        if self.fresnel not in FRESNEL_PARAMETERS:
-            raise BrdfInputError(
-                f"--fresnel {self.fresnel!r} is not known; choose one of: {', '.join(FRESNEL_PARAMETERS)}"
-            )
+        choice("fresnel", self.fresnel, FRESNEL, verb="is not known")
 
     @property
     def summary(self) -> str:
@@ -64,23 +56,14 @@ class CookTorranceLobe(Lobe):
 
     @property
     def parameters(self):
-        return (("m", POSITIVE), *((name, domain) for name, domain, _ in FRESNEL_PARAMETERS[self.fresnel]))
+        return (("m", POSITIVE), *((name, domain) for name, domain, _ in FRESNEL[self.fresnel].parameters))
 
     @property
     def grid(self):
         shapes = [{"m": m} for m in ROUGHNESS_GRID]
-        for name, _, starts in FRESNEL_PARAMETERS[self.fresnel]:
+        for name, _, starts in FRESNEL[self.fresnel].parameters:
             shapes = [shape | {name: start} for shape in shapes for start in starts]
         return tuple(shapes)
-
-    def fresnel_term(self, shape, cos_beta):
-        if self.fresnel == "schlick":
-            return fresnel_schlick(cos_beta, shape["f0"])
-        if self.fresnel == "dielectric":
-            return fresnel_dielectric(cos_beta, shape["eta"])
-        if self.fresnel == "conductor":
-            return fresnel_conductor(cos_beta, shape["eta"], shape["k"])
-        return jnp.ones_like(cos_beta)
 
     def __call__(self, shape, wi, wo):
         cos_i, cos_o = wi[:, 2], wo[:, 2]
@@ -89,7 +72,8 @@ class CookTorranceLobe(Lobe):
         cos_beta = jnp.sum(wi * h, axis=-1)
         distribution = beckmann_distribution(cos_theta_h, shape["m"])
         shadowing = v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta)
-        return self.fresnel_term(shape, cos_beta) * distribution * shadowing / (4.0 * cos_i * cos_o)
+        fresnel = FRESNEL[self.fresnel].reflectance(cos_beta, shape)
+        return fresnel * distribution * shadowing / (4.0 * cos_i * cos_o)
 
 
 def cook_torrance(fresnel: str = "schlick") -> Model:

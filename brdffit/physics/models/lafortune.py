@@ -2,11 +2,11 @@
 
 Lafortune, Foo, Torrance & Greenberg, "Non-linear approximation of reflectance
 functions", SIGGRAPH 1997, isotropic form (``C_x = C_y = cxy``), with the
-normalisation Ngan et al. 2005 fit (SPEC section 2)::
+normalisation Ngan et al. 2005 fit::
 
     lobe = (n+2)/(2π) · max(0, (cxy (wi_x wo_x + wi_y wo_y) + cz ci co) / max(|cxy|, |cz|))^n
 
-The ratio form makes the lobe independent of the length of ``(cxy, cz)``; SPEC
+The ratio form makes the lobe independent of the length of ``(cxy, cz)``; brdffit
 fixes that length by ``2 cxy² + cz² = 1``, so a lobe's direction is one angle
 ``ψ`` with ``cxy = sin ψ / √2``, ``cz = cos ψ``, which is what the fit moves.
 ``cxy < 0`` is a forward (specular) lobe, ``cxy > 0`` a retro-reflective one.
@@ -15,19 +15,21 @@ for unit directions, the base is at most 1 and ``n`` of 10⁴ stays finite.
 """
 
 from dataclasses import dataclass
+from typing import final
 
 import jax.numpy as jnp
 import numpy as np
 
-from ... import _jax  # noqa: F401  (float64 before any array)
+from ..._arrays import namespace
 from ...checks import whole_number
 from ...errors import BrdfInputError
-from ..domains import POSITIVE, Interval
+from ..domains import POSITIVE, Domain, Interval
 from ..geometry import safe_power
-from .base import Lobe, Model
 from .grids import EXPONENT_GRID
+from .lobe import BoundedShapeCoordinates, Lobe, ShapeCoordinates
+from .model import Model
 
-#: The most lobes ``--lobes`` accepts; more than a handful cannot be told apart by any measurement.
+#: The most lobes the ``lobes`` option accepts; more than a handful cannot be told apart by any measurement.
 MAX_LOBES = 8
 
 #: How far ``2 cxy² + cz²`` may be from 1 in a user's parameters (published tables round to 3 digits).
@@ -40,9 +42,55 @@ DIRECTION_GRID = (_FORWARD, -1.25, -0.6, 0.0, -_FORWARD)
 
 def direction_from_angle(psi):
     """``(cxy, cz) = (sin ψ / √2, cos ψ)``, which satisfies ``2 cxy² + cz² = 1``."""
-    return jnp.sin(psi) / jnp.sqrt(2.0), jnp.cos(psi)
+    xp = namespace(psi)
+    return xp.sin(psi) / np.sqrt(2.0), xp.cos(psi)
 
 
+def angle_of_direction(cxy, cz):
+    """``ψ = atan2(√2 cxy, cz)``, the inverse of :func:`direction_from_angle` on ``2 cxy² + cz² = 1``."""
+    return np.arctan2(np.sqrt(2.0) * np.asarray(cxy, dtype=float), np.asarray(cz, dtype=float))
+
+
+@final
+@dataclass(frozen=True)
+class AngleAndLogExponent(ShapeCoordinates):
+    """What the solver moves: the direction's angle ``ψ`` and ``ln n``."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return ("psi", "n")
+
+    def to_vector(self, shape) -> np.ndarray:
+        return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), POSITIVE.to_unconstrained(shape["n"])])
+
+    def from_vector(self, u):
+        cxy, cz = direction_from_angle(u[0])
+        return {"cxy": cxy, "cz": cz, "n": POSITIVE.to_physical(u[1])}
+
+
+@final
+@dataclass(frozen=True)
+class AngleAndExponent(BoundedShapeCoordinates):
+    """What the MCMC walkers move: the direction's angle ``ψ`` (so that every proposal satisfies
+    ``2 cxy² + cz² = 1``) and ``n`` itself."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return ("psi", "n")
+
+    @property
+    def domains(self) -> tuple[Domain, ...]:
+        return (Interval(-np.pi, np.pi), POSITIVE)
+
+    def to_vector(self, shape) -> np.ndarray:
+        return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), np.asarray(shape["n"], dtype=float)])
+
+    def from_vector(self, u):
+        cxy, cz = direction_from_angle(u[0])
+        return {"cxy": cxy, "cz": cz, "n": u[1]}
+
+
+@final
 @dataclass(frozen=True)
 class LafortuneLobe(Lobe):
     """One generalised cosine lobe with direction ``(cxy, cz)`` and exponent ``n``."""
@@ -51,15 +99,15 @@ class LafortuneLobe(Lobe):
 
     @property
     def parameters(self):
-        return (("cxy", _DirectionComponent()), ("cz", _DirectionComponent()), ("n", POSITIVE))
+        return (("cxy", DirectionComponent()), ("cz", DirectionComponent()), ("n", POSITIVE))
 
     @property
-    def unconstrained_names(self):
-        return ("psi", "n")
+    def unconstrained(self) -> ShapeCoordinates:
+        return AngleAndLogExponent()
 
     @property
-    def n_unconstrained(self) -> int:
-        return 2
+    def sampling(self) -> BoundedShapeCoordinates:
+        return AngleAndExponent()
 
     @property
     def grid(self):
@@ -68,26 +116,6 @@ class LafortuneLobe(Lobe):
             cxy, cz = (float(x) for x in direction_from_angle(psi))
             shapes += [{"cxy": cxy, "cz": cz, "n": n} for n in EXPONENT_GRID]
         return tuple(shapes)
-
-    def shape_to_unconstrained(self, shape):
-        psi = np.arctan2(np.sqrt(2.0) * shape["cxy"], shape["cz"])
-        return np.array([psi, POSITIVE.to_unconstrained(shape["n"])])
-
-    def shape_from_unconstrained(self, u):
-        cxy, cz = direction_from_angle(u[0])
-        return {"cxy": cxy, "cz": cz, "n": POSITIVE.to_physical(u[1])}
-
-    @property
-    def sampling_parameters(self):
-        # The walkers move the direction's angle, so every proposal satisfies 2 cxy² + cz² = 1.
-        return (("psi", Interval(-np.pi, np.pi)), ("n", POSITIVE))
-
-    def shape_to_sampling(self, shape):
-        return np.array([np.arctan2(np.sqrt(2.0) * shape["cxy"], shape["cz"]), float(shape["n"])])
-
-    def shape_from_sampling(self, values):
-        cxy, cz = direction_from_angle(values[0])
-        return {"cxy": cxy, "cz": cz, "n": values[1]}
 
     def checked_shape(self, shape, where):
         """Check ``n`` and ``2 cxy² + cz² = 1`` (within 1%), and rescale ``(cxy, cz)`` onto it exactly."""
@@ -110,20 +138,31 @@ class LafortuneLobe(Lobe):
         return (n + 2.0) / (2.0 * jnp.pi) * safe_power(base, n)
 
 
+@final
 @dataclass(frozen=True)
-class _DirectionComponent:
-    """Domain text for ``cxy`` and ``cz``; the joint constraint is checked by the lobe."""
+class DirectionComponent(Domain):
+    """The domain of ``cxy`` and ``cz``: within [-1, 1], and jointly ``2 cxy² + cz² = 1`` (checked by the lobe)."""
 
-    text: str = "real, with 2·cxy² + cz² = 1"
+    @property
+    def text(self) -> str:
+        return "real, with 2·cxy² + cz² = 1"
 
     @property
     def bounds(self) -> tuple[float, float]:
         return -1.0, 1.0
 
+    def contains(self, x) -> bool:
+        x = np.asarray(x, dtype=float)
+        return bool(np.all(np.isfinite(x) & (np.abs(x) <= 1.0)))
+
+    def log_prior(self, x):
+        """Uniform on [-1, 1] (the walkers move ψ, never these)."""
+        return jnp.where(jnp.abs(x) <= 1.0, 0.0, -jnp.inf)
+
 
 def lafortune(lobes: int = 1) -> Model:
     """``rho_d/π`` plus ``lobes`` generalised cosine lobes (default 1)."""
-    lobes = whole_number("--lobes", lobes, 1, MAX_LOBES)
+    lobes = whole_number("lobes", lobes, 1, MAX_LOBES)
     return Model(
         "lafortune",
         "Lafortune 1997 generalised cosine lobes",

@@ -1,6 +1,6 @@
 """The Lambertian (perfectly diffuse) model, ``rho_d / π``: Lambert, *Photometria*, 1760."""
 
-from .base import Model
+from .model import Model
 
 
 def lambert() -> Model:

@@ -4,23 +4,25 @@
 plausible", CGF 1994 (the mirror-direction lobe Ngan et al. 2005 fit);
 ``blinn-phong`` is Blinn's half-vector variant, "Models of light reflection for
 computer synthesized pictures", SIGGRAPH 1977, with the ``(n+8)/(8π)``
-normalisation of Akenine-Möller et al., *Real-Time Rendering*. SPEC section 2::
+normalisation of Akenine-Möller et al., *Real-Time Rendering*::
 
     phong        rho_s · (n+2)/(2π) · max(0, r·wo)^n,  r = (-wi_x, -wi_y, wi_z)
     blinn-phong  rho_s · (n+8)/(8π) · ch^n
 """
 
 from dataclasses import dataclass
+from typing import final
 
 import jax.numpy as jnp
 
-from ... import _jax  # noqa: F401  (float64 before any array)
 from ..domains import POSITIVE
 from ..geometry import half_vector, mirror_direction, safe_power
-from .base import Lobe, Model
 from .grids import EXPONENT_GRID
+from .lobe import Lobe
+from .model import Model
 
 
+@final
 @dataclass(frozen=True)
 class PhongLobe(Lobe):
     """Cosine power ``n`` of the angle between ``wo`` and the mirror direction of ``wi``."""
@@ -41,6 +43,7 @@ class PhongLobe(Lobe):
         return (n + 2.0) / (2.0 * jnp.pi) * safe_power(cos_alpha, n)
 
 
+@final
 @dataclass(frozen=True)
 class BlinnPhongLobe(Lobe):
     """Cosine power ``n`` of the half-vector's zenith angle."""

@@ -2,7 +2,7 @@
 
 Ward, "Measuring and modeling anisotropic reflection", SIGGRAPH 1992, eq. 5
 (isotropic) and eq. 4 (anisotropic); Dür, "An improved normalization for the
-Ward reflectance model", JGT 2006 (``ward-duer``). SPEC section 2::
+Ward reflectance model", JGT 2006 (``ward-duer``)::
 
     ward        rho_s · exp(-tan²θh / α²) / (4π α² sqrt(ci co))
     ward-aniso  rho_s · exp(-((h_x/α_x)² + (h_y/α_y)²) / h_z²) / (4π α_x α_y sqrt(ci co))
@@ -10,16 +10,18 @@ Ward reflectance model", JGT 2006 (``ward-duer``). SPEC section 2::
 """
 
 from dataclasses import dataclass
+from typing import final
 
 import jax.numpy as jnp
 
-from ... import _jax  # noqa: F401  (float64 before any array)
 from ..domains import POSITIVE
 from ..geometry import half_vector, tan2_from_cos
-from .base import Lobe, Model
 from .grids import ROUGHNESS_GRID
+from .lobe import Lobe
+from .model import Model
 
 
+@final
 @dataclass(frozen=True)
 class WardLobe(Lobe):
     """Isotropic Ward lobe, roughness ``alpha`` (rms slope); ``duer`` selects Dür's ``ci co`` denominator."""
@@ -46,6 +48,7 @@ class WardLobe(Lobe):
         return jnp.exp(-tan2_from_cos(h[:, 2]) / alpha2) / (4.0 * jnp.pi * alpha2 * projected)
 
 
+@final
 @dataclass(frozen=True)
 class AnisotropicWardLobe(Lobe):
     """Anisotropic Ward lobe with roughness ``alpha_x`` along the tangent and ``alpha_y`` across it."""

@@ -1,0 +1,19 @@
+"""Which array library a function computes with: numpy on the host, ``jax.numpy`` inside JAX programs.
+
+Readers, writers and other host code call the same geometry as the models do; with numpy input it
+stays numpy (``jax.numpy`` would compile and dispatch a program per operation, ~0.1 s to read a
+10k-row CSV), and modules that only compute on the host never import JAX.
+"""
+
+import numbers
+
+import numpy as np
+
+
+def namespace(*arrays):
+    """numpy when every argument is a numpy array or scalar or a Python number, else ``jax.numpy``."""
+    if all(isinstance(a, np.ndarray | np.generic | numbers.Number) for a in arrays):
+        return np
+    import jax.numpy as jnp
+
+    return jnp

@@ -1,0 +1,125 @@
+"""The fits of the public API: :func:`fit` and :func:`fit_batch`, each with the uncertainty of its results on request.
+
+They join two layers that know nothing of each other: ``brdffit/fitting`` (the fit) and
+``brdffit/uncertainty`` (its error bars, which need a fit to start from). Everything else in the public
+API lives in its layer and is re-exported by name in ``brdffit/__init__.py``.
+"""
+
+import os
+from collections.abc import Sequence
+from typing import Any
+
+from ._jax import float64
+from .data.samples import Samples
+from .fitting.batch import fit_many
+from .fitting.fit import MAX_STEPS, N_STARTS, checked, fit_one
+from .fitting.results import FitResult
+from .physics.models import Model
+from .uncertainty.mcmc import MCMC, check_walkers
+from .uncertainty.methods import check_options, with_uncertainty
+
+
+@float64
+def fit(
+    samples: Samples,
+    model: str | Model = "ward",
+    loss: str = "log",
+    *,
+    max_theta: float | None = None,
+    start: dict[str, Any] | None = None,
+    n_starts: int = N_STARTS,
+    max_steps: int = MAX_STEPS,
+    dtype: str = "float64",
+    seed: int = 0,
+    uncertainty: str | None = None,
+    mcmc: MCMC | None = None,
+    chain: str | os.PathLike | None = None,
+    progress: bool = False,
+    **model_options: Any,
+) -> FitResult:
+    """Fit ``model`` to ``samples`` by minimising ``loss`` (``brdffit.LOSSES``); returns a :class:`FitResult`.
+
+    ``max_theta``: drop samples with θi or θo above this many degrees.
+    ``start``: parameters (the result file's dictionary) to start from instead of
+    the data-driven starts. ``n_starts``: how many of the best grid starts to
+    run Levenberg-Marquardt from; the lowest cost wins. ``dtype``: ``float32``
+    runs the solve with the model in single precision (sums stay float64) and
+    then refines the optimum in float64 (mixed-precision iterative refinement,
+    usually one or two steps), so the result is float64's.
+    ``seed``: the random part of the subset the starts are searched on (above
+    16,384 samples). ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds the
+    result's ``uncertainty``; ``mcmc`` (:class:`brdffit.MCMC`: walkers, steps,
+    burn, thin, seed), ``chain`` (a ``.npz`` or ``.h5`` file for the chain) and
+    ``progress`` (a progress bar) apply to ``"mcmc"``. ``model_options``:
+    ``fresnel=`` for cook-torrance, ``lobes=`` for lafortune.
+    """
+    check_options(uncertainty, mcmc, chain)
+    if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
+        built, _, kept = checked(samples, model, loss, max_theta, dtype, **model_options)
+        check_walkers(mcmc or MCMC(), built, kept)
+    result = fit_one(
+        samples,
+        model,
+        loss,
+        max_theta=max_theta,
+        start=start,
+        n_starts=n_starts,
+        max_steps=max_steps,
+        dtype=dtype,
+        seed=seed,
+        **model_options,
+    )
+    if uncertainty is None:
+        return result
+    return with_uncertainty(result, samples.within(max_theta), uncertainty, mcmc=mcmc, chain=chain, progress=progress)
+
+
+@float64
+def fit_batch(
+    samples: Sequence[Samples],
+    model: str | Model = "ward",
+    loss: str = "log",
+    *,
+    strategy: str = "auto",
+    progress: bool | None = None,
+    max_theta: float | None = None,
+    start: dict[str, Any] | Sequence[dict[str, Any]] | None = None,
+    n_starts: int = N_STARTS,
+    max_steps: int = MAX_STEPS,
+    dtype: str = "float64",
+    seed: int = 0,
+    uncertainty: str | None = None,
+    mcmc: MCMC | None = None,
+    **model_options: Any,
+) -> list[FitResult]:
+    """Fit ``model`` to each of ``samples``; the results come in the same order.
+
+    The options are those of :func:`fit`, applied to every dataset; ``start``
+    may also be a list with one parameter dictionary per dataset.
+    ``strategy``: ``auto`` (``vmap`` on a GPU, ``loop`` otherwise), ``loop`` or
+    ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
+    terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
+    settings) adds each result's ``uncertainty`` after the fits.
+    """
+    check_options(uncertainty, mcmc)
+    samples = list(samples)
+    results = fit_many(
+        samples,
+        model,
+        loss,
+        strategy=strategy,
+        progress=progress,
+        max_theta=max_theta,
+        start=start,
+        n_starts=n_starts,
+        max_steps=max_steps,
+        dtype=dtype,
+        seed=seed,
+        **model_options,
+    )
+    if uncertainty is None:
+        return results
+    return [
+        with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
+        for result, one in zip(results, samples, strict=True)
+    ]

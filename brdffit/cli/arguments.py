@@ -1,0 +1,130 @@
+"""What the commands share: argument groups, the flags that spell the library's arguments, output checks.
+
+The library names its arguments as Python does (``n_starts``); :data:`FLAGS` and :func:`spell` are the one
+place where they become the command line's flags (``--starts``), so that every message reads as the user
+typed it.
+"""
+
+import argparse
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from ..errors import Argument, BrdfInputError
+
+#: Flags whose name is not the argument's with ``_`` as ``-`` (``max_theta`` → ``--max-theta``).
+FLAGS = {"n_starts": "--starts"}
+
+
+def flag(name: str) -> str:
+    """The command line's flag for the library argument ``name``."""
+    return FLAGS.get(name, "--" + name.replace("_", "-"))
+
+
+def spell(argument: Argument) -> str:
+    """An argument as the command line writes it: ``--starts 0``, or ``--starts`` without a value."""
+    return flag(argument.name) if argument.shown is None else f"{flag(argument.name)} {argument.shown}"
+
+
+def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
+    """``--model`` and the model options (``--fresnel``, ``--lobes``)."""
+    from ..physics.fresnel import FRESNEL
+    from ..physics.models import MODELS
+
+    default_text = f" (default {default})" if default else " (default: the model of a result file given as --params)"
+    command.add_argument("--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}")
+    command.add_argument(
+        "--fresnel",
+        metavar="KIND",
+        help=f"cook-torrance's Fresnel term: {', '.join(FRESNEL)} (default {next(iter(FRESNEL))})",
+    )
+    command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
+
+
+def add_loading_options(command: argparse.ArgumentParser) -> None:
+    """How a samples file is read (:func:`brdffit.load_samples`'s arguments)."""
+    from ..data.csv import ANGLE_UNITS
+    from ..data.load import FORMATS
+    from ..data.quantities import QUANTITIES
+    from ..data.spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, SPECTRAL_TARGETS
+
+    reading = command.add_argument_group("reading the samples")
+    reading.add_argument(
+        "--format", metavar="NAME", help=f"{', '.join(FORMATS)} (default: from the extension and first lines)"
+    )
+    reading.add_argument(
+        "--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)"
+    )
+    reading.add_argument(
+        "--angles", default="degrees", metavar="UNIT", help=f"CSV angle columns in {' or '.join(ANGLE_UNITS)}"
+    )
+    reading.add_argument(
+        "--spectral-to",
+        default="keep",
+        metavar="T",
+        help=f"value columns named by wavelength (nm): {', '.join(SPECTRAL_TARGETS)} (default keep: every band)",
+    )
+    reading.add_argument(
+        "--illuminant",
+        default=DEFAULT_ILLUMINANT,
+        metavar="NAME",
+        help=f"for --spectral-to (default {DEFAULT_ILLUMINANT})",
+    )
+    reading.add_argument(
+        "--observer",
+        default=DEFAULT_OBSERVER,
+        metavar="NAME",
+        help=f"colour-matching functions for --spectral-to (default: {DEFAULT_OBSERVER})",
+    )
+    reading.add_argument("--subsample", type=int, metavar="N", help="MERL: keep N samples")
+    reading.add_argument(
+        "--subsample-method", default="random", metavar="M", help="MERL: random (default) or stratified (over θh)"
+    )
+
+
+def load(path: str, args: argparse.Namespace):
+    """``path`` read with the loading options of ``args``."""
+    from ..data.load import load_samples
+
+    return load_samples(
+        path,
+        format=args.format,
+        angles=args.angles,
+        quantity=args.quantity,
+        spectral_to=args.spectral_to,
+        illuminant=args.illuminant,
+        observer=args.observer,
+        subsample=args.subsample,
+        subsample_method=args.subsample_method,
+        seed=args.seed,
+    )
+
+
+def json_argument(value: str, option: str) -> Any:
+    """Inline JSON (starting with ``{``) or the content of the JSON file ``value``."""
+    if value.lstrip().startswith("{"):
+        text, where = value, f"{option} (inline JSON)"
+    else:
+        where = f"{option} {value}"
+        try:
+            text = Path(value).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise BrdfInputError(f"{where}: no such file") from None
+        except (OSError, UnicodeDecodeError) as error:
+            raise BrdfInputError(f"{where}: cannot be read ({error})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
+
+
+def check_output(path: Path, option: str) -> None:
+    """Fail before any work if ``path`` cannot be written."""
+    folder = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise BrdfInputError(f"{option} {path}: is a folder; give a file name")
+    if not folder.is_dir():
+        raise BrdfInputError(f"{option} {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise BrdfInputError(f"{option} {path}: folder {folder} is not writable")

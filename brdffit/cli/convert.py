@@ -1,0 +1,61 @@
+"""``brdffit convert``: samples from one format to another, or a fit result tabulated as a MERL file."""
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import BrdfInputError
+from . import EXIT_OK
+from .arguments import add_loading_options, check_output, load
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from ..data.load import FORMATS
+
+    suffixes = ", ".join(f"{suffix} ({name})" for name, kind in FORMATS.items() for suffix in kind.suffixes)
+    parser.add_argument("input", metavar="IN", help="samples file (any format), or a result file (.json) for .binary")
+    parser.add_argument("output", metavar="OUT", help=f"the format from the extension: {suffixes}")
+    add_loading_options(parser)
+    parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..data.load import FORMATS, format_of_output
+
+    output = Path(args.output)
+    kind = format_of_output(output)
+    if kind is None:
+        choices = ", ".join(f"{suffix} ({name})" for name, each in FORMATS.items() for suffix in each.suffixes)
+        raise BrdfInputError(f"{output}: unknown output format; give one of: {choices}")
+    check_output(output, "OUT")
+    if FORMATS[kind].write is None:
+        return _tabulate(args, output)
+    if Path(args.input).suffix.lower() == ".json":
+        raise BrdfInputError(f"{args.input}: a result file converts only to a MERL file (.binary), not to {kind}")
+    samples = load(args.input, args)
+    if kind != "csv" and (samples.sigma is not None or samples.weight is not None):
+        print(
+            f"brdffit: warning: {output}: {kind} files hold no sigma or weight columns; they are not written",
+            file=sys.stderr,
+        )
+    FORMATS[kind].write(samples, output)
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {output} ({kind})")
+    return EXIT_OK
+
+
+def _tabulate(args: argparse.Namespace, output: Path) -> int:
+    """A fit result as a MERL table (the one format written from a model, not from samples)."""
+    if Path(args.input).suffix.lower() != ".json":
+        raise BrdfInputError(
+            f"{output}: a MERL file tabulates a whole BRDF; convert a fit result (.json) to .binary, e.g."
+            " brdffit convert fit.json out.binary"
+        )
+    from ..cache import enable_compilation_cache
+    from ..export.merl import write_merl
+    from ..fitting.results import load_result
+
+    enable_compilation_cache()
+    result = load_result(args.input)
+    write_merl(result.model, result.params, output, **result.model_options)
+    print(f"wrote {output}: {result.model} tabulated on MERL's 90 × 90 × 180 grid")
+    return EXIT_OK

@@ -1,0 +1,216 @@
+"""``brdffit fit``: fit a model to one or more samples files, write each result, print its table.
+
+Every check runs before any fit (options, output paths, every input read), so bad input writes nothing.
+"""
+
+import argparse
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from ..errors import Argument, BrdfInputError, UncertaintyWarning
+from . import EXIT_NOT_CONVERGED, EXIT_OK
+from .arguments import add_loading_options, add_model_options, check_output, json_argument, load
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from ..fitting.fit import MAX_STEPS, N_STARTS
+    from ..fitting.losses import LOSSES
+
+    parser.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s): CSV, MERL, ALTA, ASTM")
+    add_model_options(parser, "ward")
+    parser.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
+    parser.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
+    add_loading_options(parser)
+    parser.add_argument(
+        "--start",
+        metavar="PARAMS",
+        help="start from these parameters (JSON file, a result file, or inline JSON) instead of the data-driven starts",
+    )
+    parser.add_argument(
+        "--starts",
+        type=int,
+        default=N_STARTS,
+        metavar="N",
+        help=f"Levenberg-Marquardt runs from the N best grid starts (default {N_STARTS})",
+    )
+    parser.add_argument(
+        "--max-steps",
+        type=int,
+        default=MAX_STEPS,
+        metavar="N",
+        help=f"most solver steps per start (default {MAX_STEPS})",
+    )
+    parser.add_argument(
+        "--dtype",
+        default="float64",
+        metavar="TYPE",
+        help="float64 (default), or float32: solve in single precision, then refine in double",
+    )
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="result file, or a folder (OUTDIR/) for several samples files"
+        " (default: SAMPLES-stem.MODEL.json in the current folder)",
+    )
+    errors = parser.add_argument_group("uncertainty")
+    errors.add_argument(
+        "--uncertainty",
+        metavar="METHOD",
+        help="laplace (Gauss-Newton covariance at the optimum) or mcmc (emcee posterior)",
+    )
+    errors.add_argument("--walkers", type=int, metavar="N", help="mcmc: walkers (default 32)")
+    errors.add_argument("--steps", type=int, metavar="N", help="mcmc: steps per walker (default 2000)")
+    errors.add_argument("--burn", type=int, metavar="N", help="mcmc: steps discarded as burn-in (default 500)")
+    errors.add_argument("--thin", type=int, metavar="N", help="mcmc: keep every N-th step (default 1)")
+    errors.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the mcmc walkers, the start search's subset and --subsample (default 0)",
+    )
+    errors.add_argument("--chain", metavar="FILE", help="mcmc: save the whole chain (.npz, or .h5 with h5py)")
+    errors.add_argument("--corner", metavar="FILE", help="corner plot of the posterior (.png, .pdf or .svg)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..cache import enable_compilation_cache
+    from ..fitting.losses import get_loss
+    from ..physics.models import get_model
+
+    enable_compilation_cache()
+    model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
+    get_loss(args.loss)
+    mcmc = _uncertainty_settings(args)
+    outputs = output_paths(args.samples, args.output, model.name)
+    start = _start(args.start)
+    samples = [load(path, args) for path in args.samples]  # every input read and checked before any fit
+    if mcmc is not None:
+        from ..uncertainty.mcmc import check_walkers
+
+        for one in samples:
+            check_walkers(mcmc, model, one)
+    results = _fit(args, model, samples, start, mcmc)
+    outputs[0].parent.mkdir(parents=True, exist_ok=True)
+    for result, output in zip(results, outputs, strict=True):
+        result.save(output)
+    if args.corner:
+        from ..views.corner import corner_plot
+
+        corner_plot(results[0], args.corner)
+    _report(args, results, outputs)
+    return EXIT_OK if all(result.converged for result in results) else EXIT_NOT_CONVERGED
+
+
+def _fit(args: argparse.Namespace, model, samples: list, start, mcmc) -> list:
+    """Every fit, with its uncertainty when asked; the estimates' warnings are the results' own (printed later)."""
+    from .. import api
+
+    options = dict(
+        max_theta=args.max_theta,
+        start=start,
+        n_starts=args.starts,
+        max_steps=args.max_steps,
+        dtype=args.dtype,
+        seed=args.seed,
+        uncertainty=args.uncertainty,
+        mcmc=mcmc,
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)  # printed from each result, naming its file
+        if len(samples) == 1:
+            progress = sys.stderr.isatty()
+            return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]
+        return api.fit_batch(samples, model, args.loss, **options)
+
+
+def _report(args: argparse.Namespace, results: list, outputs: list[Path]) -> None:
+    """The table (one input) or a line per input, then a warning line for each thing a user must know."""
+    if len(results) == 1:
+        print(results[0].table(source=args.samples[0]))
+        print(f"wrote {', '.join(str(p) for p in (outputs[0], args.chain, args.corner) if p)}")
+    else:
+        print(summary(args.samples, results, outputs))
+    for path, result in zip(args.samples, results, strict=True):
+        for message in result.uncertainty["warnings"] if result.uncertainty else []:
+            print(f"brdffit: warning: {path}: {message}", file=sys.stderr)
+        if not result.converged:
+            print(
+                f"brdffit: warning: {path}: the fit did not converge ({result.message}); written with converged: false",
+                file=sys.stderr,
+            )
+
+
+def _start(value: str | None):
+    """The ``--start`` parameters: a parameter dictionary, or a result file's ``params``."""
+    if not value:
+        return None
+    start = json_argument(value, "--start")
+    return start["params"] if isinstance(start, dict) and "params" in start else start
+
+
+def _uncertainty_settings(args: argparse.Namespace):
+    """The MCMC settings (None unless ``--uncertainty mcmc``), after every check of the uncertainty options."""
+    from ..uncertainty.mcmc import MCMC
+    from ..uncertainty.methods import check_options
+    from ..views.corner import check_figure_path
+
+    check_options(args.uncertainty, chain=args.chain if args.uncertainty == "mcmc" else None)
+    method = args.uncertainty
+    given = {
+        name: getattr(args, name) for name in ("walkers", "steps", "burn", "thin") if getattr(args, name) is not None
+    }
+    if method != "mcmc":
+        for name in [*given, *(["chain"] if args.chain else [])]:
+            raise BrdfInputError(Argument(name), " applies only to ", Argument("uncertainty", "mcmc"))
+    if args.corner and not method:
+        raise BrdfInputError(Argument("corner"), " needs ", Argument("uncertainty", "mcmc"), " (or laplace)")
+    if (args.chain or args.corner) and len(args.samples) > 1:
+        raise BrdfInputError(f"--chain and --corner take one samples file; got {len(args.samples)}")
+    if args.corner:
+        check_figure_path(args.corner, argument="corner")
+        check_output(Path(args.corner), "--corner")
+        os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
+    return MCMC(**given, seed=args.seed) if method == "mcmc" else None
+
+
+def output_paths(inputs: list[str], output: str | None, model_name: str) -> list[Path]:
+    """The result file of each input: ``-o FILE`` for one input, else ``OUTDIR/<stem>.<model>.json``.
+
+    ``-o`` is a folder when several inputs are given, when it ends with ``/`` or
+    when it is an existing folder; it is created (after every check) if missing.
+    """
+    as_folder = len(inputs) > 1 or (output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir()))
+    if not as_folder:
+        path = Path(output) if output else Path(f"{Path(inputs[0]).stem}.{model_name}.json")
+        check_output(path, "-o")
+        return [path]
+    folder = Path(output) if output else Path(".")
+    if folder.exists() and not folder.is_dir():
+        raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
+    if not folder.exists() and folder.suffix.lower() == ".json" and not output.endswith(("/", os.sep)):
+        raise BrdfInputError(f"-o {output}: looks like a file; with several samples files give a folder (OUTDIR/)")
+    existing = next((parent for parent in (folder, *folder.parents) if parent.exists()), Path("."))
+    if not os.access(existing, os.W_OK):
+        raise BrdfInputError(f"-o {folder}: folder {existing} is not writable")
+    outputs = [folder / f"{Path(path).stem}.{model_name}.json" for path in inputs]
+    seen: dict[Path, str] = {}
+    for path, out in zip(inputs, outputs, strict=True):
+        if out in seen:
+            raise BrdfInputError(f"{seen[out]} and {path} would both write {out}; give them different names")
+        seen[out] = path
+    return outputs
+
+
+def summary(inputs: list[str], results, outputs) -> str:
+    """One line per input: steps, cost, rmse, convergence and the file written."""
+    width = max(len(path) for path in inputs)
+    lines = [f"{'samples'.ljust(width)}  steps  {'cost':>12}  {'rmse (1/sr)':>12}  status     result"]
+    for path, result, output in zip(inputs, results, outputs, strict=True):
+        status = "converged" if result.converged else "NOT conv."
+        lines.append(
+            f"{path.ljust(width)}  {result.n_steps:5d}  {result.cost:12.6g}  {result.rmse:12.4g}  {status:9s}  {output}"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,107 @@
+"""``brdffit synth``: synthetic samples of a model on a measurement geometry, with noise (``data_synth``)."""
+
+import argparse
+import inspect
+from pathlib import Path
+
+from ..errors import BrdfInputError
+from . import EXIT_OK
+from .arguments import add_model_options, check_output, json_argument
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from data_synth import GEOMETRIES, NOISE_KINDS
+
+    add_model_options(parser, None)
+    parser.add_argument(
+        "--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON"
+    )
+    parser.add_argument(
+        "--geometry", default="hemisphere", metavar="NAME", help=f"{', '.join(GEOMETRIES)} (default hemisphere)"
+    )
+    parser.add_argument(
+        "--n-incident",
+        type=int,
+        metavar="N",
+        help="light zenith angles (hemisphere, in-plane, near-specular; default 8)",
+    )
+    parser.add_argument("--n-theta", type=int, metavar="N", help="viewer zenith angles (hemisphere 36, in-plane 90)")
+    parser.add_argument("--n-phi", type=int, metavar="N", help="viewer azimuths (hemisphere; default 36)")
+    parser.add_argument(
+        "--n-samples", type=int, metavar="N", help="sample count (random, near-specular; default 10000)"
+    )
+    parser.add_argument(
+        "--spread", type=float, metavar="DEG", help="near-specular: widest angle from the mirror direction (default 10)"
+    )
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=0.0,
+        metavar="LEVEL",
+        help="noise level: 0.01 is 1%% for multiplicative noise (default 0)",
+    )
+    parser.add_argument(
+        "--noise-kind",
+        default=NOISE_KINDS[0],
+        metavar="KIND",
+        help=f"{' or '.join(NOISE_KINDS)} (LEVEL in 1/sr for additive; default {NOISE_KINDS[0]})",
+    )
+    parser.add_argument("--sigma-column", action="store_true", help="write the noise's 1-σ as sigma columns")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the noise and of random geometries (default 0)")
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="samples file to write")
+
+
+def run(args: argparse.Namespace) -> int:
+    from data_synth import GEOMETRIES, synthesize
+
+    from ..data.load import save_samples
+
+    model, params = _model_and_params(args)
+    if args.geometry not in GEOMETRIES:
+        raise BrdfInputError(f"--geometry {args.geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
+    make_geometry = GEOMETRIES[args.geometry]
+    accepted = inspect.signature(make_geometry).parameters
+    given = {
+        name: getattr(args, name)
+        for name in ("n_incident", "n_theta", "n_phi", "n_samples", "spread")
+        if getattr(args, name) is not None
+    }
+    for name in given:
+        if name not in accepted:
+            raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {args.geometry}")
+    if "seed" in accepted:
+        given["seed"] = args.seed
+    output = Path(args.output)
+    check_output(output, "-o")
+    wi, wo = make_geometry(**given)
+    samples = synthesize(
+        model.name,
+        params,
+        wi,
+        wo,
+        noise=args.noise,
+        noise_kind=args.noise_kind,
+        seed=args.seed,
+        with_sigma=args.sigma_column,
+        **model.model_options,
+    )
+    save_samples(samples, output)
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) of {model.name} to {output}")
+    return EXIT_OK
+
+
+def _model_and_params(args: argparse.Namespace):
+    """The model and its parameters, from ``--model`` and ``--params`` (a parameter dictionary or a result file)."""
+    from ..physics.models import get_model
+
+    params = json_argument(args.params, "--params")
+    model_name, options = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}
+    if isinstance(params, dict) and "params" in params and "model" in params:  # a result file
+        if args.model not in (None, params["model"]):
+            raise BrdfInputError(f"--params {args.params} holds a {params['model']} result, not --model {args.model}")
+        model_name = params["model"]
+        options = {**params.get("model_options", {}), **{k: v for k, v in options.items() if v is not None}}
+        params = params["params"]
+    if model_name is None:
+        raise BrdfInputError("--model is required unless --params is a result file")
+    return get_model(model_name, **options), params

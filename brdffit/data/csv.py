@@ -1,0 +1,186 @@
+"""The samples file: a CSV table of measurements, one per row (brdffit's own format; ``docs/formats.md``).
+
+Comma- or whitespace-separated, ``#`` starts a comment (a whole line or the rest of one), one header row
+naming
+
+* the geometry: ``theta_i, phi_i, theta_o, phi_o`` (degrees unless ``angles="radians"``) or
+  ``wi_x, wi_y, wi_z, wo_x, wo_y, wo_z``;
+* the values: ``value``, or ``r, g, b``, or any other numeric columns, taken as named channels in file
+  order (spectral bands named by wavelength);
+* optionally ``sigma`` (or ``sigma_<channel>`` for each channel), the 1-σ uncertainty in the units of
+  the values, and ``weight``.
+
+Bad input raises :class:`~brdffit.errors.BrdfInputError` with one line naming the file, the row (and its
+line in the file) and the column.
+"""
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._files import write_text_atomic
+from ..errors import BrdfInputError
+from ..physics.geometry import direction_to_spherical
+from .checks import TableChecks, named
+from .samples import Samples
+from .text import parse_numbers, read_text
+
+ANGLE_COLUMNS = ("theta_i", "phi_i", "theta_o", "phi_o")
+VECTOR_COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
+RGB_COLUMNS = ("r", "g", "b")
+ANGLE_UNITS = ("degrees", "radians")
+#: Column-name prefixes that belong to the geometry, never to a channel.
+_GEOMETRY_PREFIXES = ("theta", "phi", "wi_", "wo_")
+
+
+def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
+    """Read a samples file into :class:`Samples`; ``angles`` is the unit of its angle columns."""
+    path = Path(path)
+    source = str(path)
+    text = read_text(path, "a samples file", allow_empty=True)
+    lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1)]
+    content = [(number, line) for number, line in lines if line.strip() and not line.lstrip().startswith("#")]
+    if not content:
+        raise BrdfInputError(f"{source}: empty table (no header row and no data)")
+    header_line, header = content[0]
+    rows = content[1:]
+    if not rows:
+        raise BrdfInputError(f"{source}: empty table (a header row but no data rows)")
+    delimiter = "," if "," in header else None
+    names = [name.strip() for name in header.split(delimiter)]
+    layout = _Layout.from_header(names, source, header_line)
+    line_numbers = np.array([number for number, _ in rows])
+    checks = TableChecks(lambda row: f"{source}: row {row + 1} (line {line_numbers[row]})")
+    cells = [[cell.strip() for cell in line.split("#", 1)[0].split(delimiter)] for _, line in rows]
+    for row, row_cells in enumerate(cells):
+        if len(row_cells) != len(names):
+            raise BrdfInputError(
+                f"{checks.locate(row)}: {len(row_cells)} cells, but the header names {len(names)} columns"
+            )
+    table = parse_numbers(cells, checks, named(names))
+
+    if layout.angles:
+        angles_table = table[:, layout.geometry]
+        wi, wo = checks.angles_to_directions(
+            angles_table[:, [0, 2]], angles_table[:, [1, 3]], angles, ("theta_i", "theta_o"), ("phi_i", "phi_o")
+        )
+    else:
+        geometry = table[:, layout.geometry]
+        wi = checks.unit_directions(geometry[:, :3], "wi")
+        wo = checks.unit_directions(geometry[:, 3:], "wo")
+    values = table[:, layout.values]
+    sigma = None if layout.sigma is None else np.broadcast_to(table[:, layout.sigma], values.shape)
+    weight = None if layout.weight is None else table[:, layout.weight]
+    sigma, weight = checks.values_sigma_weight(values, layout.channels, sigma, weight, source, layout.sigma_names)
+    return Samples(wi, wo, values, layout.channels, sigma, weight, source)
+
+
+def write_csv(samples: Samples, path: str | os.PathLike) -> None:
+    """Write ``samples`` as a samples file, atomically: angles in degrees, BRDF values, sigma and weight if present.
+
+    Numbers are written with 17 significant digits, so reading the file back
+    gives the same float64 values (up to the angle ↔ vector conversion, ~1e-16).
+    """
+    columns = [np.degrees(angle) for w in (samples.wi, samples.wo) for angle in direction_to_spherical(w)]
+    header = list(ANGLE_COLUMNS) + list(samples.channels)
+    columns += list(samples.values.T)
+    if samples.sigma is not None:
+        header += ["sigma"] if samples.n_channels == 1 else [f"sigma_{c}" for c in samples.channels]
+        columns += list(samples.sigma.T)
+    if samples.weight is not None:
+        header.append("weight")
+        columns.append(samples.weight)
+    table = np.column_stack(columns)
+    body = "\n".join(",".join(f"{x:.17g}" for x in row) for row in table)
+    write_text_atomic(path, ",".join(header) + "\n" + body + "\n")
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Which header columns hold the geometry, values, sigma and weight."""
+
+    angles: bool
+    geometry: list[int]
+    values: list[int]
+    channels: tuple[str, ...]
+    sigma: list[int] | None
+    sigma_names: list[str] | None
+    weight: int | None
+
+    @classmethod
+    def from_header(cls, names: list[str], source: str, line: int) -> "_Layout":
+        where = f"{source}: header (line {line})"
+        lower = [name.lower() for name in names]
+        for index, name in enumerate(lower):
+            if not name:
+                raise BrdfInputError(f"{where}: column {index + 1} has no name")
+            if name in lower[:index]:
+                raise BrdfInputError(f"{where}: column {names[index]!r} appears twice")
+        position = {name: index for index, name in enumerate(lower)}
+        has_angles = any(name in position for name in ANGLE_COLUMNS)
+        has_vectors = any(name in position for name in VECTOR_COLUMNS)
+        geometry_help = f"geometry is {', '.join(ANGLE_COLUMNS)} or {', '.join(VECTOR_COLUMNS)}"
+        if has_angles and has_vectors:
+            raise BrdfInputError(
+                f"{where}: both angle and direction-vector columns; give one geometry ({geometry_help})"
+            )
+        if not (has_angles or has_vectors):
+            raise BrdfInputError(f"{where}: no geometry columns; {geometry_help}")
+        wanted = ANGLE_COLUMNS if has_angles else VECTOR_COLUMNS
+        for name in wanted:
+            if name not in position:
+                raise BrdfInputError(f"{where}: missing column {name!r}; {geometry_help}")
+        geometry = [position[name] for name in wanted]
+
+        rest = [index for index in range(len(names)) if lower[index] not in wanted]
+        weight = position.get("weight")
+        sigma_columns = [i for i in rest if lower[i] == "sigma" or lower[i].startswith("sigma_")]
+        value_columns = [i for i in rest if i != weight and i not in sigma_columns]
+        for index in value_columns:
+            if lower[index].startswith(_GEOMETRY_PREFIXES):
+                raise BrdfInputError(f"{where}: unknown column {names[index]!r}; {geometry_help}")
+        value_names = [lower[i] for i in value_columns]
+        if "value" in value_names or any(name in RGB_COLUMNS for name in value_names):
+            expected = ["value"] if "value" in value_names else list(RGB_COLUMNS)
+            for index in value_columns:
+                if lower[index] not in expected:
+                    raise BrdfInputError(
+                        f"{where}: unknown column {names[index]!r}; with {', '.join(expected)} no other value columns"
+                        " are allowed (optional: sigma, sigma_<channel>, weight)"
+                    )
+            for name in expected:
+                if name not in value_names:
+                    raise BrdfInputError(f"{where}: missing column {name!r}; RGB values need r, g and b")
+            value_columns = [position[name] for name in expected]
+            channels = tuple(expected)
+        else:
+            channels = tuple(names[i] for i in value_columns)
+        if not value_columns:
+            raise BrdfInputError(f"{where}: no value columns; give value, or r, g, b, or named channels")
+
+        sigma, sigma_names = None, None
+        if sigma_columns:
+            if len(sigma_columns) == 1 and lower[sigma_columns[0]] == "sigma":
+                sigma, sigma_names = sigma_columns, [names[sigma_columns[0]]] * len(channels)
+            else:
+                by_channel = {lower[i][len("sigma_") :]: i for i in sigma_columns}
+                for index in sigma_columns:
+                    if lower[index] == "sigma":
+                        raise BrdfInputError(
+                            f"{where}: give either one 'sigma' column or one sigma_<channel> per channel, not both"
+                        )
+                    if lower[index][len("sigma_") :] not in [c.lower() for c in channels]:
+                        raise BrdfInputError(
+                            f"{where}: unknown column {names[index]!r}; sigma columns are sigma_<channel>"
+                            f" for channels {', '.join(channels)}"
+                        )
+                missing = [c for c in channels if c.lower() not in by_channel]
+                if missing:
+                    raise BrdfInputError(
+                        f"{where}: missing column 'sigma_{missing[0]}'; give a sigma for every channel or one 'sigma'"
+                    )
+                sigma = [by_channel[c.lower()] for c in channels]
+                sigma_names = [names[i] for i in sigma]
+        return cls(has_angles, geometry, value_columns, channels, sigma, sigma_names, weight)

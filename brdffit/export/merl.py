@@ -1,0 +1,29 @@
+"""A fitted model as a MERL ``.binary`` table, the measured-BRDF format renderers read (Matusik et al. 2003)."""
+
+import os
+
+import numpy as np
+
+from ..data.merl import CHANNELS, HORIZON, N_BINS, bin_directions, write_merl_table
+from ..errors import BrdfInputError
+from ..physics.evaluate import evaluate
+
+
+def write_merl(model, params: dict, path: str | os.PathLike, **model_options) -> None:
+    """Tabulate ``model`` with ``params`` (the result file's dictionary) into a MERL ``.binary`` file.
+
+    The model (three channels, r, g, b) is evaluated with :func:`brdffit.evaluate` at every bin's
+    directions (Matusik et al. 2003 table, Rusinkiewicz 1998 angles); bins with a direction below the
+    horizon, which MERL never looks up, hold 0. ``model_options`` are the model's options (``fresnel=``).
+    """
+    wi, wo = bin_directions()
+    above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
+    values = np.zeros((N_BINS, len(CHANNELS)))
+    computed = evaluate(model, params, wi[above], wo[above], **model_options)
+    if computed.shape[1] != len(CHANNELS):
+        name = getattr(model, "name", model)
+        raise BrdfInputError(
+            f"{path}: model {name!s} gives {computed.shape[1]} channel(s); a MERL file holds 3 (r, g, b)"
+        )
+    values[above] = computed
+    write_merl_table(values, path)

@@ -1,0 +1,148 @@
+"""Lobe families: specular lobes of unit albedo, ``lobe(shape; wi, wo)`` in 1/sr, and their shape's coordinates.
+
+A :class:`Lobe` says which shape parameters it has (names and domains), where the fit starts from (a
+coarse ``grid`` of shapes spanning real materials) and how to evaluate it. Its shape exists in three
+coordinate systems (:class:`ShapeCoordinates`): the *physical* values themselves; the *unconstrained*
+ones the solver moves (through each domain's smooth map, ``domains.py``); and the *sampling* ones the
+MCMC walkers move (the physical values unless a lobe says otherwise). A Lafortune lobe's direction is
+one angle ``ψ`` in the last two (``lafortune.py``).
+
+Abstract classes here, final concrete classes in the family modules (equinox's abstract/final pattern).
+"""
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, final
+
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..._arrays import namespace
+from ...errors import BrdfInputError
+from ..domains import Domain, MappedDomain
+
+#: A lobe's shape: each parameter's value, an array (K,) for K lobes or a number for one.
+Shape = Mapping[str, Any]
+
+
+class ShapeCoordinates(ABC):
+    """A lobe's shape parameters in one coordinate system, one coordinate per entry of :attr:`names`.
+
+    Both maps work elementwise, so one call serves all K lobes of a model: :meth:`to_vector` turns a
+    shape of (K,) arrays into an (S, K) array, :meth:`from_vector` an (S, …) array back into a shape.
+    """
+
+    @property
+    @abstractmethod
+    def names(self) -> tuple[str, ...]:
+        """The coordinates' names, e.g. ``("psi", "n")``."""
+
+    @abstractmethod
+    def to_vector(self, shape: Shape):
+        """The coordinates (S, …) of physical ``shape`` (numpy on the host; traceable where documented)."""
+
+    @abstractmethod
+    def from_vector(self, u) -> dict[str, Any]:
+        """The physical shape at coordinates ``u`` (S, …), traceable by JAX."""
+
+
+class BoundedShapeCoordinates(ShapeCoordinates):
+    """Coordinates that live in domains of their own (the physical and the sampling ones)."""
+
+    @property
+    @abstractmethod
+    def domains(self) -> tuple[Domain, ...]:
+        """Each coordinate's domain, with the prior the posterior puts on it."""
+
+
+@final
+@dataclass(frozen=True)
+class PhysicalShape(BoundedShapeCoordinates):
+    """The parameters themselves; :meth:`to_vector` also traces (the delta method differentiates it)."""
+
+    parameters: tuple[tuple[str, Domain], ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(name for name, _ in self.parameters)
+
+    @property
+    def domains(self) -> tuple[Domain, ...]:
+        return tuple(domain for _, domain in self.parameters)
+
+    def to_vector(self, shape: Shape):
+        xp = namespace(*(shape[name] for name in self.names))
+        return xp.stack([xp.asarray(shape[name]) for name in self.names])
+
+    def from_vector(self, u) -> dict[str, Any]:
+        return {name: u[i] for i, name in enumerate(self.names)}
+
+
+@final
+@dataclass(frozen=True)
+class UnconstrainedShape(ShapeCoordinates):
+    """Each parameter through its domain's smooth map from the real line (``x = to_physical(u)``)."""
+
+    parameters: tuple[tuple[str, MappedDomain], ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(name for name, _ in self.parameters)
+
+    def to_vector(self, shape: Shape) -> np.ndarray:
+        return np.stack([domain.to_unconstrained(shape[name]) for name, domain in self.parameters])
+
+    def from_vector(self, u) -> dict[str, Any]:
+        return {name: domain.to_physical(u[i]) for i, (name, domain) in enumerate(self.parameters)}
+
+
+class Lobe(ABC):
+    """A family of specular lobes of unit albedo, ``lobe(shape; wi, wo)`` in 1/sr.
+
+    Concrete lobes are frozen dataclasses, hence hashable: JAX treats them as static configuration.
+    """
+
+    @property
+    @abstractmethod
+    def summary(self) -> str:
+        """The lobe's formula in a line, for ``brdffit models``."""
+
+    @property
+    @abstractmethod
+    def parameters(self) -> tuple[tuple[str, Domain], ...]:
+        """The shape parameters (name, domain), in the order of the result file."""
+
+    @property
+    @abstractmethod
+    def grid(self) -> tuple[dict[str, float], ...]:
+        """Starting shapes for the fit: coarse, but spanning realistic materials."""
+
+    @abstractmethod
+    def __call__(self, shape: Shape, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, " n"]:
+        """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(name for name, _ in self.parameters)
+
+    @property
+    def physical(self) -> BoundedShapeCoordinates:
+        return PhysicalShape(self.parameters)
+
+    @property
+    def unconstrained(self) -> ShapeCoordinates:
+        """What the solver moves: each parameter through its domain's map (a lobe overrides it if needed)."""
+        return UnconstrainedShape(self.parameters)
+
+    @property
+    def sampling(self) -> BoundedShapeCoordinates:
+        """What the MCMC walkers move: the physical values unless a lobe says otherwise."""
+        return self.physical
+
+    def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
+        """The shape with each value checked against its domain; ``where`` prefixes errors."""
+        for name, domain in self.parameters:
+            if not domain.contains(shape[name]):
+                raise BrdfInputError(f"{where}{name} = {shape[name]!r} is outside its domain {domain.text}")
+        return {name: float(shape[name]) for name in self.names}

@@ -1,0 +1,95 @@
+"""What every model is: a diffuse term plus ``K`` specular lobes of one family.
+
+Every model is a diffuse term plus one or more specular lobes; diffuse and specular albedos are per
+channel, lobe-shape parameters are shared by all channels. So a model is::
+
+    f(wi, wo)[c] = diffuse[c] / π + Σ_k specular[k, c] · lobe(shape[k]; wi, wo)
+
+with ``lobe`` a unit-albedo lobe family (``lobe.py``: Ward, Cook-Torrance, Phong, …). The model is
+linear in the albedos, which the fit's starting guess and its normal equations exploit
+(``brdffit/fitting``).
+
+Its parameters exist as arrays (:class:`~brdffit.physics.models.params.Params`, what :meth:`Model.brdf`
+takes), as the result file's dictionary (:attr:`Model.dictionary`) and as flat vectors in three
+coordinate systems (:attr:`Model.unconstrained`, :attr:`Model.sampling`, :attr:`Model.physical`;
+``coordinates.py``).
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from ..geometry import above_horizon
+from .coordinates import PhysicalCoordinates, SamplingCoordinates, UnconstrainedCoordinates
+from .dictionary import ParameterDictionary
+from .lobe import Lobe
+from .params import Params
+
+
+@dataclass(frozen=True)
+class Model:
+    """A reflectance model: ``diffuse / π`` plus ``n_lobes`` lobes of one family.
+
+    ``name`` is the model's registry name (``ward``); ``options`` the options that define it (``fresnel``,
+    ``lobes``) as sorted ``(key, value)`` pairs, written to the result file as ``model_options``.
+    Frozen, hence hashable: JAX treats a model as static configuration.
+    """
+
+    name: str
+    summary: str
+    lobe: Lobe | None = None
+    n_lobes: int = 0
+    diffuse_name: str = "rho_d"
+    specular_name: str = "rho_s"
+    options: tuple[tuple[str, Any], ...] = ()
+    isotropic: bool = True
+    #: Lafortune writes its lobes as a list, ``"lobes": [{...}, ...]``.
+    lobes_as_list: bool = False
+
+    @property
+    def model_options(self) -> dict[str, Any]:
+        return dict(self.options)
+
+    # ------------------------------------------------------------------ evaluation
+    def brdf(self, params: Params, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, "n C"]:
+        """BRDF values (N, C) in 1/sr (JAX); zero where ``wi_z ≤ 0`` or ``wo_z ≤ 0``.
+
+        The computation behind :func:`brdffit.evaluate` (which checks its inputs and returns numpy)
+        and :meth:`brdffit.FitResult.predict` (which evaluates a result's parameters).
+        """
+        visible, wi, wo = above_horizon(jnp.asarray(wi), jnp.asarray(wo))
+        diffuse = jnp.asarray(params.diffuse)
+        values = jnp.broadcast_to(diffuse / jnp.pi, (wi.shape[0], diffuse.shape[0]))
+        if self.n_lobes:
+            lobes = self.lobe_values(params.shape, wi, wo)
+            values = values + lobes.T @ jnp.asarray(params.specular)
+        return jnp.where(visible[:, None], values, 0.0)
+
+    def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"]:
+        """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions."""
+        return jax.vmap(lambda one_shape: self.lobe(one_shape, wi, wo))(dict(shape))
+
+    # ------------------------------------------------------------ parameter forms
+    @property
+    def dictionary(self) -> ParameterDictionary:
+        """The parameters as the result file writes them (``{"rho_d": [...], "alpha": 0.1}``)."""
+        return ParameterDictionary(self)
+
+    @property
+    def unconstrained(self) -> UnconstrainedCoordinates:
+        """The flat vector the solver moves."""
+        return UnconstrainedCoordinates(self)
+
+    @property
+    def sampling(self) -> SamplingCoordinates:
+        """The flat vector the MCMC walkers move."""
+        return SamplingCoordinates(self)
+
+    @property
+    def physical(self) -> PhysicalCoordinates:
+        """The flat vector of the parameters themselves, in which covariances are reported."""
+        return PhysicalCoordinates(self)

@@ -1,0 +1,18 @@
+"""A model's parameters as arrays, the form every computation takes."""
+
+from typing import Any, NamedTuple
+
+from jaxtyping import Array, Float
+
+
+class Params(NamedTuple):
+    """A model's parameters as arrays (a JAX pytree).
+
+    ``diffuse``: (C,) albedos; ``specular``: (K, C) albedos; ``shape``: lobe-shape parameters, each of
+    shape (K,), keyed by their names (``alpha``, ``m``, ``f0``, …). Leading batch axes are allowed
+    where a caller vmaps.
+    """
+
+    diffuse: Float[Array, "*batch C"] | Any
+    specular: Float[Array, "*batch K C"] | Any
+    shape: dict[str, Any]
