@@ -1,6 +1,6 @@
 """brdffit: differentiable BRDF fitting for measured reflectance data.
 
-The public API (SPEC section 6)::
+The public API::
 
     samples = brdffit.load_samples("samples.csv")
     result = brdffit.fit(samples, model="ward", loss="log")
@@ -9,39 +9,63 @@ The public API (SPEC section 6)::
     results = brdffit.fit_batch([samples_a, samples_b], model="ward")
     result = brdffit.fit(samples, uncertainty="laplace")        # or "mcmc", mcmc=brdffit.MCMC(steps=5000)
     result.uncertainty["stderr"], print(result)                  # errors; the table shows value ± error
-    posterior = brdffit.sample_posterior(result, samples)        # MCMC for an existing result
-    brdffit.corner_plot(posterior, "corner.png")
+    sampled = brdffit.sample_posterior(result, samples)          # MCMC for an existing result; sampled.draws
+    brdffit.corner_plot(sampled, "corner.png")
 
-Names are imported on first use (PEP 562), so ``import brdffit`` does no work;
-the modules that use JAX switch it to float64 (``_jax.py``).
+Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
+below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
+for the rest of a program (``_jax.py``).
 """
 
 import importlib
+from typing import TYPE_CHECKING
 
 from ._version import __version__ as __version__
 
 _EXPORTS = {
     "BrdfInputError": ".errors",
-    "MCMC": ".uncertainty.mcmc",
     "UncertaintyWarning": ".errors",
-    "corner_plot": ".views.corner",
-    "laplace_uncertainty": ".uncertainty.laplace",
-    "sample_posterior": ".uncertainty.mcmc",
-    "FitResult": ".fitting.results",
-    "LOSSES": ".fitting.losses",
     "MODELS": ".physics.models",
     "Model": ".physics.models",
-    "Samples": ".data.samples",
-    "enable_compilation_cache": ".cache",
-    "evaluate": ".physics.evaluate",
-    "fit": ".api",
-    "fit_batch": ".api",
     "get_model": ".physics.models",
-    "load_result": ".fitting.results",
-    "save_result": ".fitting.results",
+    "evaluate": ".physics.evaluate",
+    "Samples": ".data.samples",
     "load_samples": ".data.load",
     "save_samples": ".data.load",
+    "LOSSES": ".fitting.losses",
+    "FitResult": ".fitting.results",
+    "load_result": ".fitting.results",
+    "save_result": ".fitting.results",
+    "fit": ".api",
+    "fit_batch": ".api",
+    "MCMC": ".uncertainty.mcmc",
+    "laplace_uncertainty": ".uncertainty.laplace",
+    "sample_posterior": ".uncertainty.mcmc",
+    "corner_plot": ".views.corner",
+    "enable_compilation_cache": ".cache",
 }
+
+if TYPE_CHECKING:
+    from .api import fit as fit
+    from .api import fit_batch as fit_batch
+    from .cache import enable_compilation_cache as enable_compilation_cache
+    from .data.load import load_samples as load_samples
+    from .data.load import save_samples as save_samples
+    from .data.samples import Samples as Samples
+    from .errors import BrdfInputError as BrdfInputError
+    from .errors import UncertaintyWarning as UncertaintyWarning
+    from .fitting.losses import LOSSES as LOSSES
+    from .fitting.results import FitResult as FitResult
+    from .fitting.results import load_result as load_result
+    from .fitting.results import save_result as save_result
+    from .physics.evaluate import evaluate as evaluate
+    from .physics.models import MODELS as MODELS
+    from .physics.models import Model as Model
+    from .physics.models import get_model as get_model
+    from .uncertainty.laplace import laplace_uncertainty as laplace_uncertainty
+    from .uncertainty.mcmc import MCMC as MCMC
+    from .uncertainty.mcmc import sample_posterior as sample_posterior
+    from .views.corner import corner_plot as corner_plot
 
 
 def __getattr__(name: str):

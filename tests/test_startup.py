@@ -4,6 +4,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from paths import ROOT
 
 import brdffit
@@ -13,6 +14,30 @@ from brdffit.cache import CACHE_VARIABLE, default_cache_dir, enable_compilation_
 def test_import_loads_no_jax():
     code = "import sys, brdffit; brdffit.__version__; assert 'jax' not in sys.modules, 'jax imported'"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize(
+    ("argv", "status", "said"),
+    [
+        (["--help"], 0, "fit a model to samples files"),
+        (["--version"], 0, f"brdffit {brdffit.__version__}"),
+        ([], 2, "the following arguments are required: COMMAND"),
+        (["fitt"], 2, "invalid choice: 'fitt'"),
+    ],
+)
+def test_help_and_version_import_no_jax(argv, status, said):
+    """The command line loads a command's module only to run it: the top-level help needs none of them."""
+    code = (
+        "import sys\n"
+        "from brdffit.cli import main\n"
+        f"status = main({argv!r})\n"
+        f"assert status == {status}, status\n"
+        "loaded = [name for name in ('jax', 'numpy', 'brdffit.physics', 'brdffit.fitting') if name in sys.modules]\n"
+        "assert not loaded, loaded\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert said in done.stdout + done.stderr
 
 
 def test_public_names_resolve_lazily():
