@@ -34,7 +34,10 @@ def samples():
         (dict(max_theta=95), "max_theta=95 is not allowed; give degrees in (0, 90]"),
         (dict(fresnel="schlick"), "fresnel does not apply to model ward; it takes no options"),
         (dict(max_step=3), "max_step is not an argument of the fit, nor an option of any model (fresnel, lobes)"),
-        (dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)), "walkers=4 is too few for 8 sampled parameters; give at least 16"),
+        (
+            dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)),
+            "walkers=4 is too few for 8 sampled parameters; give at least 16",
+        ),
     ],
 )
 def test_the_library_names_python_arguments(samples, call, message):
@@ -48,7 +51,10 @@ def test_the_library_names_python_arguments(samples, call, message):
     [
         (["--starts", "0"], "--starts 0 is not allowed; give a whole number ≥ 1"),
         (["--max-theta", "95"], "--max-theta 95.0 is not allowed; give degrees in (0, 90]"),
-        (["--uncertainty", "mcmc", "--walkers", "4"], "--walkers 4 is too few for 8 sampled parameters; give at least 16"),
+        (
+            ["--uncertainty", "mcmc", "--walkers", "4"],
+            "--walkers 4 is too few for 8 sampled parameters; give at least 16",
+        ),
         (["--model", "lafortune", "--lobes", "9"], "--lobes 9 is not allowed; give a whole number from 1 to 8"),
     ],
 )
