@@ -237,6 +237,7 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
 
     @jit
     def solve(theta0, problem: Problem):
+        theta0 = jnp.asarray(theta0, jnp.float64)  # the optimum is float64's whatever the start's dtype
         problem = prepared(loss, problem)
         frozen_theta0, frozen_problem = jax.lax.stop_gradient((theta0, problem))
         solution = optx.least_squares(

@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._jax import float64
 from ..data.samples import Samples
 from ..physics.geometry import NORMAL
 from ..physics.models import Model
@@ -64,6 +65,7 @@ def chunk_size(n_padded: int) -> int:
     return min(n_padded & -n_padded, CHUNK)
 
 
+@float64
 def build_problem(samples: Samples, dtype: str = "float64") -> Problem:
     """The padded arrays of ``samples``, in ``dtype`` (the model is evaluated in it; sums stay float64).
 
