@@ -25,6 +25,8 @@ from ._version import __version__ as __version__
 _EXPORTS = {
     "BrdfInputError": ".errors",
     "UncertaintyWarning": ".errors",
+    "FitWarning": ".errors",
+    "InputWarning": ".errors",
     "MODELS": ".physics.models",
     "Model": ".physics.models",
     "get_model": ".physics.models",
@@ -53,6 +55,8 @@ if TYPE_CHECKING:
     from .data.load import save_samples as save_samples
     from .data.samples import Samples as Samples
     from .errors import BrdfInputError as BrdfInputError
+    from .errors import FitWarning as FitWarning
+    from .errors import InputWarning as InputWarning
     from .errors import UncertaintyWarning as UncertaintyWarning
     from .fitting.losses import LOSSES as LOSSES
     from .fitting.results import FitResult as FitResult

@@ -64,7 +64,7 @@ def jit(fun=None, **jit_arguments):
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
-        with jax.enable_x64(True):
+        with float64():
             if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
                 return plain(*args, **kwargs)
             return top_level()(*args, **kwargs)
@@ -75,7 +75,7 @@ def jit(fun=None, **jit_arguments):
         A later call with arrays of those shapes reuses JAX's caches; so this
         can run in another thread while the caller does other work.
         """
-        with jax.enable_x64(True):
+        with float64():
             top_level().lower(*args, **kwargs).compile()
 
     call.precompile = precompile

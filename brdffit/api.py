@@ -6,11 +6,13 @@ API lives in its layer and is re-exported by name in ``brdffit/__init__.py``.
 """
 
 import os
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
 from ._jax import float64
 from .data.samples import Samples
+from .errors import FitWarning
 from .fitting.batch import fit_many
 from .fitting.fit import MAX_STEPS, N_STARTS, checked, fit_one
 from .fitting.results import FitResult
@@ -69,6 +71,7 @@ def fit(
         seed=seed,
         **model_options,
     )
+    warn_about(result)
     if uncertainty is None:
         return result
     return with_uncertainty(result, samples.within(max_theta), uncertainty, mcmc=mcmc, chain=chain, progress=progress)
@@ -103,6 +106,10 @@ def fit_batch(
     """
     check_options(uncertainty, mcmc)
     samples = list(samples)
+    if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
+        for one in samples:
+            built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
+            check_walkers(mcmc or MCMC(), built, kept)
     results = fit_many(
         samples,
         model,
@@ -117,9 +124,17 @@ def fit_batch(
         seed=seed,
         **model_options,
     )
+    for result in results:
+        warn_about(result)
     if uncertainty is None:
         return results
     return [
         with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
         for result, one in zip(results, samples, strict=True)
     ]
+
+
+def warn_about(result: FitResult) -> None:
+    """Each of the result's caveats as a :class:`~brdffit.FitWarning` (they are also ``result.warnings``)."""
+    for caveat in result.warnings:
+        warnings.warn(FitWarning(caveat), stacklevel=3)

@@ -30,10 +30,13 @@ def choice(name: str, value, choices: Iterable[str], verb: str = "is not allowed
     return value
 
 
+def angle_up_to_90(name: str, value: float) -> float:
+    """An angle in degrees in (0, 90]: a zenith limit, a spread about a direction."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 90:
+        raise not_allowed(name, value, "give degrees in (0, 90]")
+    return value
+
+
 def max_theta(value: float | None) -> float | None:
     """A zenith limit in degrees, in (0, 90] (None: no limit)."""
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 90:
-        raise not_allowed("max_theta", value, "give degrees in (0, 90]")
-    return value
+    return None if value is None else angle_up_to_90("max_theta", value)

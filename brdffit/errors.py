@@ -1,4 +1,4 @@
-"""The exception and the warning users see.
+"""The exception and the warnings users see.
 
 :class:`BrdfInputError` is bad input: one line that names the file (or the argument), the row and column
 where there is one, what was wrong and what is allowed. A message about an argument names it the way the
@@ -7,8 +7,11 @@ of its flags (``--starts 0 is not allowed``). Messages are built from text and :
 each interface spells the arguments its own way: Python here, the command line in ``brdffit/cli`` (the one
 place that knows the flags).
 
-:class:`UncertaintyWarning` is an uncertainty estimate that needs care (a degenerate pair, an undetermined
-parameter, a short chain); the same messages are written to the result's ``uncertainty.warnings``.
+The warnings, one line each and spelled the same way: :class:`InputWarning` (input read, but worth a look:
+a header overridden, angles that look like radians read as degrees), :class:`FitWarning` (what a user must
+know about a fit: a dead lobe, a parameter at a plausible bound, data that are not reciprocal; also the
+result's ``fit.warnings``) and :class:`UncertaintyWarning` (an estimate that needs care: a degenerate pair,
+an undetermined parameter, a short chain; also the result's ``uncertainty.warnings``).
 """
 
 from collections.abc import Callable
@@ -32,12 +35,9 @@ class Argument:
         return self.name if self.shown is None else f"{self.name}={self.shown}"
 
 
-class BrdfInputError(ValueError):
-    """Bad input: a file, an argument or a parameter value that brdffit cannot accept.
-
-    Built from ``parts``, each a piece of text or an :class:`Argument`; ``str(error)`` spells the
-    arguments as Python does, :meth:`spelled` as any caller wants.
-    """
+class Spelled:
+    """A message built from ``parts``, each a piece of text or an :class:`Argument`; ``str()`` spells the
+    arguments as Python does, :meth:`spelled` as any caller wants."""
 
     def __init__(self, *parts: "str | Argument"):
         self.parts = parts
@@ -46,6 +46,18 @@ class BrdfInputError(ValueError):
     def spelled(self, spell: Callable[[Argument], str]) -> str:
         """The message with every argument written by ``spell``."""
         return "".join(part if isinstance(part, str) else spell(part) for part in self.parts)
+
+
+class BrdfInputError(Spelled, ValueError):
+    """Bad input: a file, an argument or a parameter value that brdffit cannot accept."""
+
+
+class InputWarning(Spelled, UserWarning):
+    """Input brdffit read, but that a user should check: a file header overridden, angles that look mistaken."""
+
+
+class FitWarning(Spelled, UserWarning):
+    """What a user must know about a fit before trusting it; the same lines are the result's ``fit.warnings``."""
 
 
 def not_allowed(name: str, value, allowed: str, verb: str = "is not allowed") -> BrdfInputError:
@@ -58,5 +70,5 @@ def not_a_choice(name: str, value, choices, verb: str = "is not allowed") -> Brd
     return not_allowed(name, value, f"choose one of: {', '.join(choices)}", verb)
 
 
-class UncertaintyWarning(UserWarning):
+class UncertaintyWarning(Spelled, UserWarning):
     """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""

@@ -1,14 +1,13 @@
 """Gonioreflectometer-style measurement geometries: direction pairs (wi, wo), each (N, 3).
 
-Angles follow SPEC section 1 (``z`` the normal, azimuth from ``x``); the light
+Angles follow brdffit's frame (``docs/conventions.md``: ``z`` the normal, azimuth from ``x``); the light
 sits at azimuth 0, so the mirror direction is at azimuth 180°. Grids use bin
 midpoints, so no direction lies on the horizon. Random geometries take a seed.
 """
 
 import numpy as np
 
-from brdffit.checks import whole_number
-from brdffit.errors import not_allowed
+from brdffit.checks import angle_up_to_90, whole_number
 from brdffit.physics.geometry import mirror_direction, spherical_to_direction
 
 
@@ -76,8 +75,7 @@ def near_specular(
     peak), at a uniform azimuth about it; directions below 89.9° only.
     """
     n_incident, n_samples = _positive_count("n_incident", n_incident), _positive_count("n_samples", n_samples)
-    if not (isinstance(spread, int | float) and 0 < spread <= 90):
-        raise not_allowed("spread", spread, "give degrees in (0, 90]")
+    angle_up_to_90("spread", spread)
     rng = np.random.default_rng(seed)
     theta_i = _midpoints(n_incident, np.pi / 2)
     per_light = np.diff(np.linspace(0, n_samples, n_incident + 1).round().astype(int))

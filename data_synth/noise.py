@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from brdffit.errors import not_a_choice, not_allowed
+from brdffit.checks import choice
+from brdffit.errors import not_allowed
 
 NOISE_KINDS = ("multiplicative", "additive")
 
@@ -17,8 +18,7 @@ def add_noise(
     normal from ``numpy.random.default_rng(seed)``. Results below 0 are set to
     0 (a reflectance cannot be negative); at 1% multiplicative noise that needs a 100-σ draw.
     """
-    if kind not in NOISE_KINDS:
-        raise not_a_choice("noise_kind", kind, NOISE_KINDS)
+    choice("noise_kind", kind, NOISE_KINDS)
     if not (isinstance(level, int | float) and np.isfinite(level) and level >= 0):
         raise not_allowed("noise", level, "give a number ≥ 0")
     values = np.asarray(values, dtype=float)

@@ -24,7 +24,7 @@ def synthesize(
     channels: tuple[str, ...] | None = None,
     **model_options: Any,
 ) -> Samples:
-    """Samples of ``model`` with ``params`` (SPEC section 5) at direction pairs ``wi``, ``wo`` (N, 3).
+    """Samples of ``model`` with ``params`` (a result file's parameter dictionary) at pairs ``wi``, ``wo`` (N, 3).
 
     ``noise``/``noise_kind``/``seed`` as in :func:`data_synth.noise.add_noise`;
     ``with_sigma`` stores the noise's 1-σ as the samples' ``sigma``. Channels

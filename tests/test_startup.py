@@ -1,5 +1,6 @@
 """Start-up: no work at import time, and a compilation cache that later runs reuse."""
 
+import ast
 import os
 import subprocess
 import sys
@@ -38,6 +39,15 @@ def test_help_and_version_import_no_jax(argv, status, said):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     assert said in done.stdout + done.stderr
+
+
+def test_the_lazy_names_and_the_type_checkers_imports_agree():
+    """``_EXPORTS`` (what loads at run time) and the ``TYPE_CHECKING`` block (what IDEs see) list the same names,
+    from the same modules."""
+    tree = ast.parse((ROOT / "brdffit" / "__init__.py").read_text())
+    block = next(node for node in tree.body if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test))
+    imported = {alias.asname: "." + node.module for node in block.body for alias in node.names}
+    assert imported == brdffit._EXPORTS
 
 
 def test_public_names_resolve_lazily():

@@ -5,18 +5,20 @@ Each command module (``fit.py``, ``synth.py``, ``models.py``, ``info.py``, ``con
 imported and configured, so ``brdffit --help`` and ``--version`` import no JAX and no solver.
 
 Exit status: 0 success; 1 a fit did not converge (its result is still written, with ``converged: false``);
-2 bad input or usage, reported in one line on stderr, with nothing written.
+2 bad input or usage, reported in one line on stderr, with nothing written; 130 interrupted (Ctrl-C), with
+nothing half-written (every file is written to a temporary name and renamed).
 """
 
 import argparse
 import importlib
 import os
 import sys
+import warnings
 
 from .._version import __version__
-from ..errors import BrdfInputError
+from ..errors import BrdfInputError, FitWarning, InputWarning, Spelled, UncertaintyWarning
 
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 #: The commands, each a module of this package, with the line ``brdffit --help`` shows for it.
 COMMANDS = {
@@ -44,7 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else [str(argument) for argument in argv]
     try:
         args = build_parser(_command_in(argv)).parse_args(argv)
-        return args.run(args)
+        with warnings.catch_warnings():
+            _warn_in_one_line()
+            return args.run(args)
     except BrdfInputError as error:
         print(f"brdffit: error: {error.spelled(spell)}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -53,6 +57,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except SystemExit as exit_:  # --help and --version
         return exit_.code if isinstance(exit_.code, int) else EXIT_OK
+    except KeyboardInterrupt:
+        print("brdffit: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 def run() -> None:
@@ -66,6 +73,24 @@ def run() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         status = EXIT_OK
     sys.exit(status)
+
+
+def _warn_in_one_line() -> None:
+    """brdffit's warnings as ``brdffit: warning: …`` lines, spelled with flags, each time they occur. A fit's and an
+    estimate's are printed by ``fit`` from the results, naming the file each belongs to."""
+    from .arguments import spell
+
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not isinstance(message, Spelled):
+            return shown(message, category, filename, lineno, file, line)
+        print(f"brdffit: warning: {message.spelled(spell)}", file=sys.stderr)
+
+    warnings.showwarning = show
+    warnings.simplefilter("always", InputWarning)
+    warnings.simplefilter("ignore", FitWarning)
+    warnings.simplefilter("ignore", UncertaintyWarning)
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:

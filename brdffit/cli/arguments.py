@@ -8,6 +8,7 @@ typed it.
 import argparse
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -50,11 +51,13 @@ def add_loading_options(command: argparse.ArgumentParser) -> None:
     from ..data.spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, SPECTRAL_TARGETS
 
     reading = command.add_argument_group("reading the samples")
+    kinds = ", ".join(f"{name} ({kind.description})" for name, kind in FORMATS.items())
+    reading.add_argument("--format", metavar="NAME", help=f"{kinds}; default: from the extension and first lines")
     reading.add_argument(
-        "--format", metavar="NAME", help=f"{', '.join(FORMATS)} (default: from the extension and first lines)"
-    )
-    reading.add_argument(
-        "--quantity", default="brdf", metavar="Q", help=f"what the values are: {', '.join(QUANTITIES)} (default brdf)"
+        "--quantity",
+        metavar="Q",
+        help=f"what the values are: {', '.join(QUANTITIES)} (cosine-weighted: -in); default: what the file's"
+        " header says, else brdf (brdffit info checks it on reciprocal pairs)",
     )
     reading.add_argument(
         "--angles", default="degrees", metavar="UNIT", help=f"CSV angle columns in {' or '.join(ANGLE_UNITS)}"
@@ -119,12 +122,36 @@ def json_argument(value: str, option: str) -> Any:
         raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
 
 
-def check_output(path: Path, option: str) -> None:
-    """Fail before any work if ``path`` cannot be written."""
-    folder = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise BrdfInputError(f"{option} {path}: is a folder; give a file name")
+def output_file(value: str | os.PathLike, option: str, inputs: Sequence[str | os.PathLike] = ()) -> Path:
+    """The file ``option`` writes, checked before any work; returns the path to write to.
+
+    A symbolic link is followed: the file it points to is replaced (atomically) and the link kept. The
+    target must not be one of ``inputs`` (the user's data is never overwritten), nor a folder, a device or
+    anything else that is not a regular file, and its folder must exist and be writable.
+    """
+    path = Path(value)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    where = f"{option} {value}"
+    for given in inputs:
+        if _same_file(target, Path(given)):
+            raise BrdfInputError(
+                f"{where}: is the input {given}; give another output name (inputs are never overwritten)"
+            )
+    if target.is_dir():
+        raise BrdfInputError(f"{where}: is a folder; give a file name")
+    if target.exists() and not target.is_file():
+        raise BrdfInputError(f"{where}: is not a regular file (a device or a pipe); give a file name")
+    folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
-        raise BrdfInputError(f"{option} {path}: folder {folder} does not exist")
+        raise BrdfInputError(f"{where}: folder {folder} does not exist")
     if not os.access(folder, os.W_OK):
-        raise BrdfInputError(f"{option} {path}: folder {folder} is not writable")
+        raise BrdfInputError(f"{where}: folder {folder} is not writable")
+    return target
+
+
+def _same_file(one: Path, other: Path) -> bool:
+    """Whether two paths name the same file (either may not exist yet)."""
+    try:
+        return os.path.samefile(one, other)
+    except OSError:
+        return os.path.realpath(one) == os.path.realpath(other)

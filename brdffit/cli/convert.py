@@ -6,15 +6,14 @@ from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_loading_options, check_output, load
+from .arguments import add_loading_options, load, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     from ..data.load import FORMATS
 
-    suffixes = ", ".join(f"{suffix} ({name})" for name, kind in FORMATS.items() for suffix in kind.suffixes)
     parser.add_argument("input", metavar="IN", help="samples file (any format), or a result file (.json) for .binary")
-    parser.add_argument("output", metavar="OUT", help=f"the format from the extension: {suffixes}")
+    parser.add_argument("output", metavar="OUT", help=f"the format from the extension: {_suffixes(FORMATS)}")
     add_loading_options(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
@@ -25,9 +24,8 @@ def run(args: argparse.Namespace) -> int:
     output = Path(args.output)
     kind = format_of_output(output)
     if kind is None:
-        choices = ", ".join(f"{suffix} ({name})" for name, each in FORMATS.items() for suffix in each.suffixes)
-        raise BrdfInputError(f"{output}: unknown output format; give one of: {choices}")
-    check_output(output, "OUT")
+        raise BrdfInputError(f"{output}: unknown output format; give one of: {_suffixes(FORMATS)}")
+    output = output_file(output, "OUT", [args.input])
     if FORMATS[kind].write is None:
         return _tabulate(args, output)
     if Path(args.input).suffix.lower() == ".json":
@@ -41,6 +39,11 @@ def run(args: argparse.Namespace) -> int:
     FORMATS[kind].write(samples, output)
     print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {output} ({kind})")
     return EXIT_OK
+
+
+def _suffixes(formats) -> str:
+    """Every suffix a file can be written with, and its format: ``.csv (csv), .binary (merl), …``."""
+    return ", ".join(f"{suffix} ({name})" for name, kind in formats.items() for suffix in kind.suffixes)
 
 
 def _tabulate(args: argparse.Namespace, output: Path) -> int:

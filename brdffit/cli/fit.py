@@ -6,12 +6,11 @@ Every check runs before any fit (options, output paths, every input read), so ba
 import argparse
 import os
 import sys
-import warnings
 from pathlib import Path
 
-from ..errors import Argument, BrdfInputError, UncertaintyWarning
+from ..errors import Argument, BrdfInputError
 from . import EXIT_NOT_CONVERGED, EXIT_OK
-from .arguments import add_loading_options, add_model_options, check_output, json_argument, load
+from .arguments import add_loading_options, add_model_options, json_argument, load, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -52,8 +51,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "-o",
         "--output",
         metavar="FILE",
-        help="result file, or a folder (OUTDIR/) for several samples files"
-        " (default: SAMPLES-stem.MODEL.json in the current folder)",
+        help="result file ('-' for standard output, the table then goes to standard error), or a folder (OUTDIR/)"
+        " for several samples files (default: SAMPLES-stem.MODEL[.OPTION-VALUE].json in the current folder)",
     )
     errors = parser.add_argument_group("uncertainty")
     errors.add_argument(
@@ -84,18 +83,17 @@ def run(args: argparse.Namespace) -> int:
     model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
     get_loss(args.loss)
     mcmc = _uncertainty_settings(args)
-    outputs = output_paths(args.samples, args.output, model.name)
+    inputs = [*args.samples, *([args.start] if args.start and not args.start.lstrip().startswith("{") else [])]
+    outputs = output_paths(args.samples, args.output, model, inputs)
     start = _start(args.start)
     samples = [load(path, args) for path in args.samples]  # every input read and checked before any fit
-    if mcmc is not None:
-        from ..uncertainty.mcmc import check_walkers
-
-        for one in samples:
-            check_walkers(mcmc, model, one)
     results = _fit(args, model, samples, start, mcmc)
-    outputs[0].parent.mkdir(parents=True, exist_ok=True)
-    for result, output in zip(results, outputs, strict=True):
-        result.save(output)
+    if outputs is None:  # -o -: the result file on standard output, everything else on standard error
+        sys.stdout.write(results[0].to_json())
+    else:
+        outputs[0].parent.mkdir(parents=True, exist_ok=True)
+        for result, output in zip(results, outputs, strict=True):
+            result.save(output)
     if args.corner:
         from ..views.corner import corner_plot
 
@@ -105,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace, model, samples: list, start, mcmc) -> list:
-    """Every fit, with its uncertainty when asked; the estimates' warnings are the results' own (printed later)."""
+    """Every fit, with its uncertainty when asked; their warnings are the results' own (``_report`` prints them)."""
     from .. import api
 
     options = dict(
@@ -118,23 +116,27 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc) -> list:
         uncertainty=args.uncertainty,
         mcmc=mcmc,
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UncertaintyWarning)  # printed from each result, naming its file
-        if len(samples) == 1:
-            progress = sys.stderr.isatty()
-            return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]
-        return api.fit_batch(samples, model, args.loss, **options)
+    if len(samples) == 1:
+        progress = sys.stderr.isatty()
+        return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]
+    return api.fit_batch(samples, model, args.loss, **options)
 
 
-def _report(args: argparse.Namespace, results: list, outputs: list[Path]) -> None:
-    """The table (one input) or a line per input, then a warning line for each thing a user must know."""
+def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None) -> None:
+    """The table (one input) or a line per input, then a warning line for each thing a user must know.
+
+    On standard output, unless the result file went there (``-o -``): then on standard error.
+    """
+    stream = sys.stderr if outputs is None else sys.stdout
     if len(results) == 1:
-        print(results[0].table(source=args.samples[0]))
-        print(f"wrote {', '.join(str(p) for p in (outputs[0], args.chain, args.corner) if p)}")
+        print(results[0].table(source=args.samples[0]), file=stream)
+        written = [*(outputs or []), args.chain, args.corner]
+        if any(written):
+            print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
     else:
-        print(summary(args.samples, results, outputs))
+        print(summary(args.samples, results, outputs), file=stream)
     for path, result in zip(args.samples, results, strict=True):
-        for message in result.uncertainty["warnings"] if result.uncertainty else []:
+        for message in [*result.warnings, *(result.uncertainty["warnings"] if result.uncertainty else [])]:
             print(f"brdffit: warning: {path}: {message}", file=sys.stderr)
         if not result.converged:
             print(
@@ -169,24 +171,36 @@ def _uncertainty_settings(args: argparse.Namespace):
         raise BrdfInputError(Argument("corner"), " needs ", Argument("uncertainty", "mcmc"), " (or laplace)")
     if (args.chain or args.corner) and len(args.samples) > 1:
         raise BrdfInputError(f"--chain and --corner take one samples file; got {len(args.samples)}")
+    if args.chain:
+        args.chain = str(output_file(args.chain, "--chain", args.samples))
     if args.corner:
         check_figure_path(args.corner, argument="corner")
-        check_output(Path(args.corner), "--corner")
+        args.corner = str(output_file(args.corner, "--corner", args.samples))
         os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
     return MCMC(**given, seed=args.seed) if method == "mcmc" else None
 
 
-def output_paths(inputs: list[str], output: str | None, model_name: str) -> list[Path]:
-    """The result file of each input: ``-o FILE`` for one input, else ``OUTDIR/<stem>.<model>.json``.
+def output_paths(inputs: list[str], output: str | None, model, protected: list[str]) -> list[Path] | None:
+    """The result file of each input (None: ``-o -``, standard output), checked before any work.
 
-    ``-o`` is a folder when several inputs are given, when it ends with ``/`` or
-    when it is an existing folder; it is created (after every check) if missing.
+    One input: ``-o FILE``, by default ``<stem>.<model>[.<option>-<value>].json`` here (the options that change
+    the result are in the name, so fits of one file with other options do not overwrite each other). ``-o``
+    ending in ``/``, or several inputs: a folder, created (after every check) if missing, holding one such
+    file per input. An existing folder without the ``/`` is refused: it would be ambiguous. No output may
+    be one of the ``protected`` files (the inputs).
     """
-    as_folder = len(inputs) > 1 or (output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir()))
+    if output == "-":
+        if len(inputs) > 1:
+            raise BrdfInputError(f"-o -: standard output takes one result; got {len(inputs)} samples files")
+        return None
+    as_folder = len(inputs) > 1 or (output is not None and output.endswith(("/", os.sep)))
     if not as_folder:
-        path = Path(output) if output else Path(f"{Path(inputs[0]).stem}.{model_name}.json")
-        check_output(path, "-o")
-        return [path]
+        if output is not None and Path(output).is_dir():
+            raise BrdfInputError(
+                f"-o {output}: is a folder; give a file name, or {output.rstrip(os.sep)}/ to write"
+                f" {default_name(inputs[0], model)} into it"
+            )
+        return [output_file(output or default_name(inputs[0], model), "-o", protected)]
     folder = Path(output) if output else Path(".")
     if folder.exists() and not folder.is_dir():
         raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
@@ -195,13 +209,19 @@ def output_paths(inputs: list[str], output: str | None, model_name: str) -> list
     existing = next((parent for parent in (folder, *folder.parents) if parent.exists()), Path("."))
     if not os.access(existing, os.W_OK):
         raise BrdfInputError(f"-o {folder}: folder {existing} is not writable")
-    outputs = [folder / f"{Path(path).stem}.{model_name}.json" for path in inputs]
+    outputs = [folder / default_name(path, model) for path in inputs]
     seen: dict[Path, str] = {}
     for path, out in zip(inputs, outputs, strict=True):
         if out in seen:
             raise BrdfInputError(f"{seen[out]} and {path} would both write {out}; give them different names")
         seen[out] = path
-    return outputs
+    return [output_file(out, "-o", protected) if out.parent.exists() else out for out in outputs]
+
+
+def default_name(path: str, model) -> str:
+    """``<stem>.<model>[.<option>-<value>…].json``: ``tape.lafortune.lobes-2.json``, ``oak.ward.json``."""
+    options = "".join(f".{key}-{value}" for key, value in model.options)
+    return f"{Path(path).stem}.{model.name}{options}.json"
 
 
 def summary(inputs: list[str], results, outputs) -> str:

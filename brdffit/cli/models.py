@@ -3,6 +3,7 @@
 import argparse
 
 from . import EXIT_OK
+from .arguments import flag
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -19,11 +20,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name}\n  {summary}")
         options = model_option_names(name)
         if options:
-            print(f"  options: {', '.join('--' + option for option in options)}")
+            print(f"  options: {', '.join(flag(option) for option in options)}")
         if name == "cook-torrance":
-            for fresnel in FRESNEL:
+            for fresnel, kind in FRESNEL.items():
                 lines = describe_parameters(get_model(name, fresnel=fresnel))
-                print(f"  --fresnel {fresnel}: " + "; ".join(lines))
+                print(f"  {flag('fresnel')} {fresnel}: {'; '.join(lines)} ({kind.summary})")
         else:
             print("  parameters: " + "; ".join(describe_parameters(model)))
     return EXIT_OK
@@ -31,10 +32,10 @@ def run(args: argparse.Namespace) -> int:
 
 def describe_parameters(model) -> list[str]:
     """One line per parameter: its name, shape ([C] for one value per channel) and domain."""
-    from ..physics.domains import NON_NEGATIVE
+    from ..physics.domains import ALBEDO
 
-    lines = [f"{model.diffuse_name}: [C] {NON_NEGATIVE.text}"]
+    lines = [f"{model.diffuse_name}: [C] {ALBEDO.text}"]
     if model.n_lobes:
-        lines.append(f"{model.specular_name}: [C] {NON_NEGATIVE.text}")
+        lines.append(f"{model.specular_name}: [C] {ALBEDO.text}")
         lines += [f"{name}: {domain.text}" for name, domain in model.lobe.parameters]
     return lines

@@ -2,11 +2,10 @@
 
 import argparse
 import inspect
-from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_model_options, check_output, json_argument
+from .arguments import add_model_options, json_argument, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -54,8 +53,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from data_synth import GEOMETRIES, synthesize
 
+    from ..cache import enable_compilation_cache
     from ..data.load import save_samples
 
+    enable_compilation_cache()
     model, params = _model_and_params(args)
     if args.geometry not in GEOMETRIES:
         raise BrdfInputError(f"--geometry {args.geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
@@ -71,8 +72,7 @@ def run(args: argparse.Namespace) -> int:
             raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {args.geometry}")
     if "seed" in accepted:
         given["seed"] = args.seed
-    output = Path(args.output)
-    check_output(output, "-o")
+    output = output_file(args.output, "-o", [args.params] if not args.params.lstrip().startswith("{") else [])
     wi, wo = make_geometry(**given)
     samples = synthesize(
         model.name,

@@ -11,11 +11,15 @@ A file is a header of ``#KEY value`` lines, then one measurement per line::
 * ``#DIM n_in n_out``: each row holds ``n_in`` input coordinates, then ``n_out`` values (required).
 * ``#PARAM_IN NAME``: how the inputs describe the two directions (required); angles are in radians.
 * ``#PARAM_OUT NAME``: what the values are (optional). ``INV_STERADIAN``, ``ENERGY``, ``RGB_COLOR``
-  and ``XYZ_COLOR`` are read as BRDF values in 1/sr; ``INV_STERADIAN_COSINE_FACTOR`` (BRDF times
-  the cosine of the light's zenith angle) is divided by ``cos θl``.
-* ``#VS k``: confidence intervals after the values (optional, default 0). ALTA's text reader
-  (``core/data_storage.cpp``) reads ``k = 1`` half-width or ``k = 2`` bounds columns; they are
-  accepted (either ``k`` columns in all, or ``k`` per output) and ignored.
+  and ``XYZ_COLOR`` are BRDF values in 1/sr; ``INV_STERADIAN_COSINE_FACTOR`` is the BRDF times the
+  cosine of the **output (view)** direction (ALTA's ``params.h``: "weighted by the cosine factor of the
+  output direction"), the quantity ``cosine-weighted-out``, divided by ``cos θv`` when the samples are
+  loaded. Without the line the values are read as BRDF, unless the user says otherwise.
+* ``#VS k``: confidence intervals after the values (optional, default 0), either ``k`` columns in
+  all (ALTA's text reader, ``core/data_storage.cpp``, applies them to the first output) or ``k``
+  per output. ``k = 1`` is a half-width ``w``, ``k = 2`` the bounds ``lo, hi``; brdffit reads the
+  interval as ±1σ: ``sigma = w`` or ``(hi − lo)/2`` (``k`` in all with several outputs: the first
+  output's interval for every channel). An interval of width 0 is an error (sigma must be > 0).
 * ``#CHANNELS name ...``: brdffit's own key (ALTA ignores keys it does not know): the channel names.
   Without it the channels are ``value`` (1 output), ``x, y, z`` (``XYZ_COLOR``), ``r, g, b``
   (3 outputs), else ``c0, c1, ...``.
@@ -44,7 +48,8 @@ angles in radians; ``d(θ, φ) = (sin θ cos φ, sin θ sin φ, cos θ)``; ``wi`
   within 1e-3 and normalised.
 
 Rows with either direction at or below the horizon (``z ≤ 1e-12``; e.g. the tape's
-``θv = 90°`` rows) are dropped without notice; a file where no row remains is an error.
+``θv = 90°`` rows) are dropped, and counted in the samples' provenance (``brdffit info`` shows it); a
+file where no row remains is an error. An angle beyond ±2π is an error: ALTA's angles are radians.
 
 Bad input raises :class:`~brdffit.errors.BrdfInputError` with one line naming the file (and the
 line in the file where there is one).
@@ -52,6 +57,7 @@ line in the file where there is one).
 
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -59,8 +65,8 @@ import numpy as np
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
-from .checks import UNIT_LENGTH_TOLERANCE, TableChecks, first_bad, named, normalised
-from .samples import Samples
+from .cells import UNIT_LENGTH_TOLERANCE, TableChecks, first_bad, named, normalised
+from .samples import Provenance, Samples
 from .text import format_rows, parse_numbers, read_text
 
 #: ``#PARAM_IN`` names read, with the number of input coordinates each takes.
@@ -71,8 +77,14 @@ PARAMETERISATIONS = {
     "RUSIN_TH_TD_PD": 3,
     "CARTESIAN": 6,
 }
-#: ``#PARAM_OUT`` names read; all are BRDF values in 1/sr except the cosine-weighted one.
-OUTPUTS = ("INV_STERADIAN", "INV_STERADIAN_COSINE_FACTOR", "ENERGY", "RGB_COLOR", "XYZ_COLOR")
+#: ``#PARAM_OUT`` names read, with the quantity (``quantities.py``) each says the values are.
+OUTPUTS = {
+    "INV_STERADIAN": "brdf",
+    "INV_STERADIAN_COSINE_FACTOR": "cosine-weighted-out",
+    "ENERGY": "brdf",
+    "RGB_COLOR": "brdf",
+    "XYZ_COLOR": "brdf",
+}
 #: Directions with ``z`` at or below this are below the horizon; their rows are dropped.
 HORIZON = 1e-12
 _COORDINATES = {
@@ -130,6 +142,14 @@ def read_alta(path: str | os.PathLike) -> Samples:
     checks.non_negative(
         values, named(channels, "channel"), lambda v: f"{v:g} is negative (negative reflectance is not allowed)"
     )
+    if parameterisation != "CARTESIAN":
+        checks.fail_first(
+            np.abs(table[:, :n_in]) > 2 * np.pi,
+            table[:, :n_in],
+            column,
+            lambda v: f"{v:g} is beyond ±2π; ALTA angles are radians (was the file written in degrees?)",
+        )
+    sigma = _sigma(table[:, n_in + n_out :], _vs(header, source), channels, checks)
     with np.errstate(all="ignore"):
         wi, wo = _CONVERTERS[parameterisation](table[:, :n_in])
     no_direction = first_bad(~(np.isfinite(wi).all(axis=1) & np.isfinite(wo).all(axis=1)))
@@ -144,14 +164,34 @@ def read_alta(path: str | os.PathLike) -> Samples:
             f"{source}: every row has the light or the viewer at or below the horizon (z ≤ {HORIZON:g});"
             f" check #PARAM_IN {parameterisation} and that the angles are in radians"
         )
-    wi, wo, values, lines = wi[keep], wo[keep], values[keep], lines[keep]
-    if output == "INV_STERADIAN_COSINE_FACTOR":
-        with np.errstate(over="ignore"):
-            values = values / wi[:, 2:3]
-        overflow = first_bad(~np.isfinite(values))
-        if overflow is not None:
-            raise BrdfInputError(f"{source}: line {lines[overflow[0]]}: the value divided by cos θl overflows")
-    return Samples.from_arrays(wi, wo, values, channels=channels, source=source)
+    dropped = int(np.sum(~keep))
+    provenance = Provenance(
+        "alta",
+        rows=len(rows),
+        dropped=(("with the light or the viewer at or below the horizon", dropped),) if dropped else (),
+        header_quantity=None if output is None else OUTPUTS[output],
+        sigma_from=None if sigma is None else f"#VS {_vs(header, source)} confidence intervals, read as ±1σ",
+    )
+    samples = Samples.from_arrays(
+        wi[keep], wo[keep], values[keep], channels=channels, sigma=None if sigma is None else sigma[keep], source=source
+    )
+    return replace(samples, provenance=provenance)
+
+
+def _sigma(intervals: np.ndarray, k: int, channels: tuple[str, ...], checks: TableChecks) -> np.ndarray | None:
+    """The ±1σ width (N, C) of each value from its ``#VS k`` columns (N, k in all or k per channel), or None."""
+    if k == 0:
+        return None
+    blocks = intervals.reshape(len(intervals), -1, k)  # (N, 1 or C, k)
+    width = blocks[:, :, 0] if k == 1 else (blocks[:, :, 1] - blocks[:, :, 0]) / 2
+    width = np.array(np.broadcast_to(width, (len(intervals), len(channels))))
+    checks.fail_first(
+        width <= 0,
+        width,
+        lambda c: f"confidence interval of channel {channels[c]}",
+        lambda v: f"{v:g} wide; an interval read as sigma must be > 0",
+    )
+    return width
 
 
 def _read_alta_text(path: Path) -> str:
@@ -218,7 +258,7 @@ def _output(header, source: str) -> str | None:
     if "PARAM_OUT" not in header:
         return None
     number, words = header["PARAM_OUT"]
-    name = words[0].upper() if len(words) == 1 else None
+    name = words[0].upper() if len(words) == 1 else ""
     if name not in OUTPUTS:
         raise BrdfInputError(
             f"{source}: line {number}: unknown #PARAM_OUT {' '.join(words)!r}; supported: {', '.join(OUTPUTS)}"

@@ -38,6 +38,7 @@ line in the file where there is one).
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -45,8 +46,8 @@ import numpy as np
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
 from ..physics.geometry import direction_to_spherical
-from .checks import TableChecks, first_bad, named
-from .samples import Samples
+from .cells import TableChecks, first_bad, named
+from .samples import Provenance, Samples
 from .text import format_rows, is_number, parse_numbers, read_text
 
 #: The geometry columns every ``VARS`` line names.
@@ -109,7 +110,8 @@ def read_astm(path: str | os.PathLike) -> Samples:
     checks.non_negative(
         values, named(channels, "channel"), lambda v: f"{v:g} is negative (negative reflectance is not allowed)"
     )
-    return Samples.from_arrays(wi, wo, values, channels=channels, source=source)
+    samples = Samples.from_arrays(wi, wo, values, channels=channels, source=source)
+    return replace(samples, provenance=Provenance("astm", rows=len(rows)))
 
 
 def _split(text: str, source: str) -> tuple[dict[str, tuple[int, str]], list[tuple[int, str]]]:

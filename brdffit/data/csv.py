@@ -14,17 +14,19 @@ Bad input raises :class:`~brdffit.errors.BrdfInputError` with one line naming th
 line in the file) and the column.
 """
 
+import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .._files import write_text_atomic
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError, InputWarning
 from ..physics.geometry import direction_to_spherical
-from .checks import TableChecks, named
-from .samples import Samples
+from .cells import TableChecks, named
+from .samples import Provenance, Samples
 from .text import parse_numbers, read_text
 
 ANGLE_COLUMNS = ("theta_i", "phi_i", "theta_o", "phi_o")
@@ -63,9 +65,19 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
 
     if layout.angles:
         angles_table = table[:, layout.geometry]
+        theta = angles_table[:, [0, 2]]
         wi, wo = checks.angles_to_directions(
-            angles_table[:, [0, 2]], angles_table[:, [1, 3]], angles, ("theta_i", "theta_o"), ("phi_i", "phi_o")
+            theta, angles_table[:, [1, 3]], angles, ("theta_i", "theta_o"), ("phi_i", "phi_o")
         )
+        if angles == "degrees" and 0 < np.max(theta) <= math.pi / 2:
+            warnings.warn(
+                InputWarning(
+                    f"{source}: every zenith angle is within [0, π/2] = [0, 1.571] degrees: radians read as degrees?"
+                    " If so, give ",
+                    Argument("angles", "radians"),
+                ),
+                stacklevel=2,
+            )
     else:
         geometry = table[:, layout.geometry]
         wi = checks.unit_directions(geometry[:, :3], "wi")
@@ -74,7 +86,7 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
     sigma = None if layout.sigma is None else np.broadcast_to(table[:, layout.sigma], values.shape)
     weight = None if layout.weight is None else table[:, layout.weight]
     sigma, weight = checks.values_sigma_weight(values, layout.channels, sigma, weight, source, layout.sigma_names)
-    return Samples(wi, wo, values, layout.channels, sigma, weight, source)
+    return Samples(wi, wo, values, layout.channels, sigma, weight, source, Provenance("csv", rows=len(rows)))
 
 
 def write_csv(samples: Samples, path: str | os.PathLike) -> None:

@@ -17,18 +17,19 @@ channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 """
 
 import os
+import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..checks import choice
-from ..errors import Argument, BrdfInputError
+from ..errors import Argument, BrdfInputError, InputWarning
 from . import spectral
 from .alta import read_alta, write_alta
 from .astm import read_astm, write_astm
 from .csv import ANGLE_UNITS, read_csv, write_csv
 from .merl import read_merl
-from .quantities import QUANTITIES, to_brdf
+from .quantities import canonical, to_brdf
 from .samples import Samples
 from .spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
 
@@ -81,7 +82,7 @@ def load_samples(
     *,
     format: str | None = None,
     angles: str = "degrees",
-    quantity: str = "brdf",
+    quantity: str | None = None,
     spectral_to: str = "keep",
     illuminant: str = DEFAULT_ILLUMINANT,
     observer: str = DEFAULT_OBSERVER,
@@ -93,14 +94,17 @@ def load_samples(
 
     ``format``: one of :data:`FORMATS` (default: from the file's suffix and first lines).
     ``angles``: ``"degrees"`` (default) or ``"radians"`` for a CSV file's angle columns.
-    ``quantity``: what the values are, one of ``brdf``, ``reflectance-factor``, ``cosine-weighted``
-    (``quantities.py``). ``spectral_to``: for value columns named by wavelength in nm, ``xyz`` or
-    ``rgb`` (linear sRGB) under ``illuminant`` and ``observer`` (colour-science names), or ``keep``
-    every band as a channel (default). ``subsample`` (MERL): keep that many samples,
-    ``subsample_method`` ``random`` or ``stratified`` over θh, seeded by ``seed``.
+    ``quantity``: what the values are, one of ``brdf``, ``reflectance-factor``, ``cosine-weighted-in``
+    (also ``cosine-weighted``) or ``cosine-weighted-out`` (``quantities.py``); default: what the file's
+    header says (ALTA's ``#PARAM_OUT``), else ``brdf``. A quantity given where the header says another wins,
+    with an :class:`~brdffit.errors.InputWarning`; never are values divided twice. ``spectral_to``: for
+    value columns named by wavelength in nm, ``xyz`` or ``rgb`` (linear sRGB) under ``illuminant`` and
+    ``observer`` (colour-science names), or ``keep`` every band as a channel (default). ``subsample``
+    (MERL): keep that many samples, ``subsample_method`` ``random`` or ``stratified`` over θh, seeded by
+    ``seed``.
     """
     choice("angles", angles, ANGLE_UNITS)
-    choice("quantity", quantity, QUANTITIES)
+    given = None if quantity is None else canonical(quantity)
     path = Path(path)
     kind = detect_format(path, format)
     if kind != "csv" and angles != "degrees":
@@ -112,12 +116,33 @@ def load_samples(
         "merl": {"subsample": subsample, "subsample_method": subsample_method, "seed": seed},
     }
     samples = FORMATS[kind].read(path, **reader_options.get(kind, {}))
-    return spectral.spectral_to(to_brdf(samples, quantity), spectral_to, illuminant=illuminant, observer=observer)
+    header = samples.provenance.header_quantity
+    if given is not None and header is not None and given != header:
+        warnings.warn(
+            InputWarning(
+                f"{path}: the values are read as ", Argument("quantity", given), f", not as the header says ({header})"
+            ),
+            stacklevel=2,
+        )
+    quantity = given or header or "brdf"
+    samples = replace(
+        to_brdf(samples, quantity),
+        provenance=replace(samples.provenance, quantity=quantity, quantity_given=given is not None),
+    )
+    return spectral.spectral_to(samples, spectral_to, illuminant=illuminant, observer=observer)
 
 
 def save_samples(samples: Samples, path: str | os.PathLike) -> None:
-    """Write ``samples`` as a samples file (CSV, ``csv.py``), atomically; :func:`load_samples` reads it back."""
-    write_csv(samples, path)
+    """Write ``samples`` atomically in the format ``path``'s suffix names (``.dat`` ALTA, ``.astm`` and ``.txt``
+    ASTM), else as a samples CSV; :func:`load_samples` reads it back. A MERL table is written from a model
+    (``brdffit/export``), not from samples."""
+    kind = format_of_output(Path(path)) or "csv"
+    if FORMATS[kind].write is None:
+        raise BrdfInputError(
+            f"{path}: a {kind} file is written from a fitted model (brdffit convert RESULT.json {Path(path).name}),"
+            " not from samples"
+        )
+    FORMATS[kind].write(samples, path)
 
 
 def _first_lines(path: Path, count: int = 64) -> list[str]:

@@ -20,7 +20,7 @@ folded into ``[0, π)`` by reciprocity (``φd → φd + π`` swaps light and vie
 These are the angles ``BRDFRead.cpp``'s lookup maps to the bin (each bin's
 lower edge).
 
-A bin's directions (SPEC section 1 frame, ``φh = 0``): the difference vector
+A bin's directions (brdffit's shading frame, ``docs/conventions.md``; ``φh = 0``): the difference vector
 ``d = (sin θd cos φd, sin θd sin φd, cos θd)`` and its mirror image about the
 half vector ``d' = (-d_x, -d_y, d_z)`` are rotated about the binormal ``y`` by
 ``θh``: ``wi = R_y(θh) d``, ``wo = R_y(θh) d'``; the half vector is then
@@ -29,6 +29,7 @@ half vector ``d' = (-d_x, -d_y, d_z)`` are rotated about the binormal ``y`` by
 
 import math
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +38,8 @@ from .._files import atomic_path, reading
 from ..checks import choice, whole_number
 from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
-from .checks import first_bad
-from .samples import Samples
+from .cells import first_bad
+from .samples import Provenance, Samples
 
 #: Table dimensions (θh, θd, φd bins), as in the header.
 SHAPE = (90, 90, 180)
@@ -113,11 +114,17 @@ def read_merl(
             f" (θh {where[0]}, θd {where[1]}, φd {where[2]}) is not allowed (values must be finite)"
         )
     wi, wo = bin_directions()
-    index = np.flatnonzero(np.all(table >= 0, axis=0) & (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON))
+    present = np.all(table >= 0, axis=0)
+    above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
+    index = np.flatnonzero(present & above)
     if index.size == 0:
         raise BrdfInputError(f"{source}: no valid sample (every bin is missing or below the horizon)")
     values = (table[:, index] * SCALES[:, None]).T
     samples = Samples.from_arrays(wi[index], wo[index], values, channels=CHANNELS, source=source)
+    dropped = [
+        ("bins below the horizon, which MERL never looks up", int(np.sum(~above))),
+        ("missing bins (stored value < 0)", int(np.sum(above & ~present))),
+    ]
     if max_theta is not None:  # selected as Samples.within selects, on the same directions
         inside = samples.inside(max_theta)
         if not np.any(inside):
@@ -125,9 +132,12 @@ def read_merl(
                 f"{source}: no valid sample within ", Argument("max_theta", f"{max_theta:g}"), " degrees"
             )
         samples, index = samples.select(inside), index[inside]
+        dropped.append((f"beyond θ = {max_theta:g}°", int(np.sum(~inside))))
     if subsample is not None:
         samples = samples.select(_subsample(index, subsample, subsample_method, seed, source))
-    return samples
+        dropped.append((f"left out by the subsample of {subsample:,} ({subsample_method})", index.size - subsample))
+    provenance = Provenance("merl", rows=N_BINS, dropped=tuple((why, n) for why, n in dropped if n))
+    return replace(samples, provenance=provenance)
 
 
 def _read_table(path: Path) -> np.ndarray:

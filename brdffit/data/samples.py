@@ -9,10 +9,29 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import checks as argument_checks
+from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
 from ..physics.geometry import zenith_degrees
-from .checks import TableChecks, named
+from .cells import TableChecks, named
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """How samples were read from a file: what a user may want to know and check.
+
+    ``format``: the format's name. ``rows``: the data rows read. ``dropped``: ``(reason, rows)`` for every
+    kind of row left out (below the horizon, missing). ``header_quantity``: what the file's header says its
+    values are (None where it does not say). ``quantity``: what they were read as (``quantities.py``),
+    ``quantity_given``: whether a user said so. ``sigma_from``: where a sigma came from, if not a column.
+    """
+
+    format: str
+    rows: int
+    dropped: tuple[tuple[str, int], ...] = ()
+    header_quantity: str | None = None
+    quantity: str = "brdf"
+    quantity_given: bool = False
+    sigma_from: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -22,8 +41,8 @@ class Samples:
     ``wi``, ``wo``: (N, 3) unit vectors in the local frame (``z`` the normal, ``wi`` towards the light,
     ``wo`` towards the viewer), ``z > 0``. ``values``: (N, C) BRDF in 1/sr. ``channels``: C names.
     ``sigma``: (N, C) 1-σ uncertainties in 1/sr, or None. ``weight``: (N,) non-negative weights, or
-    None. ``source`` names where they came from. Build one with :func:`brdffit.load_samples` or
-    :meth:`Samples.from_arrays`, which check the values.
+    None. ``source`` names where they came from, ``provenance`` how they were read from a file (None for
+    arrays). Build one with :func:`brdffit.load_samples` or :meth:`Samples.from_arrays`, which check the values.
     """
 
     wi: np.ndarray
@@ -33,6 +52,15 @@ class Samples:
     sigma: np.ndarray | None = None
     weight: np.ndarray | None = None
     source: str = "<arrays>"
+    provenance: Provenance | None = None
+
+    def __repr__(self) -> str:
+        extras = [name for name in ("sigma", "weight") if getattr(self, name) is not None]
+        shown = ", ".join(self.channels[:4]) + (", …" if self.n_channels > 4 else "")
+        return (
+            f"Samples({self.n_samples} × {self.n_channels} channel(s) [{shown}]"
+            f"{' with ' + ' and '.join(extras) if extras else ''} from {self.source})"
+        )
 
     @classmethod
     def from_arrays(
@@ -111,7 +139,7 @@ class Samples:
 
     def inside(self, max_theta: float) -> np.ndarray:
         """Which samples have both θi and θo at most ``max_theta`` degrees: the one test of every selection by angle."""
-        argument_checks.max_theta(max_theta)
+        checked_max_theta(max_theta)
         return (self.theta_i <= max_theta) & (self.theta_o <= max_theta)
 
     def within(self, max_theta: float | None) -> "Samples":

@@ -48,7 +48,7 @@ import numpy as np
 
 from ..checks import choice
 from ..errors import Argument, BrdfInputError, not_allowed
-from .checks import first_bad
+from .cells import first_bad
 from .samples import Samples
 
 #: What :func:`spectral_to` turns spectral samples into.

@@ -3,7 +3,8 @@
 import numpy as np
 
 from ..physics.geometry import half_vector, zenith_degrees
-from .samples import Samples
+from .reciprocity import MIN_PAIRS, reciprocity
+from .samples import Provenance, Samples
 
 #: Cell size of the coverage count, degrees, over Rusinkiewicz's (θh, θd) (each 0–90°).
 CELL = 10
@@ -17,7 +18,7 @@ def half_difference_angles(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
 
 
 def describe(samples: Samples, format_name: str) -> str:
-    """A few lines a person reads to judge whether the samples can determine a model."""
+    """A few lines a person reads to judge whether the samples can determine a model, and were read right."""
     n, c = samples.n_samples, samples.n_channels
     shown = ", ".join(samples.channels[:6]) + (f", … ({c} in all)" if c > 6 else "")
     azimuth_i = np.arctan2(samples.wi[:, 1], samples.wi[:, 0])
@@ -36,13 +37,62 @@ def describe(samples: Samples, format_name: str) -> str:
     for index, name in enumerate(samples.channels[:6]):
         values = samples.values[:, index]
         lines.append(f"  {name}: {values.min():.4g} … {values.max():.4g} 1/sr, median {np.median(values):.4g}")
-    lines.append(
-        "  sigma: "
-        + ("given" if samples.sigma is not None else "none")
-        + " · weight: "
-        + ("given" if samples.weight is not None else "none")
+    provenance = samples.provenance
+    sigma = (
+        "none"
+        if samples.sigma is None
+        else (provenance.sigma_from if provenance and provenance.sigma_from else "given")
     )
+    lines.append(f"  sigma: {sigma} · weight: {'given' if samples.weight is not None else 'none'}")
+    if provenance is not None:
+        lines += _provenance_lines(provenance)
+    lines += _reciprocity_lines(samples)
     return "\n".join(lines)
+
+
+#: What each quantity divides the file's values by.
+_DIVIDED_BY = {
+    "brdf": "taken as they are",
+    "reflectance-factor": "divided by π",
+    "cosine-weighted-in": "divided by cos θi (the light's cosine)",
+    "cosine-weighted-out": "divided by cos θo (the view's cosine)",
+}
+
+
+def _provenance_lines(provenance: Provenance) -> list[str]:
+    """How the file was read: its rows, those left out and why, and what its values were taken as."""
+    kept = provenance.rows - sum(count for _, count in provenance.dropped)
+    lines = [f"  rows: {provenance.rows} read, {kept} kept"]
+    lines += [f"  dropped: {count} {why}" for why, count in provenance.dropped]
+    origin = (
+        "as given"
+        if provenance.quantity_given
+        else ("as the header says" if provenance.header_quantity else "by default")
+    )
+    header = (
+        f" (the header says {provenance.header_quantity})"
+        if provenance.header_quantity and provenance.quantity_given
+        else ""
+    )
+    lines.append(f"  values read as {provenance.quantity} ({origin}{header}): {_DIVIDED_BY[provenance.quantity]}")
+    return lines
+
+
+def _reciprocity_lines(samples: Samples) -> list[str]:
+    """The median ratio of reciprocal pairs under each reading of the values, and the reading that fits."""
+    found = reciprocity(samples)
+    if found is None:
+        return [f"  reciprocity: fewer than {MIN_PAIRS} reciprocal pairs, not checked"]
+    readings = ", ".join(f"{ratio:.3g} as {reading}" for reading, ratio in found.ratios.items())
+    lines = [f"  reciprocity: {found.pairs} {found.kind} pairs; median f(a→b)/f(b→a), θa < θb: {readings}"]
+    if found.reciprocal:
+        lines.append(f"  the values as read are reciprocal (median {found.as_read:.3g})")
+    else:
+        lines.append(
+            f"  the values as read are NOT reciprocal (median {found.as_read:.3g}); they are as {found.best}:"
+            f" read them with --quantity {found.best}"
+        )
+    return lines
 
 
 def _range(values: np.ndarray) -> str:

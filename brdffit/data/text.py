@@ -7,7 +7,7 @@ import numpy as np
 
 from .._files import reading
 from ..errors import BrdfInputError
-from .checks import ColumnName, TableChecks
+from .cells import ColumnName, TableChecks
 
 
 def read_text(path: Path, what: str, *, allow_empty: bool = False) -> str:

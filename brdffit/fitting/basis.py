@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from ..physics.domains import NON_NEGATIVE
+from ..physics.domains import ALBEDO
 from ..physics.geometry import above_horizon
 from ..physics.models import Model
 
@@ -36,14 +36,14 @@ def value_and_basis(
     dtype = dtype or wi.dtype
     visible, wi, wo = above_horizon(wi, wo)
     n, c = wi.shape[0], n_channels
-    diffuse = NON_NEGATIVE.to_physical(theta[:c]).astype(dtype)
+    diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
     values = jnp.broadcast_to(diffuse / jnp.pi, (n, c))
     columns = [jnp.full((n, 1), 1.0 / jnp.pi, dtype=dtype)]
     if model.n_lobes:
         k = model.n_lobes
         shape_coordinates = model.lobe.unconstrained
         s = len(shape_coordinates.names)
-        specular = NON_NEGATIVE.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
+        specular = ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
 
         def lobe_and_derivatives(u):
             def lobe(v):
@@ -69,12 +69,12 @@ def jacobian_coefficients(model: Model, theta: Float[Array, " k"], n_channels: i
     """
     c, k = n_channels, model.n_lobes
     eye_c = jnp.eye(c, dtype=theta.dtype)
-    _, diffuse_slope = jax.jvp(NON_NEGATIVE.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
+    _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
     if not k:
         return (eye_c * diffuse_slope)[:, None, :]
     s = len(model.lobe.unconstrained.names)
     u_specular = theta[c : (1 + k) * c].reshape(k, c)
-    specular, specular_slope = jax.jvp(NON_NEGATIVE.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
+    specular, specular_slope = jax.jvp(ALBEDO.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
     eye_k, eye_s = jnp.eye(k, dtype=theta.dtype), jnp.eye(s, dtype=theta.dtype)
     diffuse_rows = (eye_c * diffuse_slope)[:, None, :]
     lobe_rows = specular_slope.T[:, :, None, None] * eye_k[None, :, :, None] * eye_c[:, None, None, :]

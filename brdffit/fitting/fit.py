@@ -22,8 +22,11 @@ from .._jax import float64, jit
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
+from ..physics.domains import START_FACTOR
 from ..physics.models import MODELS, Model, Params, get_model, model_option_names
+from .caveats import caveats
 from .implicit import at_optimum, computed_as
+from .lobes import lobe_by_lobe
 from .losses import Loss, get_loss
 from .problem import DTYPES, Problem, build_problem, cost, normal_equations, prepared, residuals
 from .results import FitResult
@@ -61,21 +64,29 @@ def fit_one(
     max_steps = whole_number("max_steps", max_steps)
     full = build_problem(samples, dtype)
     solve = compiled_solver(model, loss, max_steps, dtype)
+    fewer_lobes_cost = None
     if start is not None:
         starts = [start_vector(model, start, samples.n_channels)]
     else:
         search = search_problem(samples, full, dtype, seed)
         compiling = None if search is full else _compile_in_background(solve, model, full)
-        starts = starting_points(model, loss, search, n_starts)
-        if search is not full and len(starts) > 1:
-            starts = [best([solve(theta, search) for theta in starts]).theta]
+        if model.n_lobes > 1:
+            by_lobe = lobe_by_lobe(model, loss, search, solve, n_starts, best)
+            starts = [by_lobe.best.theta]
+            fewer_lobes_cost = by_lobe.fewer_lobes_cost if search is full else None
+            if search is full:  # already solved on every sample
+                return result_of(model, loss, samples, by_lobe.best, max_steps, dtype, fewer_lobes_cost)
+        else:
+            starts = starting_points(model, loss, search, n_starts)
+            if search is not full and len(starts) > 1:
+                starts = [best([solve(theta, search) for theta in starts]).theta]
         if compiling is not None:
             compiling.join()
     solved = best([solve(theta, full) for theta in starts])
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples))
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
-    return result_of(model, loss, samples, solved, max_steps, dtype)
+    return result_of(model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost)
 
 
 def _compile_in_background(solve, model: Model, problem: Problem) -> threading.Thread:
@@ -108,7 +119,7 @@ def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Pr
 
 def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
     """The model, the loss and the samples kept by ``max_theta``, after every check of the arguments."""
-    _check_option_names(model, model_options)
+    _check_option_names(model_options)
     model = get_model(model, **model_options)
     loss = get_loss(loss)
     if not isinstance(samples, Samples):
@@ -124,7 +135,7 @@ def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Mo
     return model, loss, samples
 
 
-def _check_option_names(model, options: dict[str, Any]) -> None:
+def _check_option_names(options: dict[str, Any]) -> None:
     """A keyword no model takes is a misspelt argument, not a model option (``max_step`` for ``max_steps``)."""
     known = {name for each in MODELS for name in model_option_names(each)}
     for key in options:
@@ -136,12 +147,27 @@ def _check_option_names(model, options: dict[str, Any]) -> None:
 
 
 def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.ndarray:
-    """The unconstrained vector of the parameter dictionary ``start``, checked against the samples' channels."""
+    """The unconstrained vector of the parameter dictionary ``start``, checked against the samples' channels and
+    each parameter's plausible range: beyond :data:`~brdffit.physics.domains.START_FACTOR` times its upper end a
+    fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report a
+    converged fit that never moved."""
     params = model.dictionary.to_params(start)
     if params.diffuse.size != n_channels:
         raise BrdfInputError(
             Argument("start"), f" parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
         )
+    values = np.asarray(model.physical.from_params(params))
+    channels = tuple(str(c) for c in range(n_channels))
+    for label, value, domain in zip(
+        model.physical.labels(channels), values, model.physical.domains(n_channels), strict=True
+    ):
+        limit = START_FACTOR * domain.plausible[1]
+        if value > limit:
+            raise BrdfInputError(
+                Argument("start"),
+                f": {label} = {value:g} is far beyond its plausible range"
+                f" (≤ {domain.plausible[1]:g}), where a fit cannot move; give at most {limit:g}",
+            )
     return model.unconstrained.from_params(params)
 
 
@@ -172,14 +198,26 @@ def best(runs: list[Solved]) -> Solved:
     return next(run for run, cost in zip(runs, costs, strict=True) if cost <= lowest + SAME_COST * abs(lowest))
 
 
-def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_steps: int, dtype: str) -> FitResult:
-    """The :class:`FitResult` of a solve."""
+def result_of(
+    model: Model,
+    loss: Loss,
+    samples: Samples,
+    solved: Solved,
+    max_steps: int,
+    dtype: str,
+    fewer_lobes_cost: float | None = None,
+) -> FitResult:
+    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``)."""
     converged = bool(solved.converged)
+    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
+    domains = model.physical.domains(samples.n_channels)
+    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
+    params = model.physical.to_params(inside, samples.n_channels)
     return FitResult(
         model=model.name,
         model_options=model.model_options,
         channels=samples.channels,
-        params=model.dictionary.from_params(jax.tree.map(np.asarray, solved.params)),
+        params=model.dictionary.from_params(params),
         loss=loss.name,
         cost=float(solved.cost),
         rmse=float(solved.rmse),
@@ -188,6 +226,7 @@ def result_of(model: Model, loss: Loss, samples: Samples, solved: Solved, max_st
         converged=converged,
         message="" if converged else _failure_message(solved.result, max_steps),
         dtype=dtype,
+        warnings=caveats(model, samples, params, float(solved.cost), fewer_lobes_cost),
     )
 
 
@@ -206,7 +245,7 @@ def _failure_message(result, max_steps: int) -> str:
     if result == optx.RESULTS.nonlinear_max_steps_reached:
         return (
             f"the maximum number of solver steps ({max_steps}) was reached before the tolerances were met;"
-            " raise the limit (max_steps, --max-steps)"
+            " allow more steps"
         )
     return optx.RESULTS[result]
 

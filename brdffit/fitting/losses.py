@@ -1,6 +1,6 @@
 """Losses: the residual transform applied to model and measurement, and per-sample scales.
 
-SPEC section 3. With ``f`` the model, ``y`` the measurement (both BRDF, 1/sr)
+The losses of ``docs/losses.md``. With ``f`` the model, ``y`` the measurement (both BRDF, 1/sr)
 and ``ci = cos θi``, each loss compares ``T(f)`` with ``T(y)``:
 
 =========  ===========================  ==========================================

@@ -13,16 +13,17 @@ over which :func:`normal_equations` accumulates ``JᵀJ``, ``Jᵀr`` and ``rᵀr
 without ever holding the (N·C × k) Jacobian or the residual vector.
 """
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, Bool, Float
 
 from .._jax import float64
 from ..data.samples import Samples
 from ..physics.geometry import NORMAL
-from ..physics.models import Model
+from ..physics.models import Model, Params
 from .basis import jacobian_coefficients, value_and_basis
 from .losses import Loss, residual_scale
 
@@ -42,14 +43,14 @@ class Problem(NamedTuple):
     them on the fly where they are missing.
     """
 
-    wi: Any  # (N, 3)
-    wo: Any  # (N, 3)
-    measured: Any  # (N, C) BRDF, 1/sr
-    sigma: Any  # (N, C) 1-σ uncertainty of measured, 1/sr, or None
-    weight: Any  # (N,) or None
-    real: Any  # (N,) bool: a sample, not padding
-    target: Any = None  # (N, C) T(measured), or None until prepared
-    scale: Any = None  # (N, C) or (N, 1) residual scale, 0 on padding, or None until prepared
+    wi: Float[Array, "N 3"]
+    wo: Float[Array, "N 3"]
+    measured: Float[Array, "N C"]  # BRDF, 1/sr
+    sigma: Float[Array, "N C"] | None  # 1-σ uncertainty of measured, 1/sr
+    weight: Float[Array, " N"] | None
+    real: Bool[Array, " N"]  # a sample, not padding
+    target: Float[Array, "N C"] | None = None  # T(measured), None until prepared
+    scale: Float[Array, "N C"] | Float[Array, "N 1"] | None = None  # residual scale, 0 on padding; None until prepared
 
 
 def padded_size(n: int) -> int:
@@ -135,13 +136,13 @@ def target_and_scale(loss: Loss, problem: Problem):
     return target, jnp.where(problem.real[:, None], scale, 0.0)
 
 
-def residuals(model: Model, loss: Loss, theta, problem: Problem):
+def residuals(model: Model, loss: Loss, theta: Float[Array, " k"], problem: Problem) -> Float[Array, "N C"]:
     """Residuals (N, C) at the unconstrained parameters ``theta``, computed in the problem's dtype."""
     return residuals_at(model, loss, model.unconstrained.to_params(theta, problem.measured.shape[1]), problem)
 
 
-def residuals_at(model: Model, loss: Loss, params, problem: Problem):
-    """Residuals (N, C) at the parameters ``params`` (:class:`~brdffit.models.Params`), in the problem's dtype."""
+def residuals_at(model: Model, loss: Loss, params: Params, problem: Problem) -> Float[Array, "N C"]:
+    """Residuals (N, C) at the parameters ``params`` (arrays), computed in the problem's dtype."""
     params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
     predicted = model.brdf(params, problem.wi, problem.wo)
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
@@ -171,13 +172,13 @@ def chunks(problem: Problem) -> Problem:
 class Sums(NamedTuple):
     """What one pass over a problem accumulates (float64)."""
 
-    cost: Any  # rᵀr
-    gradient: Any  # Jᵀr, (k,)
-    gram: Any  # JᵀJ, (k, k)
-    squared_error: Any  # Σ (f - y)² over the real samples and every channel, (1/sr)²: the numerator of the rmse
+    cost: Float[Array, ""]  # rᵀr
+    gradient: Float[Array, " k"]  # Jᵀr
+    gram: Float[Array, "k k"]  # JᵀJ
+    squared_error: Float[Array, ""]  # Σ (f - y)² over the real samples and every channel, (1/sr)²: the rmse's numerator
 
 
-def normal_equations(model: Model, loss: Loss, theta, problem: Problem) -> Sums:
+def normal_equations(model: Model, loss: Loss, theta: Float[Array, " k"], problem: Problem) -> Sums:
     """``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²`` at ``theta``, float64, in one pass over the chunks of ``problem``.
 
     With ``J[n, c] = w[n, c] Σ_m B[n, m] A[c, m]`` (:func:`residuals_and_basis`),

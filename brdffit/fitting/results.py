@@ -27,7 +27,8 @@ class Uncertainty(Mapping[str, Any]):
     ``stderr`` and ``quantiles`` (0.025, 0.16, 0.5, 0.84, 0.975) take the layout of ``params`` (an undetermined
     value is None); ``covariance`` and ``correlation`` are ``{"names": [...], "matrix": [[...]]}`` over the flat
     physical parameters (``rho_d[r]``, ``lobes[0].cxy``); ``diagnostics`` depend on the method; ``warnings`` say
-    what a user must know about the estimate. Also a read-only mapping of those names, as the JSON has them
+    what a user must know about the estimate, and ``warning_codes`` (``brdffit/uncertainty/findings.py``) which
+    finding each is, for programs. Also a read-only mapping of those names, as the JSON has them
     (``result.uncertainty["stderr"]``).
     """
 
@@ -38,15 +39,24 @@ class Uncertainty(Mapping[str, Any]):
     correlation: dict[str, Any]
     diagnostics: dict[str, Any]
     warnings: list[str]
+    warning_codes: list[str]
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, content: Mapping[str, Any]) -> "Uncertainty":
-        """The block of a result file; a missing entry is empty (older files)."""
-        values = {item.name: content.get(item.name) for item in fields(cls)}
-        return cls(**{name: ({} if value is None and name != "method" else value) for name, value in values.items()})
+    def from_dict(cls, content: Any, source: str = "result") -> "Uncertainty":
+        """The ``uncertainty`` block of a result file, checked; an entry an older file lacks is empty."""
+        if not isinstance(content, Mapping) or not isinstance(content.get("method"), str):
+            raise BrdfInputError(f"{source}: 'uncertainty' must be an object with a 'method'")
+        values = {}
+        for item in fields(cls):
+            empty = {} if item.type is dict[str, Any] else [] if item.type is list[str] else None
+            value = content.get(item.name, empty)
+            if empty is not None and not isinstance(value, type(empty)):
+                raise BrdfInputError(f"{source}: uncertainty.{item.name} must be a JSON {type(empty).__name__}")
+            values[item.name] = value
+        return cls(**values)
 
     def __getitem__(self, name: str) -> Any:
         if name not in self.__dataclass_fields__:
@@ -71,7 +81,9 @@ class FitResult:
     steps of the winning start; ``converged`` is False when the solver stopped
     without meeting its tolerances, and ``message`` then says why. ``dtype`` is
     the precision the model was evaluated in (``float32``: solved in single
-    precision, then refined in double, so the optimum is float64's).
+    precision, then refined in double, so the optimum is float64's). ``warnings``
+    say what a user must know before trusting the fit (a dead lobe, a parameter
+    at a plausible bound, data that are not reciprocal), one line each.
     ``uncertainty`` is the :class:`Uncertainty` when one was asked for
     (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
     parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
@@ -90,12 +102,13 @@ class FitResult:
     converged: bool
     message: str = ""
     dtype: str = "float64"
+    warnings: list[str] = field(default_factory=list)
     uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
 
-    def with_uncertainty(self, uncertainty: Uncertainty, draws: np.ndarray | None = None) -> "FitResult":
-        """This result carrying ``uncertainty`` (and the MCMC ``draws`` (S, p) it came from)."""
+    def with_estimate(self, uncertainty: Uncertainty, draws: np.ndarray | None = None) -> "FitResult":
+        """This result carrying an ``uncertainty`` estimate (and the MCMC ``draws`` (S, p) it came from)."""
         return replace(self, uncertainty=uncertainty, draws=draws)
 
     def predict(self, wi, wo) -> np.ndarray:
@@ -120,6 +133,7 @@ class FitResult:
                 "converged": self.converged,
                 "message": self.message,
                 "dtype": self.dtype,
+                "warnings": list(self.warnings),
             },
         }
         if self.uncertainty is not None:
@@ -151,9 +165,10 @@ class FitResult:
                 converged=bool(fit["converged"]),
                 message=str(fit.get("message", "")),
                 dtype=str(fit.get("dtype", "float64")),
+                warnings=list(fit.get("warnings", [])),
                 uncertainty=None
                 if content.get("uncertainty") is None
-                else Uncertainty.from_dict(content["uncertainty"]),
+                else Uncertainty.from_dict(content["uncertainty"], source),
                 brdffit_version=str(content.get("brdffit_version", "")),
             )
         except (KeyError, TypeError, ValueError) as error:

@@ -1,24 +1,22 @@
 """Data-driven starting points for the fit, by variable projection over a grid of lobe shapes.
 
-Every model is linear in its albedos (``models/base.py``). For a fixed lobe
+Every model is linear in its albedos (``physics/models/model.py``). For a fixed lobe
 shape, the albedos that minimise the loss *linearised about the data*,
 ``Σ w (f - y)²`` with ``w = (scale · T'(y))²`` (``losses.linearised_weight``), are
 a small non-negative least-squares problem per channel (Golub & Pereyra 1973,
 variable projection; Lawson & Hanson's NNLS via ``scipy.optimize.nnls``). Every
 shape of the lobe family's coarse grid gets its best albedos and is scored by
 the true loss, all shapes at once; the best few become the Levenberg-Marquardt
-starts. Models with several lobes (Lafortune) place their lobes greedily, one
-at a time.
+starts. Models with several lobes (Lafortune) place their lobes one at a time
+(:class:`LobeSearch`; ``lobes.py`` fits them lobe by lobe).
 """
-
-from dataclasses import replace
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.optimize
 
-from .._jax import jit  # float64 before any array; jax.jit with brdffit's compiler options
+from .._jax import float64, jit
 from ..data.samples import Samples
 from ..physics.models import Model, Params
 from .losses import Loss, linearised_weight
@@ -56,34 +54,62 @@ def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
     return np.sort(np.concatenate([bright, rest]))
 
 
+@float64
 def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -> list[np.ndarray]:
-    """Up to ``n_starts`` unconstrained start vectors, best first."""
-    weight = _weights(loss, problem)
-    n_channels = problem.measured.shape[1]
-    diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
+    """Up to ``n_starts`` unconstrained start vectors, best first: lobes placed greedily on the grid."""
     if not model.n_lobes:
+        weight = _weights(loss, problem)
+        diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
         diffuse = _albedos(*(np.asarray(x) for x in _gram(diffuse_basis, weight, problem.measured)))[0]
-        return [model.unconstrained.from_params(Params(_floored(diffuse), np.zeros((0, n_channels)), {}))]
-
-    grid = model.lobe.grid
-    stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
-    lobes = _grid_lobes(model.lobe, stacked, problem.wi, problem.wo)  # (G, N)
-    chosen: list[dict[str, float]] = []  # shapes of the lobes already placed
-    fixed = diffuse_basis
-    for placed in range(model.n_lobes):
-        partial_model = replace(model, n_lobes=placed + 1)
-        grams, rhs = (np.asarray(x) for x in _grid_grams(fixed, lobes, weight, problem.measured))
-        thetas = []
-        for index, shape in enumerate(grid):
-            albedos = _floored(_albedos(grams[index], rhs[index]))
-            shapes = [*chosen, shape]
-            shape_arrays = {name: np.array([s[name] for s in shapes]) for name in model.lobe.names}
-            thetas.append(partial_model.unconstrained.from_params(Params(albedos[0], albedos[1:], shape_arrays)))
-        costs = np.asarray(_grid_costs(partial_model, loss, jnp.asarray(np.stack(thetas)), problem))
+        return [
+            model.unconstrained.from_params(Params(_floored(diffuse), np.zeros((0, problem.measured.shape[1])), {}))
+        ]
+    search = LobeSearch(model, loss, problem)
+    chosen: list[dict[str, float]] = []
+    for _ in range(model.n_lobes):
+        costs, thetas = search.candidates(chosen)
         order = np.argsort(costs, kind="stable")
-        chosen.append(grid[order[0]])
-        fixed = jnp.concatenate([fixed, lobes[order[0]][None]])
+        chosen.append(search.grid[order[0]])
     return [thetas[index] for index in order[:n_starts]]
+
+
+class LobeSearch:
+    """The grid of a model's lobe shapes on one problem, for placing its lobes one at a time.
+
+    :meth:`candidates` places the next lobe beside lobes whose shapes are fixed (grid shapes or fitted ones):
+    for every grid shape, the best albedos of all lobes so far (variable projection), scored by the true loss
+    of the whole model with the lobes not yet placed switched off (albedo 0, which the solver's dead-column rule
+    then leaves alone: the fit of fewer lobes runs in the compiled solver of all of them).
+    """
+
+    @float64
+    def __init__(self, model: Model, loss: Loss, problem: Problem):
+        self.model, self.loss, self.problem = model, loss, problem
+        self.grid = model.lobe.grid
+        self.weight = _weights(loss, problem)
+        stacked = {name: jnp.asarray([shape[name] for shape in self.grid]) for name in model.lobe.names}
+        self.lobes = _grid_lobes(model.lobe, stacked, problem.wi, problem.wo)  # (G, N)
+        self.diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
+
+    @float64
+    def candidates(self, chosen: list[dict[str, float]]) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Costs (G,) and unconstrained vectors of the whole model with lobe ``len(chosen) + 1`` at each grid shape."""
+        model, n_channels = self.model, self.problem.measured.shape[1]
+        fixed = self.diffuse_basis
+        if chosen:
+            shapes = {name: jnp.asarray([shape[name] for shape in chosen]) for name in model.lobe.names}
+            fixed = jnp.concatenate([fixed, _grid_lobes(model.lobe, shapes, self.problem.wi, self.problem.wo)])
+        grams, rhs = (np.asarray(x) for x in _grid_grams(fixed, self.lobes, self.weight, self.problem.measured))
+        off = [self.grid[0]] * (model.n_lobes - len(chosen) - 1)  # any valid shape: their albedos are 0
+        thetas = []
+        for index, shape in enumerate(self.grid):
+            albedos = _floored(_albedos(grams[index], rhs[index]))
+            specular = np.concatenate([albedos[1:], np.zeros((len(off), n_channels))])
+            every = [*chosen, shape, *off]
+            shape_arrays = {name: np.array([s[name] for s in every]) for name in model.lobe.names}
+            thetas.append(model.unconstrained.from_params(Params(albedos[0], specular, shape_arrays)))
+        costs = np.asarray(_grid_costs(model, self.loss, jnp.asarray(np.stack(thetas)), self.problem))
+        return costs, thetas
 
 
 def _albedos(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:

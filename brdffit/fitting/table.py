@@ -35,6 +35,7 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     lines.append(f"  {figures}{precision} · {status}")
     if result.uncertainty:
         lines.append("  " + _uncertainty_line(result.uncertainty))
+    lines += [f"  warning: {caveat}" for caveat in result.warnings]
     return "\n".join(lines)
 
 
@@ -81,6 +82,11 @@ def _uncertainty_line(block) -> str:
             f"{diagnostics.get('acceptance', float('nan')):.2f}, τ ≤ {tau:.0f} steps, ≥ {ess:.0f} effective samples)"
         )
     noise, chi2 = diagnostics.get("noise_scale"), diagnostics.get("reduced_chi2")
+    if block.get("method") == "laplace-robust":
+        return (
+            "± Laplace standard error, heteroscedasticity-robust (sandwich A⁻¹BA⁻¹ at the optimum: the residuals'"
+            " scatter varies, so the Gauss-Newton errors would be too small)"
+        )
     if noise is not None:
         how = f"no sigma: scaled by the residuals' scatter, {noise:.3g} in the loss's units"
     else:

@@ -10,6 +10,11 @@ A :class:`MappedDomain` is also one the solver moves through: it works on an unc
 constraints in the solver. ``to_unconstrained`` is the inverse, clamped so that a value on the
 boundary (an albedo of 0, an ``f0`` of 1) maps to a finite number.
 
+Every domain also has a *plausible* range, inside its bounds: where real materials lie. A fitted value
+beyond it earns a warning (a roughness above 2, an exponent above 10⁴, an albedo above 1, a dielectric
+index within 10⁻⁶ of 1), and a start beyond :data:`START_FACTOR` times its upper end is refused, since a fit
+cannot move from there (a Phong exponent of 10⁹ is a delta function with no gradient).
+
 Concrete domains are final (equinox's abstract/final pattern): a new kind of domain subclasses one
 of the two abstract classes, never a concrete one.
 """
@@ -24,6 +29,8 @@ import numpy as np
 
 #: Boundary values are moved this far inside the domain before inverting.
 BOUNDARY_OFFSET = 1e-12
+#: A start may lie at most this factor beyond the upper end of a parameter's plausible range.
+START_FACTOR = 100.0
 
 
 class Domain(ABC):
@@ -47,6 +54,22 @@ class Domain(ABC):
     def log_prior(self, x):
         """The unnormalised log prior at ``x`` (JAX), ``-inf`` outside the domain."""
 
+    @property
+    def plausible(self) -> tuple[float, float]:
+        """Where real materials lie: the bounds, unless a domain narrows them."""
+        return self.bounds
+
+    def nearest_inside(self, x) -> np.ndarray:
+        """``x`` (numpy) moved onto the domain where it lies on or beyond an open bound. A fit's map reaches an
+        open bound only by rounding (``1 + exp(u)`` is exactly 1 for ``u < -37``); a result must still be a value
+        the domain holds, or no command could read the result file back."""
+        low, high = self.bounds
+        x = np.clip(np.asarray(x, dtype=float), low, high)
+        if not self.contains(x):  # as far inside as to_unconstrained clamps: finite to every model there
+            x = np.where(x <= low, low + BOUNDARY_OFFSET, x)
+            x = np.where(x >= high, high - BOUNDARY_OFFSET, x)
+        return x
+
 
 class MappedDomain(Domain):
     """A domain reached from the real line by a smooth map, so that the solver can move freely."""
@@ -63,9 +86,17 @@ class MappedDomain(Domain):
 @final
 @dataclass(frozen=True)
 class Positive(MappedDomain):
-    """``x > 0`` (``≥ 0`` when ``allow_zero``), through ``x = exp(u)``: scales fit in log space."""
+    """``x > 0`` (``≥ 0`` when ``allow_zero``), through ``x = exp(u)``: scales fit in log space.
+
+    ``plausible_max``: the upper end of the plausible range (None: no limit).
+    """
 
     allow_zero: bool = False
+    plausible_max: float | None = None
+
+    @property
+    def plausible(self) -> tuple[float, float]:
+        return 0.0, float("inf") if self.plausible_max is None else self.plausible_max
 
     @property
     def text(self) -> str:
@@ -96,9 +127,14 @@ class Positive(MappedDomain):
 @final
 @dataclass(frozen=True)
 class GreaterThan(MappedDomain):
-    """``x > lower``, through ``x = lower + exp(u)``."""
+    """``x > lower``, through ``x = lower + exp(u)``; ``plausible_margin``: how far above ``lower`` real values lie."""
 
     lower: float
+    plausible_margin: float = 0.0
+
+    @property
+    def plausible(self) -> tuple[float, float]:
+        return self.lower + self.plausible_margin, float("inf")
 
     @property
     def text(self) -> str:
@@ -181,3 +217,9 @@ class Interval(Domain):
 NON_NEGATIVE = Positive(allow_zero=True)
 POSITIVE = Positive()
 UNIT_INTERVAL = UnitInterval()
+#: An albedo: a fraction of the light, so at most 1 for a real material (fits beyond it get a warning).
+ALBEDO = Positive(allow_zero=True, plausible_max=1.0)
+#: A roughness (rms slope, Beckmann or Ward): beyond 2 the surface is a diffuser and the lobe meaningless.
+ROUGHNESS = Positive(plausible_max=2.0)
+#: A cosine-power exponent: beyond 10⁴ a lobe is narrower than any gonioreflectometer resolves (0.6°).
+EXPONENT = Positive(plausible_max=1e4)

@@ -12,7 +12,7 @@ from typing import Any
 
 import jax.numpy as jnp
 
-from .domains import POSITIVE, UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
+from .domains import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, GreaterThan, MappedDomain
 
 
 def fresnel_schlick(cos_beta, f0):
@@ -78,12 +78,12 @@ FRESNEL = {
     ),
     "dielectric": Fresnel(
         "exact, real index eta",
-        (("eta", GreaterThan(1.0), (1.5, 3.0)),),
+        (("eta", GreaterThan(1.0, plausible_margin=1e-6), (1.5, 3.0)),),
         lambda c, shape: fresnel_dielectric(c, shape["eta"]),
     ),
     "conductor": Fresnel(
         "exact, complex index eta + i k",
-        (("eta", POSITIVE, (0.5, 1.5)), ("k", Positive(allow_zero=True), (1.0, 4.0))),
+        (("eta", POSITIVE, (0.5, 1.5)), ("k", NON_NEGATIVE, (1.0, 4.0))),
         lambda c, shape: fresnel_conductor(c, shape["eta"], shape["k"]),
     ),
     "none": Fresnel("F = 1", (), lambda c, shape: jnp.ones_like(c)),

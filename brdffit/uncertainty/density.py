@@ -135,6 +135,6 @@ def log_probability_function(density: Density):
 
 @float64
 def physical_draws(model: Model, draws: np.ndarray, n_channels: int) -> np.ndarray:
-    """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical_labels`` order."""
+    """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical.labels`` order."""
     convert = jit(jax.vmap(lambda v: model.physical.from_params(model.sampling.to_params(v, n_channels))))
     return np.asarray(convert(jnp.asarray(draws, dtype=jnp.float64)))

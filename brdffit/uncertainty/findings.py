@@ -6,12 +6,20 @@ applies to Laplace alone), so each is named by a code rather than recognised by 
 
 from typing import NamedTuple
 
+from ..errors import UncertaintyWarning
+
 
 class Finding(NamedTuple):
     """One warning of an estimate: ``code`` (one of the constants below) and ``message``."""
 
     code: str
     message: str
+
+    def warning(self) -> UncertaintyWarning:
+        """The finding as a Python warning, its ``code`` attached."""
+        warning = UncertaintyWarning(self.message)
+        warning.code = self.code
+        return warning
 
 
 #: The fit stopped without converging: the estimate describes the point where it stopped.
@@ -28,8 +36,3 @@ DEGENERATE = "degenerate"
 SHORT_CHAIN = "short-chain"
 #: The walkers hardly move.
 LOW_ACCEPTANCE = "low-acceptance"
-
-
-def messages(findings: list[Finding]) -> list[str]:
-    """The findings' sentences, as the result file's ``warnings`` hold them."""
-    return [finding.message for finding in findings]

@@ -32,7 +32,6 @@ import numpy as np
 
 from .._jax import float64, jit
 from ..data.samples import Samples
-from ..errors import UncertaintyWarning
 from ..fitting.losses import Loss
 from ..fitting.problem import Problem, chunks, residuals_at
 from ..fitting.results import FitResult, Uncertainty
@@ -40,11 +39,12 @@ from ..physics.models import Model
 from . import findings as codes
 from .density import Density, compiled_chi_squared, density_of
 from .findings import Finding
-from .layout import QUANTILES, correlation, stderr_dict, strongest_correlation, uncertainty
+from .layout import QUANTILES, correlation, estimate, stderr_dict, strongest_correlation
 
 #: |correlation| from which a pair of parameters is reported as degenerate (the data fix a combination of them).
 DEGENERATE_CORRELATION = 0.99
-#: Without sigma, warn when a sandwich (robust) error exceeds the reported one by this factor.
+#: Without sigma, when a sandwich (robust) error exceeds the Gauss-Newton one by this factor, the robust errors are
+#: reported instead (method ``laplace-robust``) and a warning says why.
 HETEROSCEDASTIC_RATIO = 2.0
 #: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
 SINGULAR = 1e-12
@@ -133,8 +133,8 @@ def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
     with float64():
         estimate, found = laplace_estimate(result, density_of(result, samples))
     for finding in found:
-        warnings.warn(finding.message, UncertaintyWarning, stacklevel=2)
-    return result.with_uncertainty(estimate)
+        warnings.warn(finding.warning(), stacklevel=2)
+    return result.with_estimate(estimate)
 
 
 class Curvature(NamedTuple):
@@ -176,7 +176,8 @@ def laplace_estimate(
     covariance = _mapped(gradient, covariance_v)
     stderr = np.sqrt(np.diag(covariance))
     # Without sigma, s² assumes one variance for every residual; the sandwich A⁻¹BA⁻¹ (White 1980) does not.
-    robust = np.sqrt(np.diag(_mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))))
+    robust_covariance = _mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))
+    robust = np.sqrt(np.diag(robust_covariance))
     robust[np.isnan(stderr)] = np.nan
 
     found = []
@@ -204,17 +205,20 @@ def laplace_estimate(
     names = model.physical.labels(tuple(result.channels))
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(np.isfinite(robust / stderr), robust / stderr, 0.0)
-    if not density.has_sigma and ratio.max(initial=0.0) > HETEROSCEDASTIC_RATIO:
+    gauss_newton = stderr
+    method = "laplace"
+    if not density.has_sigma and ratio.max(initial=0.0) >= HETEROSCEDASTIC_RATIO:
         worst = int(np.argmax(ratio))
         found.append(
             Finding(
                 codes.HETEROSCEDASTIC,
-                "without sigma the errors assume the same scatter for every residual, but the residuals' scatter"
-                " varies (e.g. noise proportional to the signal): the heteroscedasticity-robust (sandwich) error of"
-                f" {names[worst]} is {ratio[worst]:.1f}× the reported one (diagnostics.robust_stderr); give a sigma"
-                " column for calibrated errors",
+                "without sigma the Gauss-Newton errors assume the same scatter for every residual, but the"
+                " residuals' scatter varies (e.g. noise proportional to the signal): the heteroscedasticity-robust"
+                f" (sandwich) error of {names[worst]} is {ratio[worst]:.1f}× the Gauss-Newton one, so Laplace reports"
+                " the robust errors (method laplace-robust); give a sigma column for calibrated errors",
             )
         )
+        method, stderr, covariance = "laplace-robust", robust, robust_covariance
     pair = strongest_correlation(labels, correlation(covariance_v))
     if pair is not None and abs(pair[2]) >= DEGENERATE_CORRELATION:
         found.append(
@@ -236,10 +240,11 @@ def laplace_estimate(
         "noise_scale": None if density.has_sigma else float(np.sqrt(reduced)),
         "condition_number": condition,
         "robust_stderr": None if density.has_sigma else stderr_dict(model, robust, c),
+        "gauss_newton_stderr": stderr_dict(model, gauss_newton, c),
         "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
     }
-    estimate = uncertainty(
-        "laplace",
+    laid_out = estimate(
+        method,
         model,
         tuple(result.channels),
         stderr=stderr,
@@ -248,4 +253,4 @@ def laplace_estimate(
         diagnostics=diagnostics,
         findings=found,
     )
-    return estimate, found
+    return laid_out, found

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..fitting.results import Uncertainty
 from ..physics.models import Model
-from .findings import Finding, messages
+from .findings import Finding
 
 #: The quantiles written for every parameter: the median and the central 68% and 95% intervals.
 QUANTILES = (0.025, 0.16, 0.5, 0.84, 0.975)
@@ -85,7 +85,7 @@ def json_ready(value: Any) -> Any:
     return value if math.isfinite(value) else None
 
 
-def uncertainty(
+def estimate(
     method: str,
     model: Model,
     channels: tuple[str, ...],
@@ -106,5 +106,6 @@ def uncertainty(
         covariance=matrix_block(names, covariance),
         correlation=matrix_block(names, correlation(covariance)),
         diagnostics=json_ready(diagnostics),
-        warnings=messages(findings),
+        warnings=[finding.message for finding in findings],
+        warning_codes=[finding.code for finding in findings],
     )

@@ -7,9 +7,9 @@ the posterior of ``density.py``, whose log density is jit-compiled and
 evaluates every walker of a move at once. The first ``burn`` steps are
 discarded and the rest thinned by ``thin``.
 
-Three steps, one function each: :func:`run_chain` samples (and writes the chain file),
-:func:`diagnose` judges the chain, :func:`mcmc_estimate` lays the draws out as the result's
-uncertainty. Diagnostics: the mean acceptance fraction, the integrated autocorrelation
+Three steps, one function each, which :func:`sample_and_estimate` runs in turn: :func:`run_chain`
+samples (and writes the chain file), :func:`diagnose` judges the chain, :func:`draws_estimate` lays the
+draws out as the result's uncertainty. Diagnostics: the mean acceptance fraction, the integrated autocorrelation
 time τ of each coordinate (emcee's estimator, Sokal 1989) and the effective
 sample size ``walkers · (steps - burn) / τ``. emcee's own guideline is a chain
 of at least 50 τ; a shorter one gets a warning.
@@ -27,13 +27,13 @@ from .._files import atomic_path
 from .._jax import float64
 from ..checks import whole_number
 from ..data.samples import Samples
-from ..errors import Argument, BrdfInputError, UncertaintyWarning
+from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult, Uncertainty
 from . import findings as codes
 from .density import LOG_NOISE, Density, density_of, log_probability_function, physical_draws
 from .findings import Finding
 from .laplace import Curvature, curvature_at_optimum, laplace_estimate
-from .layout import QUANTILES, uncertainty
+from .layout import QUANTILES, estimate
 
 #: emcee's guideline: a chain should be at least this many autocorrelation times long.
 MIN_AUTOCORRELATION_TIMES = 50
@@ -127,13 +127,13 @@ def sample_posterior(
     with float64():
         density = density_of(result, samples)
         check_walkers(settings, density.model, samples)
-        estimate, found, draws = posterior_estimate(result, density, settings, chain_path, progress)
+        laid_out, found, draws = sample_and_estimate(result, density, settings, chain_path, progress)
     for finding in found:
-        warnings.warn(finding.message, UncertaintyWarning, stacklevel=2)
-    return result.with_uncertainty(estimate, draws)
+        warnings.warn(finding.warning(), stacklevel=2)
+    return result.with_estimate(laid_out, draws)
 
 
-def posterior_estimate(
+def sample_and_estimate(
     result: FitResult, density: Density, settings: MCMC, chain_path: Path | None, progress: bool
 ) -> tuple[Uncertainty, list[Finding], np.ndarray]:
     """Sample, diagnose and lay out: the estimate, what it warns about, and the draws (S, p)."""
@@ -150,7 +150,7 @@ def posterior_estimate(
             Finding(codes.NOT_CONVERGED, "the fit did not converge: the chain started from the point where it stopped"),
         )
     found += diagnosis.findings
-    return mcmc_estimate(result, density, settings, chain, diagnosis, found)
+    return draws_estimate(result, density, settings, chain, diagnosis, found)
 
 
 def start_ball(
@@ -250,7 +250,7 @@ def diagnose(chain: Chain, settings: MCMC, labels: list[str]) -> Diagnosis:
     return Diagnosis(tau, effective, acceptance, found)
 
 
-def mcmc_estimate(
+def draws_estimate(
     result: FitResult, density: Density, settings: MCMC, chain: Chain, diagnosis: Diagnosis, found: list[Finding]
 ) -> tuple[Uncertainty, list[Finding], np.ndarray]:
     """The draws after burn-in and thinning as the result's uncertainty; returns it, ``found`` and the draws."""
@@ -272,7 +272,7 @@ def mcmc_estimate(
         "seed": settings.seed,
         "n_draws": int(kept.shape[0]),
     } | noise
-    estimate = uncertainty(
+    laid_out = estimate(
         "mcmc",
         model,
         tuple(result.channels),
@@ -282,7 +282,7 @@ def mcmc_estimate(
         diagnostics=diagnostics,
         findings=found,
     )
-    return estimate, found, draws
+    return laid_out, found, draws
 
 
 def _chain_of(sampler) -> Chain:

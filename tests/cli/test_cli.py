@@ -181,7 +181,17 @@ def test_fit_prints_a_table_and_writes_the_result(tmp_path, capsys):
     assert list(content) == ["brdffit_version", "model", "model_options", "channels", "params", "fit"]
     assert content["model"] == "ward" and content["model_options"] == {} and content["channels"] == ["r", "g", "b"]
     assert list(content["params"]) == ["rho_d", "rho_s", "alpha"]
-    assert list(content["fit"]) == ["loss", "cost", "rmse", "n_samples", "n_steps", "converged", "message", "dtype"]
+    assert list(content["fit"]) == [
+        "loss",
+        "cost",
+        "rmse",
+        "n_samples",
+        "n_steps",
+        "converged",
+        "message",
+        "dtype",
+        "warnings",
+    ]
     assert content["fit"]["converged"] is True and content["fit"]["n_samples"] == 10368
     # The example was made from these parameters with 1% noise (Makefile target `examples`).
     truth = json.loads(EXAMPLE_PARAMS.read_text())

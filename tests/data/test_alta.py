@@ -1,4 +1,4 @@
-"""ALTA text data files (brdffit/formats/alta.py): parameterisations, round trip, the real tape, errors, fuzzing."""
+"""ALTA text data files (brdffit/data/alta.py): parameterisations, round trip, the real tape, errors, fuzzing."""
 
 import math
 import tempfile
@@ -11,9 +11,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from paths import TAPE
 
+from brdffit import load_samples
 from brdffit.data.alta import PARAMETERISATIONS, read_alta, write_alta
 from brdffit.data.samples import Samples
-from brdffit.errors import BrdfInputError
+from brdffit.errors import BrdfInputError, InputWarning
 
 S30, C30 = math.sin(math.radians(30)), math.cos(math.radians(30))
 S45, C45 = math.sin(math.radians(45)), math.cos(math.radians(45))
@@ -145,12 +146,22 @@ def test_header_keys_outputs_and_confidence_columns(tmp_path):
     assert read_alta(alta_file(tmp_path, body)).channels == ("c0", "c1")
 
 
-def test_cosine_factor_output_is_divided_by_cos_theta_l(tmp_path):
+def test_cosine_factor_output_is_weighted_by_the_view_and_divided_once(tmp_path):
+    """ALTA's params.h: INV_STERADIAN_COSINE_FACTOR is the BRDF "weighted by the cosine factor of the output
+    direction", the view's. The reader keeps the value and says so; loading divides by cos θv, once."""
     body = header("SPHERICAL_TL_PL_TV_PV", 1, "#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n") + row(D60, 0, 0.2, 1, 0.1)
-    np.testing.assert_allclose(read_alta(alta_file(tmp_path, body)).values, [[0.2]], rtol=1e-14)
-    path = alta_file(tmp_path, body + row(1.5707963267, 0, 0.2, 1, 1e308))
-    with pytest.raises(BrdfInputError, match=r"data.dat: line 5: the value divided by cos θl overflows$"):
-        read_alta(path)
+    path = alta_file(tmp_path, body)
+    read = read_alta(path)
+    assert read.values.tolist() == [[0.1]] and read.provenance.header_quantity == "cosine-weighted-out"
+    loaded = load_samples(path)
+    np.testing.assert_allclose(loaded.values, [[0.1 / math.cos(0.2)]], rtol=1e-14)
+    assert loaded.provenance.quantity == "cosine-weighted-out" and not loaded.provenance.quantity_given
+    np.testing.assert_allclose(load_samples(path, quantity="cosine-weighted-out").values, loaded.values, rtol=0)
+    with pytest.warns(InputWarning, match=r"read as quantity=brdf, not as the header says \(cosine-weighted-out\)"):
+        assert load_samples(path, quantity="brdf").values.tolist() == [[0.1]]
+    path = alta_file(tmp_path, body + row(D60, 0, 1.5707963267, 1, 1e308))
+    with pytest.raises(BrdfInputError, match=r"data.dat: sample 2: the value read as cosine-weighted-out overflows"):
+        load_samples(path)
 
 
 def test_rows_at_or_below_the_horizon_are_dropped(tmp_path):
@@ -266,7 +277,7 @@ ERRORS = [
     ),
     (
         header("ISOTROPIC_TL_TV_PROJ_DPHI") + row(0.5, 1.5e308, 1.5e308, 0.1),
-        "line 3: the coordinates give no direction (too large)",
+        "line 3, column 2 (theta_v*cos(dphi)): 1.5e+308 is beyond ±2π; ALTA angles are radians",
     ),
 ]
 

@@ -1,4 +1,4 @@
-"""ASTM E1392 text files (brdffit/formats/astm.py): reading by hand, units, round trip, errors, fuzzing."""
+"""ASTM E1392 text files (brdffit/data/astm.py): reading by hand, units, round trip, errors, fuzzing."""
 
 import math
 import tempfile

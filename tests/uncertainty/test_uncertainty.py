@@ -13,6 +13,7 @@ import data_synth
 from brdffit import (
     MCMC,
     BrdfInputError,
+    FitWarning,
     UncertaintyWarning,
     fit,
     fit_batch,
@@ -80,12 +81,17 @@ def test_without_sigma_the_errors_scale_with_the_residual_variance():
 
 def test_without_sigma_a_varying_scatter_is_reported():
     """2% multiplicative noise without sigma: the log-loss residuals' scatter follows the signal, so the s²-scaled
-    errors are too small; the sandwich errors are larger, and a warning says so (the issue's method is kept)."""
+    (Gauss-Newton) errors are too small; the sandwich errors are larger, so they are the ones reported, the method
+    says so, and a warning says why."""
     samples = data_synth.synthesize("ward", OAK, *SMALL_GRID, noise=0.02, seed=13)
     with pytest.warns(UncertaintyWarning, match="heteroscedasticity-robust"):
         result = fit(samples, "ward", uncertainty="laplace")
-    robust = flat(result.uncertainty["diagnostics"]["robust_stderr"])
-    assert np.max(robust / flat(result.uncertainty["stderr"])) > 2
+    diagnostics = result.uncertainty["diagnostics"]
+    robust, gauss_newton = flat(diagnostics["robust_stderr"]), flat(diagnostics["gauss_newton_stderr"])
+    assert result.uncertainty["method"] == "laplace-robust" and "heteroscedastic" in result.uncertainty["warning_codes"]
+    np.testing.assert_array_equal(flat(result.uncertainty["stderr"]), robust)
+    assert np.max(robust / gauss_newton) > 2
+    assert "heteroscedasticity-robust" in result.table()
     with_sigma = fit(oak_samples(seed=13), "ward", uncertainty="laplace")
     assert with_sigma.uncertainty["diagnostics"]["robust_stderr"] is None
 
@@ -130,7 +136,8 @@ def test_zero_specular_albedo_leaves_the_roughness_undetermined():
     samples = data_synth.synthesize(
         "ward", OAK | {"rho_s": [0.0, 0.0, 0.0]}, *SMALL_GRID, noise=0.01, seed=2, with_sigma=True
     )
-    result = fit(samples, "ward", start=OAK | {"rho_s": [0.0, 0.0, 0.0]}, max_steps=1)
+    with pytest.warns(FitWarning, match="contributes less than 0.1%"):
+        result = fit(samples, "ward", start=OAK | {"rho_s": [0.0, 0.0, 0.0]}, max_steps=1)
     result = replace(result, params=OAK | {"rho_s": [0.0, 0.0, 0.0]}, converged=True)
     with pytest.warns(UncertaintyWarning, match="not determined by these samples: alpha"):
         estimated = laplace_uncertainty(result, samples)
@@ -313,6 +320,7 @@ def test_short_chain_warns():
     with pytest.warns(UncertaintyWarning, match="shorter than 50 autocorrelation times"):
         estimated = sample_posterior(result, samples, MCMC(walkers=16, steps=100, burn=20))
     assert any("autocorrelation" in message for message in estimated.uncertainty["warnings"])
+    assert "short-chain" in estimated.uncertainty["warning_codes"]
 
 
 @pytest.mark.parametrize(
@@ -443,6 +451,7 @@ def test_mcmc_near_a_bound_stays_in_the_domain_and_keeps_laplace_warnings():
     assert np.all((f0 >= 0) & (f0 <= 1))
     assert all(0 <= q <= 1 for q in result.uncertainty["quantiles"]["f0"].values())
     assert any("nearly degenerate" in message for message in result.uncertainty["warnings"])
+    assert "degenerate" in result.uncertainty["warning_codes"]
     assert all(issubclass(w.category, UncertaintyWarning) for w in caught), [str(w.message) for w in caught]
 
 

@@ -18,11 +18,11 @@ from typing import final
 import jax.numpy as jnp
 
 from ...checks import choice
-from ..domains import POSITIVE
+from ..domains import ALBEDO, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL
 from ..geometry import half_vector, tan2_from_cos
 from .grids import ROUGHNESS_GRID
-from .lobe import Lobe
+from .lobe import MappedLobe
 from .model import Model
 
 
@@ -42,7 +42,7 @@ def v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta):
 
 @final
 @dataclass(frozen=True)
-class CookTorranceLobe(Lobe):
+class CookTorranceLobe(MappedLobe):
     """Cook-Torrance lobe with rms slope ``m`` and the Fresnel term named by ``fresnel``."""
 
     fresnel: str = "schlick"
@@ -55,8 +55,13 @@ class CookTorranceLobe(Lobe):
         return f"Beckmann D, V-groove G, {self.fresnel} Fresnel, F·D·G/(4 ci co)"
 
     @property
+    def specular_domain(self) -> Domain:
+        """``ks`` is the lobe's albedo without a Fresnel term; with one, ``ks·F`` is (Ngan et al. 2005: ks to 1.25)."""
+        return ALBEDO if self.fresnel == "none" else NON_NEGATIVE
+
+    @property
     def parameters(self):
-        return (("m", POSITIVE), *((name, domain) for name, domain, _ in FRESNEL[self.fresnel].parameters))
+        return (("m", ROUGHNESS), *((name, domain) for name, domain, _ in FRESNEL[self.fresnel].parameters))
 
     @property
     def grid(self):

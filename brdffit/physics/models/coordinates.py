@@ -6,7 +6,7 @@ lobe)]``; the systems differ only in how an albedo and a lobe's shape become coo
 =================  ===================================  ================================================
 system             albedos                              shape (``Lobe`` coordinates, ``lobe.py``)
 =================  ===================================  ================================================
-unconstrained      ``ln rho`` (``NON_NEGATIVE``'s map)  each domain's map; Lafortune: ``ψ, ln n``
+unconstrained      ``ln rho`` (``ALBEDO``'s map)  each domain's map; Lafortune: ``ψ, ln n``
 sampling           the values                           the values; Lafortune: ``ψ, n``
 physical           the values                           the values (``cxy, cz, n`` for Lafortune)
 =================  ===================================  ================================================
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, final
 
 from ..._arrays import namespace
-from ..domains import NON_NEGATIVE, Domain
+from ..domains import ALBEDO, Domain
 from .lobe import BoundedShapeCoordinates, ShapeCoordinates
 from .params import Params
 
@@ -40,13 +40,13 @@ class FlatCoordinates(ABC):
     def shape(self) -> ShapeCoordinates:
         """How a lobe's shape becomes coordinates in this system."""
 
+    @abstractmethod
     def albedo_to_vector(self, albedos):
-        """The coordinates of albedos (the values themselves unless a system says otherwise)."""
-        return albedos
+        """The coordinates of albedos."""
 
+    @abstractmethod
     def albedo_from_vector(self, u):
         """Albedos at coordinates ``u`` (JAX-traceable)."""
-        return u
 
     def size(self, n_channels: int) -> int:
         """The vector's length for ``n_channels`` channels."""
@@ -83,17 +83,26 @@ class FlatCoordinates(ABC):
 
 
 class BoundedFlatCoordinates(FlatCoordinates):
-    """Coordinates whose entries live in domains (with priors): the sampling and the physical ones."""
+    """Coordinates whose entries live in domains (with priors): the sampling and the physical ones, where an
+    albedo is its own value."""
 
     @property
     @abstractmethod
     def shape(self) -> BoundedShapeCoordinates: ...
 
+    def albedo_to_vector(self, albedos):
+        return albedos
+
+    def albedo_from_vector(self, u):
+        return u
+
     def domains(self, n_channels: int) -> list[Domain]:
         """The domain of each entry, in :meth:`labels` order."""
         k = self.model.n_lobes
-        albedos = [NON_NEGATIVE] * ((1 + k) * n_channels)
-        return (albedos + list(self.shape.domains) * k) if k else albedos
+        if not k:
+            return [ALBEDO] * n_channels
+        specular = [self.model.lobe.specular_domain] * (k * n_channels)
+        return [ALBEDO] * n_channels + specular + list(self.shape.domains) * k
 
 
 @final
@@ -105,10 +114,10 @@ class UnconstrainedCoordinates(FlatCoordinates):
         return self.model.lobe.unconstrained
 
     def albedo_to_vector(self, albedos):
-        return NON_NEGATIVE.to_unconstrained(albedos)
+        return ALBEDO.to_unconstrained(albedos)
 
     def albedo_from_vector(self, u):
-        return NON_NEGATIVE.to_physical(u)
+        return ALBEDO.to_physical(u)
 
 
 @final

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ...errors import BrdfInputError
-from ..domains import NON_NEGATIVE
+from ..domains import ALBEDO
 from .params import Params
 
 if TYPE_CHECKING:
@@ -113,8 +113,8 @@ def _albedo(value: Any, where: str) -> np.ndarray:
         raise BrdfInputError(f"{where} must be a number or a list of numbers, got {value!r}") from None
     if array.ndim != 1 or array.size == 0:
         raise BrdfInputError(f"{where} must be a number or a flat list of numbers, got {value!r}")
-    if not NON_NEGATIVE.contains(array):
-        raise BrdfInputError(f"{where} = {value!r} is outside its domain {NON_NEGATIVE.text}")
+    if not ALBEDO.contains(array):
+        raise BrdfInputError(f"{where} = {value!r} is outside its domain {ALBEDO.text}")
     return array
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from ..._arrays import namespace
 from ...checks import whole_number
 from ...errors import BrdfInputError
-from ..domains import POSITIVE, Domain, Interval
+from ..domains import EXPONENT, NON_NEGATIVE, Domain, Interval
 from ..geometry import safe_power
 from .grids import EXPONENT_GRID
 from .lobe import BoundedShapeCoordinates, Lobe, ShapeCoordinates
@@ -61,11 +61,11 @@ class AngleAndLogExponent(ShapeCoordinates):
         return ("psi", "n")
 
     def to_vector(self, shape) -> np.ndarray:
-        return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), POSITIVE.to_unconstrained(shape["n"])])
+        return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), EXPONENT.to_unconstrained(shape["n"])])
 
     def from_vector(self, u):
         cxy, cz = direction_from_angle(u[0])
-        return {"cxy": cxy, "cz": cz, "n": POSITIVE.to_physical(u[1])}
+        return {"cxy": cxy, "cz": cz, "n": EXPONENT.to_physical(u[1])}
 
 
 @final
@@ -80,7 +80,7 @@ class AngleAndExponent(BoundedShapeCoordinates):
 
     @property
     def domains(self) -> tuple[Domain, ...]:
-        return (Interval(-np.pi, np.pi), POSITIVE)
+        return (Interval(-np.pi, np.pi), EXPONENT)
 
     def to_vector(self, shape) -> np.ndarray:
         return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), np.asarray(shape["n"], dtype=float)])
@@ -97,9 +97,12 @@ class LafortuneLobe(Lobe):
 
     summary = "(n+2)/(2π) · (cxy (wi_x wo_x + wi_y wo_y) + cz ci co)^n / max(|cxy|, |cz|)^n"
 
+    #: The normalisation (n+2)/(2π) is exact only for cz = 1; published fits reach rho_s = 1.71 (Ngan et al. 2005).
+    specular_domain = NON_NEGATIVE
+
     @property
     def parameters(self):
-        return (("cxy", DirectionComponent()), ("cz", DirectionComponent()), ("n", POSITIVE))
+        return (("cxy", DirectionComponent()), ("cz", DirectionComponent()), ("n", EXPONENT))
 
     @property
     def unconstrained(self) -> ShapeCoordinates:
@@ -119,8 +122,8 @@ class LafortuneLobe(Lobe):
 
     def checked_shape(self, shape, where):
         """Check ``n`` and ``2 cxy² + cz² = 1`` (within 1%), and rescale ``(cxy, cz)`` onto it exactly."""
-        if not POSITIVE.contains(shape["n"]):
-            raise BrdfInputError(f"{where}n = {shape['n']!r} is outside its domain {POSITIVE.text}")
+        if not EXPONENT.contains(shape["n"]):
+            raise BrdfInputError(f"{where}n = {shape['n']!r} is outside its domain {EXPONENT.text}")
         cxy, cz = float(shape["cxy"]), float(shape["cz"])
         norm2 = 2.0 * cxy * cxy + cz * cz
         if not np.isfinite(norm2) or abs(norm2 - 1.0) > NORM_TOLERANCE:

@@ -7,7 +7,9 @@ ones the solver moves (through each domain's smooth map, ``domains.py``); and th
 MCMC walkers move (the physical values unless a lobe says otherwise). A Lafortune lobe's direction is
 one angle ``ψ`` in the last two (``lafortune.py``).
 
-Abstract classes here, final concrete classes in the family modules (equinox's abstract/final pattern).
+Abstract classes here, final concrete classes in the family modules (equinox's abstract/final pattern: an
+abstract class may implement methods, a concrete one never overrides them). Most families are a
+:class:`MappedLobe`; Lafortune's is a :class:`Lobe` with coordinates of its own.
 """
 
 from abc import ABC, abstractmethod
@@ -115,12 +117,32 @@ class Lobe(ABC):
 
     @property
     @abstractmethod
+    def specular_domain(self) -> Domain:
+        """The domain of the lobe's albedo: ``ALBEDO`` (at most 1 is plausible) where the albedo is the lobe's
+        reflectance, a plain non-negative scale where a Fresnel term or an approximate normalisation also scales it."""
+
+    @property
+    @abstractmethod
     def grid(self) -> tuple[dict[str, float], ...]:
         """Starting shapes for the fit: coarse, but spanning realistic materials."""
 
     @abstractmethod
     def __call__(self, shape: Shape, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, " n"]:
         """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars."""
+
+    @property
+    @abstractmethod
+    def unconstrained(self) -> ShapeCoordinates:
+        """What the solver moves."""
+
+    @property
+    @abstractmethod
+    def sampling(self) -> BoundedShapeCoordinates:
+        """What the MCMC walkers move."""
+
+    @abstractmethod
+    def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
+        """The shape (numbers) with each value checked against its domain; ``where`` prefixes errors."""
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -130,18 +152,24 @@ class Lobe(ABC):
     def physical(self) -> BoundedShapeCoordinates:
         return PhysicalShape(self.parameters)
 
+
+class MappedLobe(Lobe):
+    """A lobe whose every shape parameter lives in a :class:`~brdffit.physics.domains.MappedDomain`: the solver
+    moves each through its domain's map, the walkers move the values themselves."""
+
+    @property
+    @abstractmethod
+    def parameters(self) -> tuple[tuple[str, MappedDomain], ...]: ...
+
     @property
     def unconstrained(self) -> ShapeCoordinates:
-        """What the solver moves: each parameter through its domain's map (a lobe overrides it if needed)."""
         return UnconstrainedShape(self.parameters)
 
     @property
     def sampling(self) -> BoundedShapeCoordinates:
-        """What the MCMC walkers move: the physical values unless a lobe says otherwise."""
         return self.physical
 
     def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
-        """The shape with each value checked against its domain; ``where`` prefixes errors."""
         for name, domain in self.parameters:
             if not domain.contains(shape[name]):
                 raise BrdfInputError(f"{where}{name} = {shape[name]!r} is outside its domain {domain.text}")

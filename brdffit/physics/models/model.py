@@ -58,8 +58,9 @@ class Model:
     def brdf(self, params: Params, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, "n C"]:
         """BRDF values (N, C) in 1/sr (JAX); zero where ``wi_z ≤ 0`` or ``wo_z ≤ 0``.
 
-        The computation behind :func:`brdffit.evaluate` (which checks its inputs and returns numpy)
-        and :meth:`brdffit.FitResult.predict` (which evaluates a result's parameters).
+        The computation behind :func:`brdffit.evaluate` (which checks its inputs and returns float64 numpy)
+        and :meth:`brdffit.FitResult.predict` (which evaluates a result's parameters). Called directly it is
+        plain JAX in the caller's precision: float32 unless the caller has float64 on (``jax.enable_x64``).
         """
         visible, wi, wo = above_horizon(jnp.asarray(wi), jnp.asarray(wo))
         diffuse = jnp.asarray(params.diffuse)

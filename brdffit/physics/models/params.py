@@ -1,7 +1,8 @@
 """A model's parameters as arrays, the form every computation takes."""
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
+import numpy as np
 from jaxtyping import Array, Float
 
 
@@ -13,6 +14,6 @@ class Params(NamedTuple):
     where a caller vmaps.
     """
 
-    diffuse: Float[Array, "*batch C"] | Any
-    specular: Float[Array, "*batch K C"] | Any
-    shape: dict[str, Any]
+    diffuse: Float[Array, "*batch C"] | Float[np.ndarray, "*batch C"]
+    specular: Float[Array, "*batch K C"] | Float[np.ndarray, "*batch K C"]
+    shape: dict[str, Float[Array, "*batch K"] | Float[np.ndarray, "*batch K"]]

@@ -15,23 +15,25 @@ from typing import final
 
 import jax.numpy as jnp
 
-from ..domains import POSITIVE
+from ..domains import ALBEDO, EXPONENT
 from ..geometry import half_vector, mirror_direction, safe_power
 from .grids import EXPONENT_GRID
-from .lobe import Lobe
+from .lobe import MappedLobe
 from .model import Model
 
 
 @final
 @dataclass(frozen=True)
-class PhongLobe(Lobe):
+class PhongLobe(MappedLobe):
     """Cosine power ``n`` of the angle between ``wo`` and the mirror direction of ``wi``."""
 
     summary = "(n+2)/(2π) · max(0, r·wo)^n around the mirror direction r"
 
+    specular_domain = ALBEDO
+
     @property
     def parameters(self):
-        return (("n", POSITIVE),)
+        return (("n", EXPONENT),)
 
     @property
     def grid(self):
@@ -45,14 +47,16 @@ class PhongLobe(Lobe):
 
 @final
 @dataclass(frozen=True)
-class BlinnPhongLobe(Lobe):
+class BlinnPhongLobe(MappedLobe):
     """Cosine power ``n`` of the half-vector's zenith angle."""
 
     summary = "(n+8)/(8π) · ch^n around the normal, in the half vector"
 
+    specular_domain = ALBEDO
+
     @property
     def parameters(self):
-        return (("n", POSITIVE),)
+        return (("n", EXPONENT),)
 
     @property
     def grid(self):

@@ -14,16 +14,16 @@ from typing import final
 
 import jax.numpy as jnp
 
-from ..domains import POSITIVE
+from ..domains import ALBEDO, ROUGHNESS
 from ..geometry import half_vector, tan2_from_cos
 from .grids import ROUGHNESS_GRID
-from .lobe import Lobe
+from .lobe import MappedLobe
 from .model import Model
 
 
 @final
 @dataclass(frozen=True)
-class WardLobe(Lobe):
+class WardLobe(MappedLobe):
     """Isotropic Ward lobe, roughness ``alpha`` (rms slope); ``duer`` selects Dür's ``ci co`` denominator."""
 
     duer: bool = False
@@ -32,9 +32,11 @@ class WardLobe(Lobe):
     def summary(self) -> str:
         return "Dür's normalisation 4π α² ci co" if self.duer else "Gaussian in tan θh, 4π α² sqrt(ci co)"
 
+    specular_domain = ALBEDO
+
     @property
     def parameters(self):
-        return (("alpha", POSITIVE),)
+        return (("alpha", ROUGHNESS),)
 
     @property
     def grid(self):
@@ -50,14 +52,16 @@ class WardLobe(Lobe):
 
 @final
 @dataclass(frozen=True)
-class AnisotropicWardLobe(Lobe):
+class AnisotropicWardLobe(MappedLobe):
     """Anisotropic Ward lobe with roughness ``alpha_x`` along the tangent and ``alpha_y`` across it."""
 
     summary = "anisotropic Gaussian, α_x along the tangent x, α_y along y"
 
+    specular_domain = ALBEDO
+
     @property
     def parameters(self):
-        return (("alpha_x", POSITIVE), ("alpha_y", POSITIVE))
+        return (("alpha_x", ROUGHNESS), ("alpha_y", ROUGHNESS))
 
     @property
     def grid(self):

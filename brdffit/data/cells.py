@@ -131,8 +131,7 @@ def normalised(vectors: np.ndarray, message: Callable[[int, float], str]) -> np.
     """``vectors`` (N, 3) divided by their lengths, each of which must be 1 within :data:`UNIT_LENGTH_TOLERANCE`;
     otherwise a :class:`BrdfInputError` with ``message(row, length)`` for the first that is not."""
     length = np.linalg.norm(vectors, axis=1)
-    bad = np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE
-    if np.any(bad):
-        row = int(np.argmax(bad))
-        raise BrdfInputError(message(row, float(length[row])))
+    bad = first_bad(np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE)
+    if bad is not None:
+        raise BrdfInputError(message(bad[0], float(length[bad[0]])))
     return vectors / length[:, None]

@@ -1,0 +1,111 @@
+"""Reciprocity, ``f(wi, wo) = f(wo, wi)`` (Helmholtz): a check of what a file's values are.
+
+Every BRDF is reciprocal; a cosine-weighted value is not. So on data that measure both directions of a
+pair, the ratio of the two values says what the file holds: a median ratio ``f(a→b) / f(b→a)`` near 1 for
+BRDF values, ``cos θb / cos θa`` away from 1 for values weighted by the light's cosine, its inverse for the
+view's. Pairs are oriented with the light nearer the normal (``θi < θo``), so that a cosine reading moves
+every ratio the same way.
+
+A pair is two samples whose directions are swapped: ``wi`` and ``wo`` exchanged where the data hold at least
+:data:`MIN_PAIRS` of those, else (isotropic measurements, the light at one azimuth) the zeniths exchanged at
+the same ``|φo − φi|``. Angles match on a 0.01° grid.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics.geometry import direction_to_spherical, zenith_degrees
+from .quantities import stored_factor
+from .samples import Samples
+
+#: Below this many pairs the check says nothing.
+MIN_PAIRS = 20
+#: Median ratios inside this band are reciprocal; outside it a fit warns (a factor of 1.25 either way).
+RECIPROCAL = (0.8, 1.25)
+#: Angles are matched on a grid of this step, degrees.
+GRID_DEGREES = 0.01
+
+
+@dataclass(frozen=True)
+class Reciprocity:
+    """What the reciprocal pairs of some samples say about their values.
+
+    ``pairs``: how many were found, and of which ``kind`` (``"swapped directions"`` or ``"isotropic"``).
+    ``ratios``: for each reading of the file's values (``brdf``, ``cosine-weighted-in``,
+    ``cosine-weighted-out``), the median of ``f(a→b) / f(b→a)`` over pairs and channels. ``in_force``: the
+    quantity the samples were read as.
+    """
+
+    pairs: int
+    kind: str
+    ratios: dict[str, float]
+    in_force: str
+
+    @property
+    def as_read(self) -> float:
+        """The median ratio of the samples as they were read."""
+        return self.ratios[_reading(self.in_force)]
+
+    @property
+    def reciprocal(self) -> bool:
+        """Whether the samples as read are reciprocal (median ratio within :data:`RECIPROCAL`)."""
+        return RECIPROCAL[0] <= self.as_read <= RECIPROCAL[1]
+
+    @property
+    def best(self) -> str:
+        """The reading whose median ratio is nearest 1."""
+        return min(self.ratios, key=lambda reading: abs(np.log(self.ratios[reading])))
+
+
+def reciprocity(samples: Samples) -> Reciprocity | None:
+    """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs)."""
+    in_force = samples.provenance.quantity if samples.provenance is not None else "brdf"
+    pairs, kind = _pairs(samples, general=True), "swapped directions"
+    if len(pairs[0]) < MIN_PAIRS:
+        pairs, kind = _pairs(samples, general=False), "isotropic (zeniths swapped, same |φo − φi|)"
+    if len(pairs[0]) < MIN_PAIRS:
+        return None
+    first, second = pairs
+    stored = samples.values * stored_factor(in_force, samples.wi, samples.wo)
+    ratios = {}
+    for reading in ("brdf", "cosine-weighted-in", "cosine-weighted-out"):
+        brdf = stored / stored_factor(reading, samples.wi, samples.wo)
+        a, b = brdf[first], brdf[second]
+        usable = (a > 0) & (b > 0)
+        ratios[reading] = float(np.median(a[usable] / b[usable])) if np.any(usable) else float("nan")
+    return Reciprocity(len(first), kind, ratios, in_force)
+
+
+def _reading(quantity: str) -> str:
+    """The reading a quantity stands for (a reflectance factor is a BRDF times π: the same ratios)."""
+    return "brdf" if quantity in ("brdf", "reflectance-factor") else quantity
+
+
+def _pairs(samples: Samples, general: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(first, second)`` of reciprocal pairs, ``first`` with ``θi < θo``, each pair once."""
+    theta_i, theta_o = (np.rint(zenith_degrees(w) / GRID_DEGREES).astype(np.int64) for w in (samples.wi, samples.wo))
+    phi_i, phi_o = (
+        np.rint(np.degrees(direction_to_spherical(w)[1]) % 360.0 / GRID_DEGREES).astype(np.int64) % 36000
+        for w in (samples.wi, samples.wo)
+    )
+    if general:
+        key = _packed(theta_i, phi_i, theta_o, phi_o)
+        partner = _packed(theta_o, phi_o, theta_i, phi_i)
+    else:
+        delta = np.abs(phi_o - phi_i)
+        delta = np.minimum(delta, 36000 - delta)
+        key = _packed(theta_i, theta_o, delta)
+        partner = _packed(theta_o, theta_i, delta)
+    order = np.argsort(key, kind="stable")
+    position = np.minimum(np.searchsorted(key[order], partner), len(key) - 1)
+    found = (key[order][position] == partner) & (theta_i < theta_o)
+    return np.flatnonzero(found), order[position[found]]
+
+
+def _packed(*columns: np.ndarray) -> np.ndarray:
+    """Integer columns (each < 2¹⁶, the first < 2¹⁵: a zenith, ≤ 9000) as one int64 key."""
+    key = np.zeros(len(columns[0]), dtype=np.int64)
+    for column in columns:
+        key = key * 65536 + column
+    return key

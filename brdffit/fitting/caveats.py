@@ -1,0 +1,136 @@
+"""What a user must know before trusting a fit, one line each: the result's ``fit.warnings``.
+
+* the samples as read are not reciprocal (``data/reciprocity.py``): their quantity is probably wrong;
+* a lobe contributes less than :data:`DEAD_SHARE` of the model at every sample: it fits nothing;
+* a parameter lies beyond its plausible range (``physics/domains.py``: a roughness above 2, an exponent
+  above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1);
+* the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives;
+* a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
+"""
+
+import jax.numpy as jnp
+import numpy as np
+
+from .._jax import float64, jit
+from ..data.reciprocity import reciprocity
+from ..data.samples import Samples
+from ..physics.geometry import above_horizon, spherical_to_direction
+from ..physics.models import Model, Params
+
+#: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
+DEAD_SHARE = 1e-3
+#: Incidence zeniths (degrees) at which the directional albedo is checked.
+ALBEDO_INCIDENCE = (0.0, 30.0, 60.0, 80.0)
+#: A directional albedo counts as above 1 beyond this (quadrature rounds), and only where two grids agree.
+ALBEDO_LIMIT = 1.005
+
+
+@float64
+def caveats(
+    model: Model, samples: Samples, params: Params, cost: float | None = None, fewer_lobes_cost: float | None = None
+) -> list[str]:
+    """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
+    ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples."""
+    found = _not_reciprocal(samples)
+    found += _dead_lobes(model, params, samples)
+    found += _implausible(model, params, samples.channels)
+    found += _albedo_above_one(model, params, samples.channels)
+    if cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9):
+        found.append(
+            f"the fit ends at cost {cost:.6g}, worse than the {fewer_lobes_cost:.6g} of {model.n_lobes - 1} lobe(s):"
+            " it stopped in a local minimum"
+        )
+    return found
+
+
+def lobe_name(model: Model, params: Params, k: int) -> str:
+    """How a message names lobe ``k``: ``lobe 2 (cxy +0.577, cz 0.577, n 1.8e+03)``, or the specular lobe."""
+    if not model.lobes_as_list:
+        return f"the specular lobe ({model.specular_name})"
+    shape = ", ".join(f"{name} {float(params.shape[name][k]):.3g}" for name in model.lobe.names)
+    return f"lobe {k + 1} ({shape})"
+
+
+def _not_reciprocal(samples: Samples) -> list[str]:
+    found = reciprocity(samples)
+    if found is None or found.reciprocal:
+        return []
+    return [
+        f"the samples as read ({found.in_force}) are not reciprocal: over {found.pairs} reciprocal pairs the median"
+        f" of f(a→b)/f(b→a) is {found.as_read:.3g}; read as {found.best} it is {found.ratios[found.best]:.3g}"
+        f" (the quantity option)"
+    ]
+
+
+def _dead_lobes(model: Model, params: Params, samples: Samples) -> list[str]:
+    if not model.n_lobes:
+        return []
+    shares = np.asarray(_lobe_shares(model, params, samples.wi, samples.wo))
+    return [
+        f"{lobe_name(model, params, k)} contributes less than {DEAD_SHARE:.1%} of the model at every sample"
+        f" (at most {share:.2g}): it fits nothing; fit with one lobe less"
+        for k, share in enumerate(shares)
+        if share < DEAD_SHARE
+    ]
+
+
+@jit(static_argnums=0)
+def _lobe_shares(model: Model, params: Params, wi, wo):
+    """Each lobe's largest share of the model over the samples and channels, (K,)."""
+    visible, wi, wo = above_horizon(wi, wo)
+    contributions = model.lobe_values(params.shape, wi, wo)[:, :, None] * params.specular[:, None, :]  # (K, N, C)
+    total = params.diffuse / jnp.pi + contributions.sum(axis=0)
+    share = contributions / jnp.maximum(total, jnp.finfo(total.dtype).tiny)
+    return (share * visible[None, :, None]).max(axis=(1, 2))
+
+
+def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
+    values = np.asarray(model.physical.from_params(params))
+    found = []
+    for label, value, domain in zip(
+        model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True
+    ):
+        low, high = domain.plausible
+        if value > high:
+            found.append(f"{label} = {value:.4g} is beyond its plausible range (≤ {high:g})")
+        elif value < low:
+            found.append(f"{label} = {value:.10g} is below its plausible range (≥ {low:.10g})")
+    return found
+
+
+def _albedo_above_one(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
+    """The directional albedo ``∫ f cos θo dωo`` by midpoint quadrature in ``(cos θo, φo)``; a value above
+    :data:`ALBEDO_LIMIT` counts only where the grid's even points alone (a grid half as fine) agree within 1%,
+    i.e. where the grid resolves the lobe."""
+    fine, coarse = (np.asarray(estimate) for estimate in _directional_albedo(model, params, 256))
+    found = []
+    for i, theta in enumerate(ALBEDO_INCIDENCE):
+        for c, channel in enumerate(channels):
+            if fine[i, c] > ALBEDO_LIMIT and abs(fine[i, c] - coarse[i, c]) <= 0.01 * fine[i, c]:
+                found.append(
+                    f"the directional albedo at θi = {theta:g}° is {fine[i, c]:.3g} in channel {channel} (> 1):"
+                    " the model reflects more light than it receives"
+                )
+                break
+    return found
+
+
+def _directional_albedo(model: Model, params: Params, n: int):
+    """Directional albedos (incidences, C) on an n × 2n grid of midpoints in ``(cos θo, φo)``, and the same from
+    its even rows and columns alone: one evaluation of the model for both."""
+    cos_o = (np.arange(n) + 0.5) / n
+    phi_o = (np.arange(2 * n) + 0.5) * np.pi / n
+    cos_grid, phi_grid = np.meshgrid(cos_o, phi_o, indexing="ij")
+    wo = spherical_to_direction(np.arccos(cos_grid.ravel()), phi_grid.ravel())
+    incidences = len(ALBEDO_INCIDENCE)
+    wi = np.repeat(spherical_to_direction(np.radians(np.array(ALBEDO_INCIDENCE)), np.zeros(incidences)), len(wo), 0)
+    values = np.asarray(_brdf(model, params, wi, np.tile(wo, (incidences, 1))))
+    weighted = values.reshape(incidences, n, 2 * n, -1) * cos_grid[None, :, :, None]
+    fine = weighted.sum(axis=(1, 2)) / n * (np.pi / n)
+    coarse = weighted[:, ::2, ::2].sum(axis=(1, 2)) * 4 / n * (np.pi / n)
+    return fine, coarse
+
+
+@jit(static_argnums=0)
+def _brdf(model: Model, params: Params, wi, wo):
+    return model.brdf(params, wi, wo)
