@@ -148,26 +148,25 @@ def _check_option_names(options: dict[str, Any]) -> None:
 
 def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.ndarray:
     """The unconstrained vector of the parameter dictionary ``start``, checked against the samples' channels and
-    each parameter's plausible range: beyond :data:`~brdffit.physics.domains.START_FACTOR` times its upper end a
-    fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report a
-    converged fit that never moved."""
+    each lobe-shape parameter's plausible range: beyond :data:`~brdffit.physics.domains.START_FACTOR` times its
+    upper end a fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report
+    a converged fit that never moved. An albedo can start anywhere: the fit moves its logarithm."""
     params = model.dictionary.to_params(start)
     if params.diffuse.size != n_channels:
         raise BrdfInputError(
             Argument("start"), f" parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
         )
-    values = np.asarray(model.physical.from_params(params))
-    channels = tuple(str(c) for c in range(n_channels))
-    for label, value, domain in zip(
-        model.physical.labels(channels), values, model.physical.domains(n_channels), strict=True
-    ):
-        limit = START_FACTOR * domain.plausible[1]
-        if value > limit:
-            raise BrdfInputError(
-                Argument("start"),
-                f": {label} = {value:g} is far beyond its plausible range"
-                f" (≤ {domain.plausible[1]:g}), where a fit cannot move; give at most {limit:g}",
-            )
+    if model.n_lobes:
+        for k in range(model.n_lobes):
+            for name, domain in model.lobe.parameters:
+                value, limit = float(params.shape[name][k]), START_FACTOR * domain.plausible[1]
+                if value > limit:
+                    where = f"lobes[{k}].{name}" if model.lobes_as_list else name
+                    raise BrdfInputError(
+                        Argument("start"),
+                        f": {where} = {value:g} is far beyond its plausible range"
+                        f" (≤ {domain.plausible[1]:g}), where a fit cannot move; give at most {limit:g}",
+                    )
     return model.unconstrained.from_params(params)
 
 

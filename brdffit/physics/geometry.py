@@ -81,9 +81,14 @@ def above_horizon(wi: Directions, wo: Directions) -> tuple[Bool[Array, " n"], Di
 
 
 def tan2_from_cos(cos_theta):
-    """``tan²θ = (1 - cos²θ) / cos²θ`` for ``cos θ > 0``."""
+    """``tan²θ = (1 - cos²θ) / cos²θ`` for ``cos θ > 0``, never below 0.
+
+    A normalised half vector can have ``cos θ`` a rounding above 1 (MERL's specular bins); the negative
+    ``tan²θ`` that gives would make ``exp(-tan²θ/α²)`` overflow for a sharp lobe.
+    """
+    xp = namespace(cos_theta)
     cos2 = cos_theta * cos_theta
-    return (1.0 - cos2) / cos2
+    return xp.maximum((1.0 - cos2) / cos2, 0.0)
 
 
 def safe_power(base, exponent):

@@ -138,6 +138,10 @@ def test_not_a_text_file(tmp_path, capsys):
         (["--starts", "0"], ["--starts 0 is not allowed; give a whole number ≥ 1"]),
         (["--start", "{bad json"], ["--start (inline JSON): not valid JSON"]),
         (["--start", '{"rho_d": [0.1]}'], ["ward: missing parameter 'rho_s'"]),
+        (
+            ["--model", "phong", "--start", '{"rho_d": [0.1, 0.1, 0.1], "rho_s": [0.1, 0.1, 0.1], "n": 1e9}'],
+            ["--start: n = 1e+09 is far beyond its plausible range (≤ 10000), where a fit cannot move"],
+        ),
         (["--dtype", "float16"], ["--dtype 'float16' is not allowed; choose one of: float64, float32"]),
         (["--bogus"], ["unrecognized arguments: --bogus"]),
     ],

@@ -412,3 +412,29 @@ def test_fuzzed_files_raise_only_brdf_input_error(data):
             assert isinstance(samples, Samples) and samples.n_samples >= 1
             assert np.all(np.isfinite(samples.values)) and np.all(samples.values >= 0)
             assert np.all(samples.wi[:, 2] > 0) and np.all(samples.wo[:, 2] > 0)
+
+
+@pytest.mark.parametrize(
+    ("vs", "extra", "sigma"),
+    [
+        (1, "0.02", [[0.02]]),  # a half-width, read as ±1σ
+        (2, "0.07 0.11", [[0.02]]),  # bounds lo, hi: sigma (hi - lo)/2
+    ],
+)
+def test_confidence_intervals_become_sigma(tmp_path, vs, extra, sigma):
+    body = header("SPHERICAL_TL_PL_TV_PV", 1, f"#VS {vs}\n") + f"{D30} 0 {D45} 1 0.09 {extra}\n"
+    samples = read_alta(alta_file(tmp_path, body))
+    np.testing.assert_allclose(samples.sigma, sigma, rtol=1e-12)
+    assert samples.provenance.sigma_from.startswith(f"#VS {vs} confidence intervals")
+
+
+def test_a_zero_width_interval_is_refused(tmp_path):
+    body = header("SPHERICAL_TL_PL_TV_PV", 1, "#VS 1\n") + f"{D30} 0 {D45} 1 0.09 0\n"
+    with pytest.raises(BrdfInputError, match=r"line 4, confidence interval of channel value: 0 wide"):
+        read_alta(alta_file(tmp_path, body))
+
+
+def test_angles_beyond_two_pi_are_degrees_in_disguise(tmp_path):
+    body = header("SPHERICAL_TL_PL_TV_PV") + row(30.0, 0, 45.0, 0, 0.1)
+    with pytest.raises(BrdfInputError, match=r"column 1 \(theta_l\): 30 is beyond ±2π; ALTA angles are radians"):
+        read_alta(alta_file(tmp_path, body))

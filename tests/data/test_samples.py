@@ -5,6 +5,7 @@ The bad-input cases are exercised end to end through the command line in
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -12,7 +13,8 @@ from conftest import directions_from_degrees, random_directions
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from brdffit import BrdfInputError, Samples, load_samples, save_samples
+from brdffit import BrdfInputError, InputWarning, Samples, load_samples, save_samples
+from brdffit.cli import main
 
 
 def write(tmp_path, text, name="samples.csv"):
@@ -158,3 +160,17 @@ def test_the_reader_only_ever_raises_brdf_input_error(tmp_path, text):
         else:
             assert np.all(np.isfinite(samples.values)) and np.all(samples.values >= 0)
             assert np.all(samples.wi[:, 2] > 0) and np.all(samples.wo[:, 2] > 0)
+
+
+def test_angles_that_look_like_radians_read_as_degrees_warn(tmp_path, capsys):
+    path = tmp_path / "radians.csv"
+    path.write_text("theta_i,phi_i,theta_o,phi_o,value\n0.3,0,0.5,3.1,0.2\n1.2,0,0.7,0,0.1\n")
+    with pytest.warns(InputWarning, match=r"every zenith angle is within \[0, π/2\].*give angles=radians"):
+        load_samples(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        radians = load_samples(path, angles="radians")  # read as meant: no warning
+    assert radians.theta_i.max() == pytest.approx(np.degrees(1.2), rel=1e-12)
+    assert main(["info", str(path)]) == 0
+    assert "brdffit: warning: " in capsys.readouterr().err  # the command line names its flag
+    assert main(["info", str(path)]) == 0 and "--angles radians" in capsys.readouterr().err

@@ -1,0 +1,104 @@
+"""A fit says what a user must know: dead lobes, implausible parameters, albedos above 1, non-reciprocal data."""
+
+import warnings
+
+import numpy as np
+import pytest
+from catalogue import CASES
+from paths import TAPE
+
+import data_synth
+from brdffit import FitWarning, fit, get_model, load_samples
+from brdffit.fitting.caveats import caveats
+
+WARD = CASES[1][2]
+
+
+@pytest.fixture(scope="module")
+def oak():
+    return data_synth.synthesize("ward", WARD, *data_synth.hemisphere_grid(4, 18, 18), noise=0.01, seed=1)
+
+
+def test_a_good_fit_has_no_caveat(oak):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = fit(oak, "ward")
+    assert result.warnings == [] and "warning" not in result.table()
+
+
+def test_a_lobe_that_fits_nothing_is_named(oak):
+    model = get_model("lafortune", lobes=2)
+    params = model.dictionary.to_params(
+        {
+            "rho_d": [0.1, 0.1, 0.1],
+            "lobes": [
+                {"rho_s": [0.1, 0.1, 0.1], "cxy": -0.6, "cz": 0.529, "n": 20.0},
+                {"rho_s": [1e-9, 1e-9, 1e-9], "cxy": 0.5, "cz": 0.707, "n": 500.0},
+            ],
+        }
+    )
+    found = caveats(model, oak, params)
+    assert len(found) == 1 and found[0].startswith("lobe 2 (cxy 0.5, cz 0.707, n 500) contributes less than 0.1%")
+
+
+def test_implausible_parameters_and_albedos_above_one(oak):
+    model = get_model("ward")
+    found = caveats(
+        model, oak, model.dictionary.to_params({"rho_d": [1.2, 0.1, 0.1], "rho_s": [0.1] * 3, "alpha": 2.5})
+    )
+    assert "rho_d[r] = 1.2 is beyond its plausible range (≤ 1)" in found
+    assert "alpha = 2.5 is beyond its plausible range (≤ 2)" in found
+    assert any(line.startswith("the directional albedo at θi = 0° is 1.") for line in found)
+    dielectric = get_model("cook-torrance", fresnel="dielectric")
+    params = dielectric.dictionary.to_params({"kd": [0.1] * 3, "ks": [0.5] * 3, "m": 0.2, "eta": 1.0 + 1e-9})
+    assert any(
+        line.startswith("eta = 1.000000001 is below its plausible range") for line in caveats(dielectric, oak, params)
+    )
+
+
+def test_a_directional_albedo_the_grid_cannot_resolve_says_nothing(oak):
+    """A mirror-sharp lobe (α = 0.001, narrower than the quadrature grid) is not judged: no false alarm."""
+    model = get_model("ward")
+    params = model.dictionary.to_params({"rho_d": [0.1] * 3, "rho_s": [0.5] * 3, "alpha": 0.001})
+    assert not any("directional albedo" in line for line in caveats(model, oak, params))
+
+
+def test_more_lobes_ending_worse_than_fewer_is_a_local_minimum(oak):
+    model = get_model("lafortune", lobes=2)
+    params = model.dictionary.to_params(
+        {
+            "rho_d": [0.1] * 3,
+            "lobes": [
+                {"rho_s": [0.1] * 3, "cxy": -0.6, "cz": 0.529, "n": 20.0},
+                {"rho_s": [0.1] * 3, "cxy": 0.5, "cz": 0.707, "n": 5.0},
+            ],
+        }
+    )
+    found = caveats(model, oak, params, cost=2.0, fewer_lobes_cost=1.0)
+    assert found[-1] == "the fit ends at cost 2, worse than the 1 of 1 lobe(s): it stopped in a local minimum"
+
+
+@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
+def test_a_fit_of_data_that_are_not_reciprocal_warns():
+    tape = load_samples(TAPE)
+    with warnings.catch_warnings(record=True) as caught:  # also rho_d > 1: Lambert cannot fit a retro-reflector
+        warnings.simplefilter("always")
+        result = fit(tape, "lambert")
+    said = [str(w.message) for w in caught if issubclass(w.category, FitWarning)]
+    assert any("not reciprocal" in line and "read as cosine-weighted-out it is 1.05" in line for line in said)
+    assert any("not reciprocal" in line for line in result.warnings)
+    assert any("not reciprocal" in line for line in result.to_dict()["fit"]["warnings"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)  # Lambert cannot fit a retro-reflector: rho_d > 1 is implausible
+        right = fit(load_samples(TAPE, quantity="cosine-weighted-out"), "lambert")
+    assert not any("reciprocal" in line for line in right.warnings)
+
+
+def test_results_carry_their_caveats_through_the_file(oak, tmp_path):
+    with pytest.warns(FitWarning):
+        result = fit(oak, "ward", start=WARD | {"rho_s": [0.0, 0.0, 0.0]}, max_steps=1)
+    result.save(tmp_path / "r.json")
+    from brdffit import load_result
+
+    assert load_result(tmp_path / "r.json").warnings == result.warnings != []
+    assert np.all(np.isfinite(result.rmse))

@@ -1,0 +1,67 @@
+"""Every result brdffit writes is read back by everything that reads results, wherever the fit ended."""
+
+import json
+import warnings
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from catalogue import CASES, case_id
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import data_synth
+from brdffit import FitWarning, UncertaintyWarning, evaluate, fit, get_model, laplace_uncertainty, load_result
+from brdffit.cli import main
+from brdffit.fitting.fit import MAX_STEPS, Solved, result_of
+from brdffit.fitting.losses import get_loss
+
+GEOMETRY = data_synth.uniform_random(200, seed=4)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[case_id(case) for case in CASES])
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(edge=st.lists(st.sampled_from([-800.0, -40.0, -5.0, 0.0, 2.0]), min_size=12, max_size=12))
+def test_a_result_at_any_edge_is_read_back_by_every_command(case, edge, tmp_path):
+    """Unconstrained coordinates far below put parameters on their domains' lower edges, where rounding would leave
+    them outside (``1 + exp(-800)`` is exactly 1, outside ``eta > 1``; ``exp(-800)`` is 0, outside ``alpha > 0``):
+    the result file must still hold values every reader accepts: ``load_result``, ``evaluate``, ``synth
+    --params``, ``fit --start``, uncertainty, ``convert``. (Far above, a shape is implausible: the fit warns, and a
+    start there is refused, ``test_fit.py``.)"""
+    name, options, params = case
+    model = get_model(name, **options)
+    samples = data_synth.synthesize(name, params, *GEOMETRY, noise=0.01, seed=1, **options)
+    theta = model.unconstrained.from_params(model.dictionary.to_params(params))
+    theta = np.where(np.arange(theta.size) % 2 == 0, np.resize(edge, theta.size), theta)  # half the coordinates
+    solved = Solved(theta, 1.0, 1, 0, True, model.unconstrained.to_params(jnp.asarray(theta), 3), 0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", (FitWarning, UncertaintyWarning, RuntimeWarning))
+        result = result_of(model, get_loss("log"), samples, solved, MAX_STEPS, "float64")
+        path = tmp_path / "result.json"
+        result.save(path)
+        back = load_result(path)
+        values = evaluate(back.model, back.params, samples.wi, samples.wo, **back.model_options)
+        assert np.all(np.isfinite(values))
+        data_synth.synthesize(back.model, back.params, *GEOMETRY, **back.model_options)
+        fit(samples, back.model, start=back.params, max_steps=1, **back.model_options)
+        laplace_uncertainty(back, samples)
+        assert main(["convert", str(path), str(tmp_path / "table.binary")]) == 0
+    json.loads(path.read_text())  # strict JSON: no NaN or infinity
+
+
+def test_a_fresnel_at_its_edges_is_representable(tmp_path):
+    """f0 → 1 (the logistic rounds to exactly 1) and eta → 1 (1 + exp(u) rounds to exactly 1) write values the
+    reader takes back."""
+    for options, coordinate in (({"fresnel": "schlick"}, 40.0), ({"fresnel": "dielectric"}, -40.0)):
+        model = get_model("cook-torrance", **options)
+        samples = data_synth.synthesize("lambert", {"rho_d": [0.2]}, *GEOMETRY)
+        theta = np.array([np.log(0.2), np.log(0.5), np.log(0.2), coordinate])
+        solved = Solved(theta, 1.0, 1, 0, True, model.unconstrained.to_params(jnp.asarray(theta), 1), 0.1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FitWarning)
+            result = result_of(model, get_loss("log"), samples, solved, MAX_STEPS, "float64")
+        result.save(tmp_path / "edge.json")
+        back = load_result(tmp_path / "edge.json")
+        fresnel = back.params.get("f0", back.params.get("eta"))
+        assert fresnel == pytest.approx(1.0, abs=1e-11)
+        model.dictionary.to_params(back.params)  # accepted
