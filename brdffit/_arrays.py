@@ -1,4 +1,5 @@
-"""Which array library a function computes with: numpy on the host, ``jax.numpy`` inside JAX programs.
+"""Which array library a function computes with (numpy on the host, ``jax.numpy`` inside JAX programs), and the
+one scan for the first bad entry of an array.
 
 Readers, writers and other host code call the same geometry as the models do; with numpy input it
 stays numpy (``jax.numpy`` would compile and dispatch a program per operation, ~0.1 s to read a
@@ -17,3 +18,12 @@ def namespace(*arrays):
     import jax.numpy as jnp
 
     return jnp
+
+
+def first_bad(bad: np.ndarray) -> tuple[int, int] | None:
+    """``(row, column)`` of the first True of a mask (N,) or (N, k), row by row; None when all is well."""
+    if not np.any(bad):
+        return None
+    bad = np.asarray(bad).reshape(len(bad), -1)
+    row, column = np.unravel_index(np.argmax(bad), bad.shape)
+    return int(row), int(column)

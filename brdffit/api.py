@@ -11,19 +11,20 @@ from collections.abc import Sequence
 from typing import Any
 
 from ._jax import float64
+from .data.load import load_samples
 from .data.samples import Samples
 from .errors import FitWarning
 from .fitting.batch import fit_many
 from .fitting.fit import MAX_STEPS, N_STARTS, checked, fit_one
 from .fitting.results import FitResult
-from .physics.models import Model
+from .physics.models import Model, model_for
 from .uncertainty.mcmc import MCMC, check_walkers
 from .uncertainty.methods import check_options, with_uncertainty
 
 
 @float64
 def fit(
-    samples: Samples,
+    samples: Samples | str | os.PathLike,
     model: str | Model = "ward",
     loss: str = "log",
     *,
@@ -39,7 +40,8 @@ def fit(
     progress: bool = False,
     **model_options: Any,
 ) -> FitResult:
-    """Fit ``model`` to ``samples`` by minimising ``loss`` (``brdffit.LOSSES``); returns a :class:`FitResult`.
+    """Fit ``model`` to ``samples`` (a :class:`Samples`, or a file's path: :func:`brdffit.load_samples` reads it)
+    by minimising ``loss`` (``brdffit.LOSSES``); returns a :class:`FitResult`.
 
     ``max_theta``: drop samples with θi or θo above this many degrees.
     ``start``: parameters (the result file's dictionary) to start from instead of
@@ -56,6 +58,9 @@ def fit(
     ``fresnel=`` for cook-torrance, ``lobes=`` for lafortune.
     """
     check_options(uncertainty, mcmc, chain)
+    samples = _loaded(samples)
+    if start is not None and isinstance(model, str):  # Lafortune's number of lobes may come from the start
+        model, model_options = model_for(model, start, **model_options), {}
     if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
         built, _, kept = checked(samples, model, loss, max_theta, dtype, **model_options)
         check_walkers(mcmc or MCMC(), built, kept)
@@ -79,7 +84,7 @@ def fit(
 
 @float64
 def fit_batch(
-    samples: Sequence[Samples],
+    samples: Sequence[Samples | str | os.PathLike],
     model: str | Model = "ward",
     loss: str = "log",
     *,
@@ -105,7 +110,7 @@ def fit_batch(
     settings) adds each result's ``uncertainty`` after the fits.
     """
     check_options(uncertainty, mcmc)
-    samples = list(samples)
+    samples = [_loaded(one) for one in samples]
     if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
         for one in samples:
             built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
@@ -132,6 +137,11 @@ def fit_batch(
         with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
         for result, one in zip(results, samples, strict=True)
     ]
+
+
+def _loaded(samples: "Samples | str | os.PathLike") -> Samples:
+    """Samples, or the samples a file holds (read with :func:`brdffit.load_samples`'s defaults)."""
+    return load_samples(samples) if isinstance(samples, str | os.PathLike) else samples
 
 
 def warn_about(result: FitResult) -> None:

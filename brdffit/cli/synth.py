@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _model_and_params(args: argparse.Namespace):
     """The model and its parameters, from ``--model`` and ``--params`` (a parameter dictionary or a result file)."""
-    from ..physics.models import get_model
+    from ..physics.models import model_for
 
     params = json_argument(args.params, "--params")
     model_name, options = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}
@@ -104,4 +104,4 @@ def _model_and_params(args: argparse.Namespace):
         params = params["params"]
     if model_name is None:
         raise BrdfInputError("--model is required unless --params is a result file")
-    return get_model(model_name, **options), params
+    return model_for(model_name, params, **options), params

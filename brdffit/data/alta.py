@@ -62,10 +62,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._arrays import first_bad
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
-from ..physics.geometry import direction_to_spherical, spherical_to_direction
-from .cells import UNIT_LENGTH_TOLERANCE, TableChecks, first_bad, named, normalised
+from ..physics.geometry import UNIT_LENGTH_TOLERANCE, direction_to_spherical, normalised, spherical_to_direction
+from .cells import TableChecks, named
 from .samples import Provenance, Samples
 from .text import format_rows, parse_numbers, read_text
 

@@ -43,10 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._arrays import first_bad
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
 from ..physics.geometry import direction_to_spherical
-from .cells import TableChecks, first_bad, named
+from .cells import TableChecks, named
 from .samples import Provenance, Samples
 from .text import format_rows, is_number, parse_numbers, read_text
 

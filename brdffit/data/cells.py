@@ -1,6 +1,6 @@
 """Checks of a table's values, shared by every reader: each reports the first bad cell in one line.
 
-:func:`first_bad` is the one scan for "the first row, then column, where something is wrong";
+``_arrays.first_bad`` is the one scan for "the first row, then column, where something is wrong";
 :class:`TableChecks` phrases what was wrong there, naming the row as the caller's ``locate`` does
 (``samples.csv: row 3 (line 5)``, ``tape.dat: line 12``) and the column as its ``column`` does
 (``column theta_o``, ``channel g``).
@@ -12,23 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._arrays import first_bad
 from ..errors import BrdfInputError
-from ..physics.geometry import spherical_to_direction
-
-#: Direction vectors may deviate this much from unit length (printed files round); they are then normalised.
-UNIT_LENGTH_TOLERANCE = 1e-3
+from ..physics.geometry import UNIT_LENGTH_TOLERANCE, normalised, spherical_to_direction
 
 #: How a message names column ``k``.
 ColumnName = Callable[[int], str]
-
-
-def first_bad(bad: np.ndarray) -> tuple[int, int] | None:
-    """``(row, column)`` of the first True of a mask (N,) or (N, k), row by row; None when all is well."""
-    if not np.any(bad):
-        return None
-    bad = np.asarray(bad).reshape(len(bad), -1)
-    row, column = np.unravel_index(np.argmax(bad), bad.shape)
-    return int(row), int(column)
 
 
 def named(names: Sequence[str], kind: str = "column") -> ColumnName:
@@ -125,13 +114,3 @@ class TableChecks:
             if not np.any(weight > 0):
                 raise BrdfInputError(f"{source}: every weight is 0; at least one sample must count")
         return sigma, weight
-
-
-def normalised(vectors: np.ndarray, message: Callable[[int, float], str]) -> np.ndarray:
-    """``vectors`` (N, 3) divided by their lengths, each of which must be 1 within :data:`UNIT_LENGTH_TOLERANCE`;
-    otherwise a :class:`BrdfInputError` with ``message(row, length)`` for the first that is not."""
-    length = np.linalg.norm(vectors, axis=1)
-    bad = first_bad(np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE)
-    if bad is not None:
-        raise BrdfInputError(message(bad[0], float(length[bad[0]])))
-    return vectors / length[:, None]

@@ -34,11 +34,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._arrays import first_bad
 from .._files import atomic_path, reading
 from ..checks import choice, whole_number
 from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
-from .cells import first_bad
 from .samples import Provenance, Samples
 
 #: Table dimensions (θh, θd, φd bins), as in the header.

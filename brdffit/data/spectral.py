@@ -46,9 +46,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from .._arrays import first_bad
 from ..checks import choice
 from ..errors import Argument, BrdfInputError, not_allowed
-from .cells import first_bad
 from .samples import Samples
 
 #: What :func:`spectral_to` turns spectral samples into.

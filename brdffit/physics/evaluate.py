@@ -6,17 +6,20 @@ import numpy as np
 
 from .._jax import jit
 from ..errors import BrdfInputError
-from .models import Model, Params, get_model
+from .geometry import UNIT_LENGTH_TOLERANCE, normalised
+from .models import Model, Params, model_for
 
 
 def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any) -> np.ndarray:
     """BRDF values (N, C) in 1/sr of ``model`` with ``params`` at directions ``wi``, ``wo`` (N, 3).
 
     ``params`` is the result file's parameter dictionary; ``options`` are the model's options
-    (``fresnel=``, ``lobes=``). Directions are unit vectors in the local frame; pairs with either
-    ``z ≤ 0`` give 0. Returns a float64 numpy array; :meth:`Model.brdf` is the JAX computation behind it.
+    (``fresnel=``, ``lobes=``; Lafortune's number of lobes is that of ``params["lobes"]`` unless given).
+    Directions are unit vectors in the local frame (within 1e-3, then normalised; any other length is an
+    error); pairs with either ``z ≤ 0`` give 0. Returns a float64 numpy array; :meth:`Model.brdf` is the JAX
+    computation behind it.
     """
-    model = get_model(model, **options)
+    model = model_for(model, params, **options)
     checked = model.dictionary.to_params(params)
     wi = _directions(wi, "wi")
     wo = _directions(wo, "wo")
@@ -39,4 +42,10 @@ def _directions(value, name: str) -> np.ndarray:
         raise BrdfInputError(f"{name} must have shape (N, 3), got {array.shape}")
     if not np.all(np.isfinite(array)):
         raise BrdfInputError(f"{name} contains NaN or infinite values")
-    return array
+    return normalised(
+        array,
+        lambda row, length: (
+            f"{name} row {row}: length {length:.6g} is not 1 (directions must be unit vectors,"
+            f" within {UNIT_LENGTH_TOLERANCE:g})"
+        ),
+    )

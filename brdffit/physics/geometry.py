@@ -13,16 +13,22 @@ from __future__ import annotations  # the jaxtyping annotations stay unevaluated
 
 from typing import TYPE_CHECKING
 
-from .._arrays import namespace
+import numpy as np
+
+from .._arrays import first_bad, namespace
+from ..errors import BrdfInputError
 
 if TYPE_CHECKING:
-    import numpy as np
+    from collections.abc import Callable
+
     from jaxtyping import Array, Bool, Float
 
     Directions = Float[Array, "*batch 3"] | Float[np.ndarray, "*batch 3"]
 
 #: The surface normal, used to stand in for directions the models must ignore.
 NORMAL = (0.0, 0.0, 1.0)
+#: Direction vectors may deviate this much from unit length (printed files round); they are then normalised.
+UNIT_LENGTH_TOLERANCE = 1e-3
 
 
 def spherical_to_direction(theta, phi) -> Directions:
@@ -103,3 +109,13 @@ def safe_power(base, exponent):
     positive = base > tiny
     safe_base = xp.where(positive, base, 1.0)
     return xp.where(positive, xp.exp(exponent * xp.log(safe_base)), 0.0)
+
+
+def normalised(vectors: np.ndarray, message: Callable[[int, float], str]) -> np.ndarray:
+    """``vectors`` (N, 3) divided by their lengths, each of which must be 1 within :data:`UNIT_LENGTH_TOLERANCE`;
+    otherwise a :class:`BrdfInputError` with ``message(row, length)`` for the first that is not."""
+    length = np.linalg.norm(vectors, axis=1)
+    bad = first_bad(np.abs(length - 1.0) > UNIT_LENGTH_TOLERANCE)
+    if bad is not None:
+        raise BrdfInputError(message(bad[0], float(length[bad[0]])))
+    return vectors / length[:, None]

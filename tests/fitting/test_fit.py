@@ -10,7 +10,7 @@ from catalogue import CASES, parametrize_cases
 from reference_materials import flat_parameters
 
 import data_synth
-from brdffit import BrdfInputError, FitResult, FitWarning, Samples, evaluate, fit, load_result
+from brdffit import BrdfInputError, FitResult, FitWarning, Samples, evaluate, fit, load_result, load_samples
 
 #: A geometry that sees every lobe: 6000 random pairs plus 6000 around the mirror direction.
 _RANDOM = data_synth.uniform_random(6000, seed=1)
@@ -149,7 +149,9 @@ def test_too_few_values_for_the_parameters():
 def test_bad_calls():
     samples = noiseless(*CASES[0])
     with pytest.raises(BrdfInputError, match="fit takes Samples"):
-        fit("samples.csv", "ward")
+        fit(12, "ward")
+    with pytest.raises(BrdfInputError, match=r"^nowhere/samples.csv: no such file$"):
+        fit("nowhere/samples.csv", "ward")  # a path is read with load_samples
     with pytest.raises(BrdfInputError, match="'wrd' is not a model"):
         fit(samples, "wrd")
     with pytest.raises(BrdfInputError, match=r"^max_steps=0 is not allowed"):
@@ -210,3 +212,10 @@ def test_starts_that_reach_one_optimum_tie_and_the_first_wins():
     assert best(runs).name == 0
     runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.27287252534e-03, 3.27287252530e-03, 1.0])]
     assert best(runs).name == 1
+
+
+def test_a_path_is_fitted_as_load_samples_reads_it():
+    from paths import EXAMPLE
+
+    assert fit(EXAMPLE, "lambert").to_dict() == fit(load_samples(EXAMPLE), "lambert").to_dict()
+    assert repr(load_samples(EXAMPLE)) == f"Samples(10368 × 3 channel(s) [r, g, b] from {EXAMPLE})"

@@ -62,6 +62,7 @@ def test_zero_below_the_horizon(model, options, params, rng):
     above = random_directions(rng, 10)
     below = above * np.array([1.0, 1.0, -1.0])
     horizon = above * np.array([1.0, 1.0, 0.0])
+    horizon /= np.linalg.norm(horizon, axis=1, keepdims=True)  # unit vectors, as evaluate requires
     for wi, wo in ((below, above), (above, below), (horizon, above), (above, horizon)):
         assert np.all(evaluate(model, params, wi, wo, **options) == 0.0)
 
@@ -425,3 +426,13 @@ def test_registry_names_models_and_options():
         get_model("lafortune", lobes=0)
     assert get_model("lafortune", lobes=3).n_lobes == 3
     assert get_model("cook-torrance").model_options == {"fresnel": "schlick"}
+
+
+def test_evaluate_takes_unit_directions_and_lafortunes_lobes_from_the_parameters(rng):
+    wi, wo = random_directions(rng, 20), random_directions(rng, 20)
+    two = CASES[11][2]  # Lafortune, 2 lobes
+    np.testing.assert_array_equal(evaluate("lafortune", two, wi, wo), evaluate("lafortune", two, wi, wo, lobes=2))
+    # within 1e-3 of unit length: normalised (printed directions round); beyond: an error naming the row
+    np.testing.assert_allclose(evaluate("ward", CASES[1][2], wi * 1.0004, wo), evaluate("ward", CASES[1][2], wi, wo))
+    with pytest.raises(BrdfInputError, match=r"^wo row 0: length 2 is not 1 \(directions must be unit vectors"):
+        evaluate("ward", CASES[1][2], wi, wo * 2.0)

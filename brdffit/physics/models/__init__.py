@@ -58,6 +58,22 @@ def get_model(model: "str | Model", **options: Any) -> Model:
     return MODELS[model](**options)
 
 
+def model_for(model: "str | Model", params: Any, **options: Any) -> Model:
+    """:func:`get_model`, with a Lafortune model's number of lobes taken from ``params`` (a parameter dictionary
+    with a ``lobes`` list) when ``lobes`` is not given."""
+    if (
+        isinstance(model, str)
+        and model in MODELS
+        and options.get("lobes") is None
+        and "lobes" in model_option_names(model)
+        and isinstance(params, dict)
+        and isinstance(params.get("lobes"), list | tuple)
+        and params["lobes"]
+    ):
+        options = {**options, "lobes": len(params["lobes"])}
+    return get_model(model, **options)
+
+
 def _listed(names: tuple[str, ...]) -> list:
     """``a, b`` as message parts, each an :class:`Argument`."""
     parts: list = []
