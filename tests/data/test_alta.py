@@ -214,8 +214,6 @@ def test_real_retro_reflective_tape():
     Its largest value (72.5 1/sr, θl = 15°) is where the viewer is at the light: the convention
     ``wi = d(θl, 0)``, ``wo = d(θv, Δφ)`` puts the retro-reflection peak at ``wo = wi``.
     """
-    if not TAPE.exists():
-        pytest.skip(f"../shared/data absent: {TAPE} is not part of the project")
     samples = read_alta(TAPE)
     rows = sum(1 for line in TAPE.read_text().splitlines() if line.strip() and not line.startswith("#"))
     assert rows == 7405

@@ -119,7 +119,6 @@ def load_samples_from_arrays(wi, wo, values, channels):
     return Samples.from_arrays(wi, wo, values, channels=channels)
 
 
-@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
 def test_retro_reflective_tape(tmp_path, capsys):
     """The real ALTA measurement: two Lafortune lobes find the retro-reflective one (cxy > 0) and fit several
     times better than Lambert (issue 5 acceptance)."""

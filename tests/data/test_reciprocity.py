@@ -77,7 +77,6 @@ def test_an_alta_file_with_the_cosine_header_loads_reciprocal(brdf_values, tmp_p
     np.testing.assert_allclose(loaded.values, brdf_values.values, rtol=1e-12)
 
 
-@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
 def test_the_real_tape_is_cosine_weighted_by_the_view():
     """The gray tape has no #PARAM_OUT line; its reciprocal pairs say its values are f·cos θv (issue 11: 0.61 as
     stored, 0.35 divided by cos θl, 1.06 divided by cos θv)."""
@@ -89,7 +88,6 @@ def test_the_real_tape_is_cosine_weighted_by_the_view():
     assert 0.9 <= read_right.as_read <= 1.1 and read_right.reciprocal
 
 
-@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
 def test_info_on_the_tape_names_the_quantity_and_what_was_dropped(capsys):
     assert main(["info", str(TAPE)]) == 0
     out = capsys.readouterr().out

@@ -78,7 +78,6 @@ def test_more_lobes_ending_worse_than_fewer_is_a_local_minimum(oak):
     assert found[-1] == "the fit ends at cost 2, worse than the 1 of 1 lobe(s): it stopped in a local minimum"
 
 
-@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
 def test_a_fit_of_data_that_are_not_reciprocal_warns():
     tape = load_samples(TAPE)
     with warnings.catch_warnings(record=True) as caught:  # also rho_d > 1: Lambert cannot fit a retro-reflector

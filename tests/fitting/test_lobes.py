@@ -10,9 +10,20 @@ import data_synth
 from brdffit import FitWarning, fit, load_samples
 from brdffit.physics.geometry import spherical_to_direction
 
-#: The lowest costs any search found on the real tape (values as stored): the landed code's greedy starts with
-#: ``n_starts=30`` (issue 11: 63.8 where its default stopped at 129.6) and this code with 3 and 30 starts.
-TAPE_BEST = {("log", 2): 129.6103, ("log", 3): 63.8001, ("l2", 2): 14973.5, ("l2", 3): 14417.9}
+#: The lowest costs any search found on the real tape, by how its values are read: as stored (the landed code's
+#: greedy starts with ``n_starts=30``; issue 11: 63.8 where its default stopped at 129.6) and as the view's
+#: cosine-weighted BRDF, its right reading (this code with 3 and 30 starts, and 60 random starts, which found
+#: nothing lower). With that reading the l2 loss leaves a third lobe dead: the fit warns, tested below.
+TAPE_BEST = {
+    ("brdf", "log", 2): 129.6103,
+    ("brdf", "log", 3): 63.8001,
+    ("brdf", "l2", 2): 14973.5,
+    ("brdf", "l2", 3): 14417.9,
+    ("cosine-weighted-out", "log", 2): 142.2086,
+    ("cosine-weighted-out", "log", 3): 75.9963,
+    ("cosine-weighted-out", "l2", 2): 14672.62,
+    ("cosine-weighted-out", "l2", 3): 14672.62,
+}
 
 
 def quiet_fit(*args, **kwargs):
@@ -21,13 +32,15 @@ def quiet_fit(*args, **kwargs):
         return fit(*args, **kwargs)
 
 
-@pytest.mark.skipif(not TAPE.exists(), reason=f"{TAPE} absent (../shared/data is not part of the project)")
-@pytest.mark.parametrize(("loss", "lobes"), sorted(TAPE_BEST))
-def test_the_real_tape_reaches_the_best_known_optimum_by_default(loss, lobes):
-    """Within 1% of the lowest cost known (costs differ by rounding across machines, far less than 1%)."""
-    result = quiet_fit(load_samples(TAPE), "lafortune", loss, lobes=lobes)
-    assert result.converged and result.cost <= 1.01 * TAPE_BEST[(loss, lobes)]
-    assert not any("contributes less than" in line for line in result.warnings)  # no dead lobe on the way
+@pytest.mark.parametrize(("quantity", "loss", "lobes"), sorted(TAPE_BEST))
+def test_the_real_tape_reaches_the_best_known_optimum_by_default(quantity, loss, lobes):
+    """Within 1% of the lowest cost known (costs differ by rounding across machines, far less than 1%). A lobe
+    that fits nothing is said: only where a third lobe adds nothing at the optimum (the same cost as two)."""
+    result = quiet_fit(load_samples(TAPE, quantity=quantity), "lafortune", loss, lobes=lobes)
+    assert result.converged and result.cost <= 1.01 * TAPE_BEST[(quantity, loss, lobes)]
+    dead = any("contributes less than" in line for line in result.warnings)
+    adds_nothing = lobes == 3 and TAPE_BEST[(quantity, loss, 3)] >= 0.999 * TAPE_BEST[(quantity, loss, 2)]
+    assert dead == adds_nothing
 
 
 def dense_tape():
