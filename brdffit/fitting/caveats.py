@@ -4,7 +4,8 @@
 * a lobe contributes less than :data:`DEAD_SHARE` of the model at every sample: it fits nothing;
 * a parameter lies beyond its plausible range (``physics/domains.py``: a roughness above 2, an exponent
   above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1);
-* the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives;
+* the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives (one line
+  per channel);
 * a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
 """
 
@@ -103,15 +104,15 @@ def _albedo_above_one(model: Model, params: Params, channels: tuple[str, ...]) -
     :data:`ALBEDO_LIMIT` counts only where the grid's even points alone (a grid half as fine) agree within 1%,
     i.e. where the grid resolves the lobe."""
     fine, coarse = (np.asarray(estimate) for estimate in _directional_albedo(model, params, 256))
+    above = (fine > ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)  # (incidences, C)
     found = []
-    for i, theta in enumerate(ALBEDO_INCIDENCE):
-        for c, channel in enumerate(channels):
-            if fine[i, c] > ALBEDO_LIMIT and abs(fine[i, c] - coarse[i, c]) <= 0.01 * fine[i, c]:
-                found.append(
-                    f"the directional albedo at θi = {theta:g}° is {fine[i, c]:.3g} in channel {channel} (> 1):"
-                    " the model reflects more light than it receives"
-                )
-                break
+    for c, channel in enumerate(channels):
+        where = [f"{fine[i, c]:.3g} at θi = {theta:g}°" for i, theta in enumerate(ALBEDO_INCIDENCE) if above[i, c]]
+        if where:
+            found.append(
+                f"the directional albedo in channel {channel} exceeds 1: {', '.join(where)}"
+                " (the model reflects more light than it receives)"
+            )
     return found
 
 
