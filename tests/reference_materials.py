@@ -31,7 +31,7 @@ def _number_or_list(text: str):
 
 
 def ngan_materials(model: str) -> dict[str, dict]:
-    """``{material: params}`` in brdffit's names and normalisation (SPEC section 2)."""
+    """``{material: params}`` in brdffit's names and normalisation (docs/models.md)."""
     materials = {}
     for line in (NGAN_FOLDER / _FILES[model]).read_text().splitlines():
         match = _LINE.match(line.strip())

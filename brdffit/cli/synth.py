@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from ..data.load import save_samples
 
     enable_compilation_cache()
-    model, params = _model_and_params(args)
+    model, params, channels = _model_and_params(args)
     if args.geometry not in GEOMETRIES:
         raise BrdfInputError(f"--geometry {args.geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
     make_geometry = GEOMETRIES[args.geometry]
@@ -83,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
         noise_kind=args.noise_kind,
         seed=args.seed,
         with_sigma=args.sigma_column,
+        channels=channels,
         **model.model_options,
     )
     save_samples(samples, output)
@@ -91,17 +92,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _model_and_params(args: argparse.Namespace):
-    """The model and its parameters, from ``--model`` and ``--params`` (a parameter dictionary or a result file)."""
+    """The model, its parameters and the channel names (None: named by their count), from ``--model`` and
+    ``--params`` (a parameter dictionary, or a result file, whose channel names are kept)."""
     from ..physics.models import model_for
 
     params = json_argument(args.params, "--params")
-    model_name, options = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}
+    model_name, options, channels = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}, None
     if isinstance(params, dict) and "params" in params and "model" in params:  # a result file
         if args.model not in (None, params["model"]):
             raise BrdfInputError(f"--params {args.params} holds a {params['model']} result, not --model {args.model}")
         model_name = params["model"]
         options = {**params.get("model_options", {}), **{k: v for k, v in options.items() if v is not None}}
+        channels = tuple(params["channels"]) if isinstance(params.get("channels"), list) else None
         params = params["params"]
     if model_name is None:
         raise BrdfInputError("--model is required unless --params is a result file")
-    return model_for(model_name, params, **options), params
+    return model_for(model_name, params, **options), params, channels

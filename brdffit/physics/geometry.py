@@ -42,7 +42,9 @@ def direction_to_spherical(direction: Directions):
     """Zenith ``θ ∈ [0, π]`` and azimuth ``φ ∈ (-π, π]`` (radians) of a unit vector."""
     xp = namespace(direction)
     x, y, z = direction[..., 0], direction[..., 1], direction[..., 2]
-    return xp.arctan2(xp.hypot(x, y), z), xp.arctan2(y, x)
+    azimuth = xp.arctan2(y, x)
+    # arctan2 gives -π for x < 0 and y = -0.0 (or a negative y too small to move the result): that is φ = π.
+    return xp.arctan2(xp.hypot(x, y), z), xp.where(azimuth == -xp.pi, xp.pi, azimuth)
 
 
 def zenith_degrees(direction: Directions):

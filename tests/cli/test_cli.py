@@ -264,6 +264,19 @@ def test_synth_then_fit_round_trip(tmp_path, capsys):
     assert status == 0 and "of cook-torrance" in out
 
 
+def test_synth_keeps_a_result_files_channel_names(tmp_path, capsys):
+    result = {
+        "model": "lambert",
+        "model_options": {},
+        "channels": ["x", "y", "z"],
+        "params": {"rho_d": [0.2, 0.3, 0.4]},
+    }
+    (tmp_path / "xyz.json").write_text(json.dumps(result))
+    status, _, err = run(["synth", "--params", tmp_path / "xyz.json", "-o", tmp_path / "xyz.csv"], capsys)
+    assert status == 0, err
+    assert load_samples(tmp_path / "xyz.csv").channels == ("x", "y", "z")
+
+
 def test_synth_sigma_column(tmp_path, capsys):
     status, _, err = run(
         [

@@ -1,4 +1,4 @@
-"""Reading, checking and writing samples files (SPEC section 4).
+"""Reading, checking and writing samples files (docs/samples.md).
 
 The bad-input cases are exercised end to end through the command line in
 ``test_cli.py``; here the loader's successful paths and the array API.

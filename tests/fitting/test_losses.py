@@ -1,4 +1,4 @@
-"""Loss residuals (SPEC section 3) and how sigma and weight scale them."""
+"""Loss residuals (docs/losses.md) and how sigma and weight scale them."""
 
 import math
 

@@ -75,7 +75,7 @@ def test_normal_equations_of_every_loss(loss_name, monkeypatch):
 @pytest.mark.parametrize("loss_name", ["log", "cbrt"])
 def test_residuals_follow_the_loss_formula_on_samples_and_vanish_on_padding(columns, loss_name):
     """Residuals of a padded problem, its target and scale computed on the fly or prepared once, against
-    SPEC section 3 written out in numpy: sqrt(weight)·(T(f) − T(y)) / (sigma·|T'(max(y, sigma))|).
+    The losses of docs/losses.md written out in numpy: sqrt(weight)·(T(f) − T(y)) / (sigma·|T'(max(y, sigma))|).
 
     1000 samples pad to 1024 rows, whose residuals must be exactly 0. T' of log (ci / (1 + v ci)) and of
     cbrt (v^(-2/3) / 3) by hand. Tolerance: T(f) and T(y) are each within an ulp or two of the numpy

@@ -23,8 +23,16 @@ def test_spherical_round_trip(rng):
     back_theta, back_phi = direction_to_spherical(direction)
     np.testing.assert_allclose(back_theta, theta, atol=1e-14)
     np.testing.assert_allclose(back_phi, phi, atol=1e-14)
-    # SPEC convention: phi = 0 is the tangent x, phi = 90° is y.
+    # The convention: phi = 0 is the tangent x, phi = 90° is y.
     np.testing.assert_allclose(spherical_to_direction(np.pi / 2, np.pi / 2), [0.0, 1.0, 0.0], atol=1e-16)
+
+
+def test_azimuth_is_in_minus_pi_to_pi_with_pi_included():
+    """A direction on the negative x axis has φ = π, whatever the sign of its zero y (-0.0 comes out of rotations
+    and sign flips, and arctan2 would give -π for it), on the host and in JAX."""
+    directions = np.array([[-0.6, 0.0, 0.8], [-0.6, -0.0, 0.8]])
+    for phi in (direction_to_spherical(directions)[1], jax.jit(direction_to_spherical)(jnp.asarray(directions))[1]):
+        assert np.all(np.asarray(phi) == np.pi)
 
 
 def test_angle_conversions_stay_on_the_host_for_numpy_and_trace_for_jax(rng):

@@ -1,4 +1,4 @@
-"""Physics, golden values and derivatives of every model (SPEC section 2)."""
+"""Physics, golden values and derivatives of every model (docs/models.md)."""
 
 import math
 
@@ -184,7 +184,7 @@ def test_cook_torrance_golden_values():
 
 
 def test_cook_torrance_equals_the_seed_form(rng):
-    """SPEC: with ks = 1 the lobe equals F/π · D'G/(ci co), D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)."""
+    """With ks = 1 the lobe equals F/π · D'G/(ci co), D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)."""
     wi, wo = random_directions(rng, 1000), random_directions(rng, 1000)
     m, f0 = 0.25, 0.3
     h = (wi + wo) / np.linalg.norm(wi + wo, axis=1, keepdims=True)
@@ -232,7 +232,7 @@ def test_lafortune_golden_values(rng):
 
 # ------------------------------------------------- finite values and gradients
 def _extreme_cases():
-    """Each model at the edges SPEC names: roughness 1e-3, exponents 1e4, Fresnel at its bounds."""
+    """Each model at the edges docs/models.md names: roughness 1e-3, exponents 1e4, Fresnel at its bounds."""
     c = 1 / math.sqrt(3)
     cases = []
     for alpha in (1e-3, 1.0):

@@ -8,8 +8,9 @@ rough surfaces", EGSR 2007::
     D    = exp(-tan²θh / m²) / (π m² ch⁴)                     (Beckmann; m is the rms slope)
     G    = min(1, 2 ch co / (wo·h), 2 ch ci / (wo·h))       (V-groove, Torrance & Sparrow 1967)
 
-It equals the seeds' ``F/π · D'G/(ci co)`` with ``D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)``. The Fresnel
-term is one of ``fresnel.FRESNEL``. With ``ks = 1`` and ``F = 1`` the lobe's directional albedo is at most 1.
+It equals the V-groove model as it is often written, ``F/π · D'G/(ci co)``, with
+``D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)``. The Fresnel term is one of ``fresnel.FRESNEL``. With ``ks = 1`` and
+``F = 1`` the lobe's directional albedo is at most 1.
 """
 
 from dataclasses import dataclass
