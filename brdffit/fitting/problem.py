@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float
 
-from .._jax import float64
+from .._jax import float64, jit
 from ..data.samples import Samples
 from ..physics.geometry import NORMAL
 from ..physics.models import Model, Params
@@ -148,6 +148,16 @@ def residuals_at(model: Model, loss: Loss, params: Params, problem: Problem) -> 
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
     target, scale = target_and_scale(loss, problem)
     return (transformed - target) * scale
+
+
+@float64
+def sample_residuals(model: Model, loss: Loss, params: Params, samples: Samples) -> np.ndarray:
+    """The loss's residuals (N, C) of the model with ``params`` on ``samples``, sigma and weight applied: what a fit
+    minimises the squares of (``docs/losses.md``), in the loss's units, float64, on the host."""
+    return np.asarray(_residuals_at(model, loss, params, build_problem(samples)))[: samples.n_samples]
+
+
+_residuals_at = jit(residuals_at, static_argnums=(0, 1))
 
 
 def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):

@@ -115,6 +115,22 @@ class FitResult:
         """The fitted model's BRDF (N, C) in 1/sr at directions ``wi``, ``wo`` (N, 3)."""
         return evaluate(self.model, self.params, wi, wo, **self.model_options)
 
+    def residuals(self, samples) -> np.ndarray:
+        """The fit's residuals (N, C) on ``samples`` (a :class:`~brdffit.Samples` with this result's channels), in
+        the units of its loss: ``sqrt(weight)·(T(f) − T(y))``, divided by ``sigma·|T'(y)|`` where the samples have
+        sigma (``docs/losses.md``). Their sum of squares over the fitted samples is ``cost``."""
+        from ..physics.models import get_model
+        from .losses import get_loss
+        from .problem import sample_residuals
+
+        if tuple(samples.channels) != tuple(self.channels):
+            raise BrdfInputError(
+                f"{samples.source}: channels {', '.join(samples.channels)} are not the result's"
+                f" ({', '.join(self.channels)})"
+            )
+        model = get_model(self.model, **self.model_options)
+        return sample_residuals(model, get_loss(self.loss), model.dictionary.to_params(self.params), samples)
+
     # ------------------------------------------------------------------ JSON
     def to_dict(self) -> dict[str, Any]:
         """The result file's content as plain Python objects."""

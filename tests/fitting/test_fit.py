@@ -219,3 +219,26 @@ def test_a_path_is_fitted_as_load_samples_reads_it():
 
     assert fit(EXAMPLE, "lambert").to_dict() == fit(load_samples(EXAMPLE), "lambert").to_dict()
     assert repr(load_samples(EXAMPLE)) == f"Samples(10368 × 3 channel(s) [r, g, b] from {EXAMPLE})"
+
+
+def test_residuals_of_a_result_sum_to_its_cost_with_sigma_and_weight():
+    """Σ r² of ``FitResult.residuals`` is the reported cost (both float64 sums of the same 3·10³ squares, in
+    different orders: equal to ~1e-13 relative, 1e-10 allowed); samples of other channels are refused."""
+    truth = CASES[1]
+    samples = noiseless(*truth)
+    rng = np.random.default_rng(5)
+    samples = Samples.from_arrays(
+        samples.wi[:1000],
+        samples.wo[:1000],
+        samples.values[:1000] * (1 + 0.02 * rng.standard_normal((1000, 3))),
+        channels=samples.channels,
+        sigma=0.02 * samples.values[:1000] + 1e-4,
+        weight=rng.uniform(0.5, 2.0, 1000),
+    )
+    result = fit(samples, "ward", "cbrt")
+    residuals = result.residuals(samples)
+    assert residuals.shape == (1000, 3)
+    assert np.sum(residuals**2) == pytest.approx(result.cost, rel=1e-10)
+    grey = Samples.from_arrays(samples.wi, samples.wo, samples.values[:, :1])
+    with pytest.raises(BrdfInputError, match="channels value are not the result's"):
+        result.residuals(grey)
