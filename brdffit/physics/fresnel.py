@@ -12,7 +12,7 @@ from typing import Any
 
 import jax.numpy as jnp
 
-from .domains import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, GreaterThan, MappedDomain
+from .domains import UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
 
 
 def fresnel_schlick(cos_beta, f0):
@@ -62,6 +62,13 @@ def fresnel_conductor(cos_beta, eta, k):
     return 0.5 * (rs + rp)
 
 
+#: A conductor's refractive index: metals in the visible lie within 0.05–5 (silver to titanium); above 10 the
+#: interface is a mirror at every angle (F → 1), which a fit reaches when the data want no Fresnel term at all.
+CONDUCTOR_INDEX = Positive(plausible_max=10.0)
+#: A conductor's extinction coefficient: 0 for a dielectric, up to ~10 for metals in the visible (aluminium).
+CONDUCTOR_EXTINCTION = Positive(allow_zero=True, plausible_max=20.0)
+
+
 @dataclass(frozen=True)
 class Fresnel:
     """A kind of Fresnel term: its parameters ``(name, domain, starting values)`` and ``reflectance(cos β, shape)``."""
@@ -83,7 +90,10 @@ FRESNEL = {
     ),
     "conductor": Fresnel(
         "exact, complex index eta + i k",
-        (("eta", POSITIVE, (0.5, 1.5)), ("k", NON_NEGATIVE, (1.0, 4.0))),
+        # Starts: metals (eta < 1.5, k of 1 to 4) and, with k = 0, dielectric-like interfaces, where a fit of a
+        # material that is no metal ends (the pickled-oak example: eta 19, k 0, cost 2.98 where the metal starts
+        # alone stopped at eta → ∞, i.e. F = 1, cost 4.38).
+        (("eta", CONDUCTOR_INDEX, (0.5, 1.5, 4.0)), ("k", CONDUCTOR_EXTINCTION, (0.0, 1.0, 4.0))),
         lambda c, shape: fresnel_conductor(c, shape["eta"], shape["k"]),
     ),
     "none": Fresnel("F = 1", (), lambda c, shape: jnp.ones_like(c)),
