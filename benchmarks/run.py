@@ -19,6 +19,8 @@ Sections (issue 3):
 (e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step).
 (f) MCMC (issue 4): emcee, 32 walkers × 2000 steps on the 10k-sample example, compile included.
 (g) Reading a full MERL file (issue 5): 1,458,000 bins to direction pairs.
+(h) ``brdffit compare`` of 4 models × 5 folds on the 10k-sample example (issue 12) against the four plain
+    ``brdffit fit`` runs of the same models, each a fresh process without a compilation cache, in turns.
 
 ``--sections`` runs some of them; the others keep their results from the last
 run in ``latest.json`` (each section records its date).
@@ -168,6 +170,45 @@ def cli_section(repeats: int, folder: Path) -> dict:
     return {"first_run_seconds": first, "seconds": statistics.median(later), "all_seconds": later, "n_samples": 10368}
 
 
+#: The models of (h), as compare's specs and as fit's options.
+COMPARED = {
+    "lambert": ["--model", "lambert"],
+    "ward": ["--model", "ward"],
+    "cook-torrance:fresnel=conductor": ["--model", "cook-torrance", "--fresnel", "conductor"],
+    "lafortune:lobes=2": ["--model", "lafortune", "--lobes", "2"],
+}
+
+
+def compare_section(repeats: int, folder: Path) -> dict:
+    """(h): `brdffit compare` (4 models × 5 folds) against the 4 plain fits, process start to output written."""
+    import time
+
+    script = str(Path(sys.executable).with_name("brdffit"))
+    example = str(ROOT / "examples" / "ward-pickled-oak.csv")
+
+    def timed(*arguments: str) -> float:
+        clock = time.perf_counter()
+        subprocess.run(
+            [script, *arguments], env={**os.environ, "BRDFFIT_CACHE_DIR": ""}, capture_output=True, check=True
+        )
+        return time.perf_counter() - clock
+
+    compare_runs, fit_runs = [], []
+    for round_number in range(1, repeats + 1):
+        log(f"(h) compare against 4 fits, round {round_number}/{repeats}")
+        specs = ",".join(COMPARED)
+        compare_runs.append(timed("compare", example, "--models", specs, "--folds", "5", "-o", str(folder / "c.json")))
+        fit_runs.append(sum(timed("fit", example, *flags, "-o", str(folder / "f.json")) for flags in COMPARED.values()))
+    return {
+        "models": list(COMPARED),
+        "folds": 5,
+        "compare_seconds": statistics.median(compare_runs),
+        "fits_seconds": statistics.median(fit_runs),
+        "all_compare_seconds": compare_runs,
+        "all_fits_seconds": fit_runs,
+    }
+
+
 def mcmc_section(repeats: int) -> dict:
     log("(f) mcmc: 32 walkers × 2000 steps on the example")
     return repeated(repeats, "mcmc", "--walkers", "32", "--steps", "2000")
@@ -301,6 +342,16 @@ def table(results: dict) -> str:
             f"(g) Reading a full MERL file ({loading['n_samples']:,} valid direction pairs × RGB): median"
             f" {loading['seconds']:.2f} s, peak memory {loading['peak_rss_mb']:.0f} MB."
         )
+    compared = results.get("compare")
+    if compared:
+        rounds = zip(compared["all_compare_seconds"], compared["all_fits_seconds"], strict=True)
+        ratio = compared["compare_seconds"] / compared["fits_seconds"]
+        lines.append(
+            f"(h) `brdffit compare` of {len(compared['models'])} models × {compared['folds']} folds on the example:"
+            f" median {compared['compare_seconds']:.1f} s against {compared['fits_seconds']:.1f} s for the"
+            f" {len(compared['models'])} plain `brdffit fit` runs ({ratio:.2f}×;"
+            f" round by round {', '.join(f'{c / f:.2f}×' for c, f in rounds)}), no compilation cache."
+        )
     return "\n".join(lines)
 
 
@@ -311,8 +362,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcfg",
-        help="which to run: a (with d, e), b, c, f, g; default abcfg (the README's table needs all)",
+        default="abcfgh",
+        help="which to run: a (with d, e), b, c, f, g, h; default abcfgh (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -335,6 +386,8 @@ def main() -> None:
             results["mcmc"] = mcmc_section(args.repeats) | {"date": today}
         if "g" in args.sections:
             results["merl_load"] = merl_load_section(args.repeats, folder) | {"date": today}
+        if "h" in args.sections:
+            results["compare"] = compare_section(args.repeats, folder) | {"date": today}
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -7,6 +7,7 @@ The public API::
     result.params, result.to_json(), result.predict(wi, wo)
     values = brdffit.evaluate("cook-torrance", params, wi, wo, fresnel="schlick")
     results = brdffit.fit_batch([samples_a, samples_b], model="ward")
+    comparison = brdffit.compare(samples, ["ward", "lafortune:lobes=2"])  # ranked by cross-validated loss
     result = brdffit.fit(samples, uncertainty="laplace")        # or "mcmc", mcmc=brdffit.MCMC(steps=5000)
     result.uncertainty["stderr"], print(result)                  # errors; the table shows value ± error
     sampled = brdffit.sample_posterior(result, samples)          # MCMC for an existing result; sampled.draws
@@ -40,6 +41,8 @@ _EXPORTS = {
     "save_result": ".fitting.results",
     "fit": ".api",
     "fit_batch": ".api",
+    "compare": ".fitting.compare",
+    "Comparison": ".fitting.compare",
     "MCMC": ".uncertainty.mcmc",
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
@@ -58,6 +61,8 @@ if TYPE_CHECKING:
     from .errors import FitWarning as FitWarning
     from .errors import InputWarning as InputWarning
     from .errors import UncertaintyWarning as UncertaintyWarning
+    from .fitting.compare import Comparison as Comparison
+    from .fitting.compare import compare as compare
     from .fitting.losses import LOSSES as LOSSES
     from .fitting.results import FitResult as FitResult
     from .fitting.results import load_result as load_result

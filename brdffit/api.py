@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ._jax import float64
-from .data.load import load_samples
+from .data.load import as_samples
 from .data.samples import Samples
 from .errors import FitWarning
 from .fitting.batch import fit_many
@@ -58,7 +58,7 @@ def fit(
     ``fresnel=`` for cook-torrance, ``lobes=`` for lafortune.
     """
     check_options(uncertainty, mcmc, chain)
-    samples = _loaded(samples)
+    samples = as_samples(samples)
     if start is not None and isinstance(model, str):  # Lafortune's number of lobes may come from the start
         model, model_options = model_for(model, start, **model_options), {}
     if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
@@ -110,7 +110,7 @@ def fit_batch(
     settings) adds each result's ``uncertainty`` after the fits.
     """
     check_options(uncertainty, mcmc)
-    samples = [_loaded(one) for one in samples]
+    samples = [as_samples(one) for one in samples]
     if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
         for one in samples:
             built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
@@ -137,11 +137,6 @@ def fit_batch(
         with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
         for result, one in zip(results, samples, strict=True)
     ]
-
-
-def _loaded(samples: "Samples | str | os.PathLike") -> Samples:
-    """Samples, or the samples a file holds (read with :func:`brdffit.load_samples`'s defaults)."""
-    return load_samples(samples) if isinstance(samples, str | os.PathLike) else samples
 
 
 def warn_about(result: FitResult) -> None:

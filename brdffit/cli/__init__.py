@@ -1,6 +1,6 @@
 """The ``brdffit`` command line: the parser, and a module per command that it loads on demand.
 
-Each command module (``fit.py``, ``synth.py``, ``models.py``, ``info.py``, ``convert.py``) has
+Each command module (``fit.py``, ``compare.py``, ``synth.py``, ``models.py``, ``info.py``, ``convert.py``) has
 ``configure(parser)``, which adds its arguments, and ``run(args) -> int``. Only the command being run is
 imported and configured, so ``brdffit --help`` and ``--version`` import no JAX and no solver.
 
@@ -23,6 +23,7 @@ EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 #: The commands, each a module of this package, with the line ``brdffit --help`` shows for it.
 COMMANDS = {
     "fit": "fit a model to samples files",
+    "compare": "fit several models to one samples file and rank them by cross-validated loss",
     "synth": "write synthetic samples of a model",
     "models": "list the models, their parameters and domains",
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",

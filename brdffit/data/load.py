@@ -132,6 +132,11 @@ def load_samples(
     return spectral.spectral_to(samples, spectral_to, illuminant=illuminant, observer=observer)
 
 
+def as_samples(samples: "Samples | str | os.PathLike") -> Samples:
+    """Samples as they are, or the samples a file holds (read with :func:`load_samples`'s defaults)."""
+    return load_samples(samples) if isinstance(samples, str | os.PathLike) else samples
+
+
 def save_samples(samples: Samples, path: str | os.PathLike) -> None:
     """Write ``samples`` atomically in the format ``path``'s suffix names (``.dat`` ALTA, ``.astm`` and ``.txt``
     ASTM), else as a samples CSV; :func:`load_samples` reads it back. A MERL table is written from a model

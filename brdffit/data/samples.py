@@ -126,6 +126,12 @@ class Samples:
         """Zenith angle of the viewer, degrees."""
         return zenith_degrees(self.wo)
 
+    def light_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The distinct light directions (L, 3) and, for each sample, the index of its own (N,): directions equal
+        to 6 decimals (printed files round) are one. A gonioreflectometer has a few; random data one per sample."""
+        distinct, index = np.unique(np.round(self.wi, 6), axis=0, return_inverse=True)
+        return distinct, index.reshape(-1)
+
     def select(self, keep: np.ndarray) -> "Samples":
         """The samples where ``keep`` (a boolean mask or index array) selects."""
         return replace(

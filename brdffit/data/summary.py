@@ -31,7 +31,7 @@ def describe(samples: Samples, format_name: str) -> str:
         f"{samples.source}: {format_name}, {n} samples × {c} channel(s): {shown}",
         f"  θi {_range(samples.theta_i)}°, θo {_range(samples.theta_o)}°, |φo − φi| {_range(delta_phi)}°",
         f"  θh {_range(theta_h)}°, θd {_range(theta_d)}°; {len(cells)} of {total} {CELL}°×{CELL}° (θh, θd) cells"
-        f" hold samples; {len(np.unique(np.round(samples.wi, 6), axis=0))} distinct light directions",
+        f" hold samples; {len(samples.light_directions()[0])} distinct light directions",
         f"  grazing: {np.mean(np.maximum(samples.theta_i, samples.theta_o) > 70):.0%} of samples have θi or θo > 70°",
     ]
     for index, name in enumerate(samples.channels[:6]):

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .._files import atomic_path
 from ..fitting.results import FitResult
+from ..physics.models.specs import spec_of
 
 #: Colours of the first channels (r, g, b look like themselves); further channels take matplotlib's cycle.
 CHANNEL_COLOURS = {"r": "#d62728", "g": "#2ca02c", "b": "#1f77b4", "value": "#333333", "y": "#333333"}
@@ -19,8 +20,7 @@ FIT_STYLES = ("-", "--", ":", "-.")
 
 def label(result: FitResult) -> str:
     """A fit named as a model spec: ``ward``, ``lafortune:lobes=2``, ``cook-torrance:fresnel=conductor``."""
-    options = ",".join(f"{key}={value}" for key, value in result.model_options.items())
-    return f"{result.model}:{options}" if options else result.model
+    return spec_of(result.model, result.model_options)
 
 
 def as_list(results: FitResult | Sequence[FitResult]) -> list[FitResult]:

@@ -1,0 +1,253 @@
+"""Which model suits these samples: every candidate fitted, scored by information criteria and cross-validation.
+
+For each model spec (``specs.py``: ``ward``, ``lafortune:lobes=2``) :func:`compare` fits all the samples (the
+fit of :func:`brdffit.fit`: its starts, its warnings) and scores it:
+
+* **AIC and BIC** from the Gaussian likelihood of the loss's residuals. Without ``sigma`` the noise scale is
+  estimated (its maximum-likelihood value ``Σr²/n``): ``−2 ln L = n ln(Σr²/n)`` up to a constant shared by
+  every model, so ``AIC = n ln(Σr²/n) + 2k`` and ``BIC = n ln(Σr²/n) + k ln n`` (Akaike 1974; Schwarz 1978).
+  With ``sigma`` the residuals are in units of σ and ``−2 ln L = χ² = Σr²``: ``AIC = χ² + 2k``,
+  ``BIC = χ² + k ln n``. ``n`` counts the fitted values (samples × channels with a nonzero weight), ``k`` the
+  model's parameters.
+* **K-fold cross-validation** (``folds.py``): each fold's samples are held out, the model is refitted on the
+  rest, and the held-out loss per residual ``Σr²/n_held`` is measured; ``cv_loss`` is its mean over the folds,
+  ``cv_stderr`` the standard error of that mean (standard deviation over folds / √K). A model with more
+  parameters always lowers the cost on the data it was fitted to, not always the held-out loss: that is the
+  criterion models are ranked by. The best and every model within one standard error of it (``cv_loss ≤
+  best + its cv_stderr``, the one-standard-error rule of Hastie, Tibshirani & Friedman 2009, §7.10) are marked.
+
+Each fold's fit starts from the optimum of the fit to all the samples, and every fit of one model runs in one
+compiled solver: a fold is the whole problem with its held-out rows switched off (as padding is), so the
+folds cost a few Levenberg-Marquardt steps each and no compilation.
+"""
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cache, partial
+from typing import Any
+
+import numpy as np
+
+from .._files import write_text_atomic
+from .._jax import float64, jit
+from .._version import __version__
+from ..data.load import as_samples
+from ..data.samples import Samples
+from ..errors import Argument, BrdfInputError
+from ..physics.fresnel import FRESNEL
+from ..physics.models import Model
+from ..physics.models.specs import model_of_spec, spec_of
+from .fit import MAX_STEPS, N_STARTS, compiled_solver, fit_one
+from .folds import Folds, make_folds
+from .losses import Loss, get_loss
+from .problem import Problem, build_problem, cost, residuals
+from .results import FitResult
+
+#: The criterion models are ranked by.
+CRITERION = "cv_loss"
+
+
+def default_specs() -> list[str]:
+    """Every model: Lafortune with 1 to 3 lobes, Cook-Torrance with each Fresnel term."""
+    specs = ["lambert", "ward", "ward-aniso", "ward-duer"]
+    specs += [f"cook-torrance:fresnel={kind}" for kind in FRESNEL]
+    specs += ["blinn-phong", "phong"] + [f"lafortune:lobes={lobes}" for lobes in (1, 2, 3)]
+    return specs
+
+
+@dataclass(frozen=True)
+class ModelScore:
+    """One candidate's fit and scores (module docstring); ``result`` is its full :class:`FitResult`."""
+
+    spec: str
+    k: int
+    aic: float
+    bic: float
+    cv_loss: float
+    cv_stderr: float
+    fold_losses: list[float]
+    result: FitResult = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        result = self.result
+        return {
+            "spec": self.spec,
+            "model": result.model,
+            "model_options": dict(result.model_options),
+            "k": self.k,
+            "cost": result.cost,
+            "rmse": result.rmse,
+            "aic": self.aic,
+            "bic": self.bic,
+            "cv_loss": self.cv_loss,
+            "cv_stderr": self.cv_stderr,
+            "fold_losses": list(self.fold_losses),
+            "converged": result.converged,
+            "warnings": list(result.warnings),
+            "params": result.params,
+        }
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Models compared on one set of samples, best first (by :data:`CRITERION`)."""
+
+    source: str
+    n_samples: int
+    channels: tuple[str, ...]
+    loss: str
+    folds: int
+    fold_kind: str  # "light-direction" or "random"
+    seed: int
+    models: list[ModelScore]
+
+    @property
+    def best(self) -> ModelScore:
+        return self.models[0]
+
+    def within_one_stderr(self, score: ModelScore) -> bool:
+        """Whether ``score``'s held-out loss is within one standard error of the best's."""
+        return score.cv_loss <= self.best.cv_loss + self.best.cv_stderr
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "brdffit_version": __version__,
+            "samples": self.source,
+            "n_samples": self.n_samples,
+            "channels": list(self.channels),
+            "loss": self.loss,
+            "folds": self.folds,
+            "fold_kind": self.fold_kind,
+            "seed": self.seed,
+            "criterion": CRITERION,
+            "best": self.best.spec,
+            "models": [score.to_dict() | {"within_one_stderr": self.within_one_stderr(score)} for score in self.models],
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the comparison's JSON atomically."""
+        write_text_atomic(path, self.to_json())
+
+    def table(self) -> str:
+        """The ranking as a person reads it (``brdffit compare`` prints it)."""
+        from .compare_table import comparison_table
+
+        return comparison_table(self)
+
+    def __str__(self) -> str:
+        return self.table()
+
+
+@float64
+def compare(
+    samples: Samples | str | os.PathLike,
+    models: Sequence[str | Model] | None = None,
+    loss: str = "log",
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    max_theta: float | None = None,
+    n_starts: int = N_STARTS,
+    max_steps: int = MAX_STEPS,
+    progress: bool | None = False,
+) -> Comparison:
+    """Fit every model of ``models`` (specs such as ``"lafortune:lobes=2"``, or :class:`Model` objects; default
+    :func:`default_specs`) to ``samples`` by ``loss`` and rank them by their ``folds``-fold cross-validated loss.
+
+    ``seed`` makes the folds (and the start search's subset); ``max_theta``, ``n_starts`` and ``max_steps`` are
+    those of :func:`brdffit.fit`. ``progress``: a progress bar on stderr (None: when stderr is a terminal).
+    Returns a :class:`Comparison`, best first.
+    """
+    samples = as_samples(samples).within(max_theta)
+    loss_kind = get_loss(loss)
+    chosen = [_model(one) for one in (default_specs() if models is None else models)]
+    if not chosen:
+        raise BrdfInputError(Argument("models"), ": give at least one model to compare")
+    split = make_folds(samples, folds, seed)
+    problem = build_problem(samples)
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(chosen), unit="model", disable=None if progress is None else not progress, leave=False)
+    scores = []
+    try:
+        for model in chosen:
+            bar.set_description(spec_of(model.name, model.model_options))
+            result = fit_one(samples, model, loss, n_starts=n_starts, max_steps=max_steps, seed=seed)
+            fold_losses = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
+            scores.append(_score(model, result, samples, fold_losses))
+            bar.update(1)
+    finally:
+        bar.close()
+    ranked = sorted(scores, key=lambda score: (math.isnan(score.cv_loss), score.cv_loss))
+    return Comparison(samples.source, samples.n_samples, samples.channels, loss, split.count, split.kind, seed, ranked)
+
+
+def _model(one: str | Model) -> Model:
+    if isinstance(one, Model):
+        return one
+    if not isinstance(one, str):
+        raise BrdfInputError(
+            Argument("models"), f": each must be a model spec (a string) or a Model, got {type(one).__name__}"
+        )
+    return model_of_spec(one)
+
+
+def _cross_validated(
+    model: Model, loss: Loss, result: FitResult, samples: Samples, problem: Problem, split: Folds, max_steps: int
+) -> list[float]:
+    """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples."""
+    solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
+    held_out_cost = _held_out_cost(model, loss)
+    theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
+    counted = np.ones(samples.n_samples, bool) if samples.weight is None else samples.weight > 0
+    losses = []
+    for k in range(split.count):
+        held = split.held_out(k)
+        n_held = int(np.sum(held & counted)) * samples.n_channels
+        fitted = solve(theta0, problem._replace(real=_rows(~held, problem)))
+        total = held_out_cost(fitted.theta, problem._replace(real=_rows(held, problem)))
+        losses.append(float(total) / n_held if n_held else math.nan)
+    return losses
+
+
+def _rows(mask: np.ndarray, problem: Problem) -> np.ndarray:
+    """``mask`` (N,) over the samples as the problem's row mask: padding rows stay off."""
+    rows = np.zeros(problem.real.shape[0], bool)
+    rows[: mask.size] = mask
+    return rows
+
+
+@cache
+def _held_out_cost(model: Model, loss: Loss):
+    """``Σr²`` over the problem's rows that are on, compiled once per model and loss."""
+    return jit(lambda theta, problem: cost(partial(residuals, model, loss), theta, problem))
+
+
+def _score(model: Model, result: FitResult, samples: Samples, fold_losses: list[float]) -> ModelScore:
+    """AIC, BIC and the cross-validated loss of one fit (module docstring)."""
+    k = model.unconstrained.size(samples.n_channels)
+    counted = samples.n_samples if samples.weight is None else int(np.sum(samples.weight > 0))
+    n = counted * samples.n_channels
+    if samples.sigma is None:
+        deviance = n * math.log(max(result.cost, np.finfo(float).tiny) / n)
+    else:
+        deviance = result.cost
+    held = np.array([value for value in fold_losses if not math.isnan(value)])
+    cv_loss = float(np.mean(held)) if held.size else math.nan
+    cv_stderr = float(np.std(held, ddof=1) / math.sqrt(held.size)) if held.size > 1 else math.nan
+    return ModelScore(
+        spec_of(model.name, model.model_options),
+        k,
+        deviance + 2 * k,
+        deviance + k * math.log(n),
+        cv_loss,
+        cv_stderr,
+        fold_losses,
+        result,
+    )

@@ -1,0 +1,44 @@
+"""The printed ranking of a model comparison (``brdffit compare``): one row per model, best first."""
+
+import math
+
+#: The models whose warnings are written out under the table (the others' are counted; the JSON has them all).
+WARNINGS_OF_FIRST = 3
+
+
+def comparison_table(comparison) -> str:
+    """The ranking of a :class:`~brdffit.fitting.compare.Comparison`: rank, mark, spec, k, cost, rmse, AIC, BIC, the
+    cross-validated loss with its standard error and the count of warnings; then the key and the warnings of the
+    first :data:`WARNINGS_OF_FIRST` models."""
+    how = (
+        "each holding out whole light directions"
+        if comparison.fold_kind == "light-direction"
+        else "of samples drawn at random"
+    )
+    lines = [
+        f"models compared on {comparison.source}: {comparison.n_samples} samples × {len(comparison.channels)}"
+        f" channel(s), loss {comparison.loss}",
+        f"  ranked by the loss per residual on held-out samples: {comparison.folds} folds {how},"
+        f" seed {comparison.seed}",
+    ]
+    width = max(len("model"), *(len(score.spec) for score in comparison.models))
+    lines.append(
+        f"  rank    {'model'.ljust(width)}   k  {'cost':>11}  {'rmse (1/sr)':>11}  {'AIC':>11}  {'BIC':>11}"
+        f"  {'CV loss':>10} ± {'s.e.':<9} warnings"
+    )
+    for rank, score in enumerate(comparison.models, 1):
+        mark = "*" if rank == 1 else "=" if comparison.within_one_stderr(score) else " "
+        status = "" if score.result.converged else "  NOT converged"
+        lines.append(
+            f"  {rank:>4} {mark}  {score.spec.ljust(width)} {score.k:>3}  {score.result.cost:11.5g}"
+            f"  {score.result.rmse:11.4g}  {score.aic:11.5g}  {score.bic:11.5g}"
+            f"  {_number(score.cv_loss):>10} ± {_number(score.cv_stderr):<9} {len(score.result.warnings):>8}{status}"
+        )
+    lines.append("  * best   = within one standard error of the best")
+    for score in comparison.models[:WARNINGS_OF_FIRST]:
+        lines += [f"  {score.spec}: warning: {line}" for line in score.result.warnings]
+    return "\n".join(lines)
+
+
+def _number(value: float) -> str:
+    return "—" if math.isnan(value) else f"{value:.4g}"
