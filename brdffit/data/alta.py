@@ -65,7 +65,13 @@ import numpy as np
 from .._arrays import first_bad
 from .._files import write_text_atomic
 from ..errors import BrdfInputError
-from ..physics.geometry import UNIT_LENGTH_TOLERANCE, direction_to_spherical, normalised, spherical_to_direction
+from ..physics.geometry import (
+    UNIT_LENGTH_TOLERANCE,
+    direction_to_spherical,
+    from_half_difference,
+    normalised,
+    spherical_to_direction,
+)
 from .cells import TableChecks, named
 from .samples import Provenance, Samples
 from .text import format_rows, parse_numbers, read_text
@@ -322,29 +328,12 @@ def _isotropic_tl_tv_proj_dphi(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
-def half_difference_to_directions(theta_h, phi_h, theta_d, phi_d) -> tuple[np.ndarray, np.ndarray]:
-    """``wi, wo`` (N, 3) from Rusinkiewicz's ``θh, φh, θd, φd`` (radians): ``wi = Rz(φh) Ry(θh) d(θd, φd)``,
-    ``wo = Rz(φh) Ry(θh) (−dx, −dy, dz)``."""
-    d = spherical_to_direction(theta_d, phi_d)
-    mirrored = d * np.array([-1.0, -1.0, 1.0])
-    return _rotate(d, theta_h, phi_h), _rotate(mirrored, theta_h, phi_h)
-
-
-def _rotate(v: np.ndarray, theta_h, phi_h) -> np.ndarray:
-    """``Rz(φh) Ry(θh) v``: the frame whose ``z`` is the half vector ``d(θh, φh)``."""
-    ct, st, cp, sp = np.cos(theta_h), np.sin(theta_h), np.cos(phi_h), np.sin(phi_h)
-    x = ct * v[:, 0] + st * v[:, 2]
-    z = -st * v[:, 0] + ct * v[:, 2]
-    y = v[:, 1]
-    return np.stack([cp * x - sp * y, sp * x + cp * y, z], axis=-1)
-
-
 def _rusin_th_ph_td_pd(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return half_difference_to_directions(x[:, 0], x[:, 1], x[:, 2], x[:, 3])
+    return from_half_difference(x[:, 0], x[:, 1], x[:, 2], x[:, 3])
 
 
 def _rusin_th_td_pd(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return half_difference_to_directions(x[:, 0], np.zeros(len(x)), x[:, 1], x[:, 2])
+    return from_half_difference(x[:, 0], np.zeros(len(x)), x[:, 1], x[:, 2])
 
 
 def _cartesian(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

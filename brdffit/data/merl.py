@@ -39,6 +39,7 @@ from .._files import atomic_path, reading
 from ..checks import choice, whole_number
 from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
+from ..physics.geometry import from_half_difference
 from .samples import Provenance, Samples
 
 #: Table dimensions (θh, θd, φd bins), as in the header.
@@ -70,14 +71,7 @@ def bin_directions() -> tuple[np.ndarray, np.ndarray]:
     Some point below the horizon (``z ≤ 0``); MERL never looks those bins up.
     """
     theta_h, theta_d, phi_d = (a.reshape(-1) for a in bin_angles())
-    dx = np.sin(theta_d) * np.cos(phi_d)
-    dy = np.sin(theta_d) * np.sin(phi_d)
-    dz = np.cos(theta_d)
-    cos_h, sin_h = np.cos(theta_h), np.sin(theta_h)
-    # R_y(θh) (x, y, z) = (x cos θh + z sin θh, y, -x sin θh + z cos θh); wo uses d' = (-dx, -dy, dz).
-    wi = np.stack([dx * cos_h + dz * sin_h, dy, -dx * sin_h + dz * cos_h], axis=-1)
-    wo = np.stack([-dx * cos_h + dz * sin_h, -dy, dx * sin_h + dz * cos_h], axis=-1)
-    return wi, wo
+    return from_half_difference(theta_h, np.zeros_like(theta_h), theta_d, phi_d)
 
 
 # ---------------------------------------------------------------------- reading

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ..physics.geometry import half_vector, zenith_degrees
+from ..physics.geometry import to_half_difference
 from .reciprocity import MIN_PAIRS, reciprocity
 from .samples import Provenance, Samples
 
@@ -12,9 +12,8 @@ CELL = 10
 
 def half_difference_angles(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
     """θh (half vector from the normal) and θd (light from the half vector), degrees (Rusinkiewicz 1998)."""
-    half = half_vector(samples.wi, samples.wo)
-    theta_d = np.degrees(np.arccos(np.clip(np.sum(half * samples.wi, axis=1), -1.0, 1.0)))
-    return zenith_degrees(half), theta_d
+    theta_h, _, theta_d, _ = to_half_difference(samples.wi, samples.wo)
+    return np.degrees(theta_h), np.degrees(theta_d)
 
 
 def describe(samples: Samples, format_name: str) -> str:

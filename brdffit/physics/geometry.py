@@ -68,6 +68,43 @@ def half_vector(wi: Directions, wo: Directions) -> Directions:
     return summed / xp.sqrt(xp.sum(summed * summed, axis=-1, keepdims=True))
 
 
+def to_half_difference(wi: Directions, wo: Directions):
+    """Rusinkiewicz's (EGWR 1998) half/difference angles ``θh, φh, θd, φd`` (radians) of the pairs ``wi``, ``wo``.
+
+    ``h = normalize(wi + wo)`` has zenith ``θh`` and azimuth ``φh``; the difference vector
+    ``d = R_y(−θh) R_z(−φh) wi`` (the light seen from the half vector's frame) has zenith ``θd`` and azimuth
+    ``φd``. Isotropic BRDFs depend on ``θh, θd, φd`` only (MERL's table, Matusik et al. 2003). The inverse is
+    :func:`from_half_difference`. numpy or JAX.
+    """
+    xp = namespace(wi, wo)
+    theta_h, phi_h = direction_to_spherical(half_vector(wi, wo))
+    cos_p, sin_p, cos_t, sin_t = xp.cos(phi_h), xp.sin(phi_h), xp.cos(theta_h), xp.sin(theta_h)
+    x = cos_p * wi[..., 0] + sin_p * wi[..., 1]  # R_z(−φh) wi
+    y = -sin_p * wi[..., 0] + cos_p * wi[..., 1]
+    d = xp.stack([cos_t * x - sin_t * wi[..., 2], y, sin_t * x + cos_t * wi[..., 2]], axis=-1)  # R_y(−θh)
+    theta_d, phi_d = direction_to_spherical(d)
+    return theta_h, phi_h, theta_d, phi_d
+
+
+def from_half_difference(theta_h, phi_h, theta_d, phi_d) -> tuple[Directions, Directions]:
+    """``wi, wo`` (N, 3) of Rusinkiewicz's angles (radians), the inverse of :func:`to_half_difference`:
+    ``wi = R_z(φh) R_y(θh) d(θd, φd)`` and ``wo = R_z(φh) R_y(θh) (−d_x, −d_y, d_z)``. numpy or JAX."""
+    xp = namespace(theta_h, phi_h, theta_d, phi_d)
+    d = spherical_to_direction(theta_d, phi_d)
+    mirrored = d * xp.asarray([-1.0, -1.0, 1.0])
+    return _rotated(d, theta_h, phi_h), _rotated(mirrored, theta_h, phi_h)
+
+
+def _rotated(v, theta_h, phi_h):
+    """``R_z(φh) R_y(θh) v``: ``v`` from the frame whose ``z`` is the half vector ``(θh, φh)``."""
+    xp = namespace(v)
+    cos_t, sin_t, cos_p, sin_p = xp.cos(theta_h), xp.sin(theta_h), xp.cos(phi_h), xp.sin(phi_h)
+    x = cos_t * v[..., 0] + sin_t * v[..., 2]
+    z = -sin_t * v[..., 0] + cos_t * v[..., 2]
+    y = v[..., 1]
+    return xp.stack([cos_p * x - sin_p * y, sin_p * x + cos_p * y, z], axis=-1)
+
+
 def mirror_direction(w: Directions) -> Directions:
     """Mirror image of ``w`` about the normal: ``(-x, -y, z)``."""
     xp = namespace(w)

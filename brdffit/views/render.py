@@ -46,6 +46,7 @@ from .._jax import jit
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
+from ..physics.geometry import to_half_difference
 from ..physics.models import Model, Params, model_for
 
 #: The view direction in world (= camera) coordinates: towards the viewer.
@@ -174,19 +175,8 @@ def rusinkiewicz_embedding(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     ``dθh² + dθd² + sin²θd dφd²`` (the θd term stretched by at most ``sqrt(1 + ¼cos²θd) ≤ 1.12``). No fold
     ``φd → −φd`` (bilateral symmetry) is assumed: MERL's lookup does not assume it either.
     """
-    half = wi + wo
-    half = half / np.linalg.norm(half, axis=-1, keepdims=True)
-    theta_h = np.arccos(np.clip(half[:, 2], -1.0, 1.0))
-    phi_h = np.arctan2(half[:, 1], half[:, 0])
-    # d = R_y(-θh) R_z(-φh) wi
-    cos_p, sin_p = np.cos(phi_h), np.sin(phi_h)
-    x = cos_p * wi[:, 0] + sin_p * wi[:, 1]
-    y = -sin_p * wi[:, 0] + cos_p * wi[:, 1]
-    cos_t, sin_t = np.cos(theta_h), np.sin(theta_h)
-    d_x = cos_t * x - sin_t * wi[:, 2]
-    d_z = sin_t * x + cos_t * wi[:, 2]
-    theta_d = np.arccos(np.clip(d_z, -1.0, 1.0))
-    twice_phi_d = 2.0 * np.arctan2(y, d_x)
+    theta_h, _, theta_d, phi_d = to_half_difference(np.asarray(wi, dtype=float), np.asarray(wo, dtype=float))
+    twice_phi_d = 2.0 * phi_d
     radius = 0.5 * np.sin(theta_d)
     return np.stack([theta_h, theta_d, radius * np.cos(twice_phi_d), radius * np.sin(twice_phi_d)], axis=-1)
 

@@ -8,10 +8,12 @@ from conftest import random_directions
 
 from brdffit.physics.geometry import (
     direction_to_spherical,
+    from_half_difference,
     half_vector,
     mirror_direction,
     safe_power,
     spherical_to_direction,
+    to_half_difference,
 )
 
 
@@ -68,3 +70,24 @@ def test_safe_power(exponent):
     np.testing.assert_allclose(values, expected, rtol=2e-13)
     for grad in jax.vmap(jax.grad(safe_power, argnums=(0, 1)), in_axes=(0, None))(base, jnp.asarray(exponent)):
         assert np.all(np.isfinite(grad))
+
+
+def test_half_difference_angles_round_trip_and_known_pairs(rng):
+    """Rusinkiewicz's angles and back, on the host and in JAX; a mirror pair has θd = θi and θh = 0, a pair at
+    the same direction θd = 0; swapping wi and wo turns φd by π."""
+    theta_h, phi_h = rng.uniform(0, 1.2, 200), rng.uniform(-3, 3, 200)
+    theta_d, phi_d = rng.uniform(0.01, 1.2, 200), rng.uniform(-3, 3, 200)
+    wi, wo = from_half_difference(theta_h, phi_h, theta_d, phi_d)
+    np.testing.assert_allclose(np.linalg.norm(wi, axis=1), 1.0, rtol=1e-15)
+    for back, given in zip(to_half_difference(wi, wo), (theta_h, phi_h, theta_d, phi_d), strict=True):
+        np.testing.assert_allclose(np.angle(np.exp(1j * (back - given))), 0.0, atol=1e-12)  # azimuths modulo 2π
+    traced = jax.jit(to_half_difference)(jnp.asarray(wi), jnp.asarray(wo))
+    for host, device in zip(to_half_difference(wi, wo), traced, strict=True):
+        np.testing.assert_allclose(host, device, rtol=0, atol=1e-12)
+    light = spherical_to_direction(np.array([0.7]), np.array([0.3]))
+    mirror = light * np.array([-1.0, -1.0, 1.0])
+    angles = to_half_difference(light, mirror)
+    np.testing.assert_allclose([angles[0][0], angles[2][0]], [0.0, 0.7], atol=1e-12)
+    np.testing.assert_allclose(to_half_difference(light, light)[2], 0.0, atol=1e-7)
+    swapped = to_half_difference(wo, wi)[3]
+    np.testing.assert_allclose(np.angle(np.exp(1j * (swapped - phi_d - np.pi))), 0.0, atol=1e-12)

@@ -8,7 +8,7 @@ from paths import EXAMPLE
 
 import data_synth
 from brdffit import BrdfInputError, evaluate, load_samples
-from brdffit.data.alta import half_difference_to_directions
+from brdffit.physics.geometry import from_half_difference
 from brdffit.views.render import (
     LIGHTS,
     LUMINANCE_WEIGHTS,
@@ -69,7 +69,7 @@ def test_the_rusinkiewicz_embedding_recovers_the_angles_and_is_reciprocal(rng):
     n = 2000
     theta_h, theta_d = rng.uniform(0, np.pi / 2, (2, n))
     phi_h, phi_d = rng.uniform(-np.pi, np.pi, (2, n))
-    wi, wo = half_difference_to_directions(theta_h, phi_h, theta_d, phi_d)
+    wi, wo = from_half_difference(theta_h, phi_h, theta_d, phi_d)
     point = rusinkiewicz_embedding(wi, wo)
     radius = 0.5 * np.sin(theta_d)
     expected = np.stack([theta_h, theta_d, radius * np.cos(2 * phi_d), radius * np.sin(2 * phi_d)], axis=-1)
@@ -211,7 +211,7 @@ def _nearest_neighbour_tolerance(params: dict, size: int, lights: str) -> np.nda
         wi = frame @ np.asarray(light.direction)
         lit = wi[:, 2] > 0
         angles = _rusinkiewicz_angles(wi[lit], wo[lit])
-        centre = evaluate("ward", params, *half_difference_to_directions(angles[0], 0 * angles[0], *angles[1:]))
+        centre = evaluate("ward", params, *from_half_difference(angles[0], 0 * angles[0], *angles[1:]))
         squares = 0.0
         for axis, width in enumerate((step, step, step / np.maximum(np.sin(angles[1]), 1e-9))):
             largest = 0.0
@@ -219,7 +219,7 @@ def _nearest_neighbour_tolerance(params: dict, size: int, lights: str) -> np.nda
                 moved = [a.copy() for a in angles]
                 moved[axis] = moved[axis] + sign * width
                 moved[0], moved[1] = np.clip(moved[0], 0, np.pi / 2), np.clip(moved[1], 0, np.pi / 2)
-                pair_in, pair_out = half_difference_to_directions(moved[0], 0 * moved[0], moved[1], moved[2])
+                pair_in, pair_out = from_half_difference(moved[0], 0 * moved[0], moved[1], moved[2])
                 above = (pair_in[:, 2] > 0) & (pair_out[:, 2] > 0)
                 value = np.zeros_like(centre)
                 value[above] = evaluate("ward", params, pair_in[above], pair_out[above])
