@@ -3,7 +3,8 @@
 * the samples as read are not reciprocal (``data/reciprocity.py``): their quantity is probably wrong;
 * a lobe contributes less than :data:`DEAD_SHARE` of the model at every sample: it fits nothing;
 * a parameter lies beyond its plausible range (``physics/domains.py``: a roughness above 2, an exponent
-  above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1);
+  above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1), or a bounded one (Schlick's ``f0``)
+  ends on an end of its domain: the optimum is against the bound;
 * the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives (one line
   per channel);
 * a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
@@ -16,10 +17,13 @@ from .._jax import float64, jit
 from ..data.reciprocity import reciprocity
 from ..data.samples import Samples
 from ..physics.geometry import above_horizon, spherical_to_direction
+from ..physics.domains import UnitInterval
 from ..physics.models import Model, Params
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
 DEAD_SHARE = 1e-3
+#: A parameter of a bounded domain this close to one of its ends ended against it.
+EDGE = 1e-6
 #: Incidence zeniths (degrees) at which the directional albedo is checked.
 ALBEDO_INCIDENCE = (0.0, 30.0, 60.0, 80.0)
 #: A directional albedo counts as above 1 beyond this (quadrature rounds), and only where two grids agree.
@@ -92,7 +96,12 @@ def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> lis
         model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True
     ):
         low, high = domain.plausible
-        if value > high:
+        if isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE:
+            found.append(
+                f"{label} = {value:.10g} lies on an end of its domain {domain.text}: the fit ended against the bound,"
+                " where the model may not describe the data"
+            )
+        elif value > high:
             found.append(f"{label} = {value:.4g} is beyond its plausible range (≤ {high:g})")
         elif value < low:
             found.append(f"{label} = {value:.10g} is below its plausible range (≥ {low:.10g})")

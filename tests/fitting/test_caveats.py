@@ -60,6 +60,19 @@ def test_implausible_parameters_and_albedos_above_one(oak):
     )
 
 
+def test_a_bounded_parameter_on_an_end_of_its_domain_is_said(oak):
+    """Cook-Torrance with Schlick's Fresnel fitted to the Ward example ends at f0 = 1 (F = 1 everywhere): the
+    optimum lies against the bound (20 starts and a start at f0 = 0.8 end there too), which the fit must say."""
+    model = get_model("cook-torrance")
+    on_edge = {"kd": [0.16, 0.11, 0.065], "ks": [0.018, 0.015, 0.0094], "m": 0.18}
+    for f0, said in ((1.0, True), (1 - 1e-9, True), (0.0, True), (0.98, False), (1e-4, False)):
+        found = caveats(model, oak, model.dictionary.to_params(on_edge | {"f0": f0}))
+        assert any(line.startswith("f0 = ") and "lies on an end of its domain [0, 1]" in line for line in found) is said
+    with pytest.warns(FitWarning, match="f0 = 1 lies on an end of its domain"):
+        result = fit(oak, "cook-torrance")
+    assert result.params["f0"] > 1 - 1e-6 and any("f0 = " in line for line in result.warnings)
+
+
 def test_a_directional_albedo_the_grid_cannot_resolve_says_nothing(oak):
     """A mirror-sharp lobe (α = 0.001, narrower than the quadrature grid) is not judged: no false alarm."""
     model = get_model("ward")
