@@ -157,7 +157,7 @@ def _uncertainty_settings(args: argparse.Namespace):
     """The MCMC settings (None unless ``--uncertainty mcmc``), after every check of the uncertainty options."""
     from ..uncertainty.mcmc import MCMC
     from ..uncertainty.methods import check_options
-    from ..views.corner import check_figure_path
+    from ..views.figures import check_figure_path
 
     check_options(args.uncertainty, chain=args.chain if args.uncertainty == "mcmc" else None)
     method = args.uncertainty

@@ -2,30 +2,16 @@
 
 import logging
 import os
-from pathlib import Path
 
 import numpy as np
 
-from .._files import atomic_path
 from .._jax import float64
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
+from .figures import check_figure_path, save_figure
 
-#: File types ``corner_plot`` writes (matplotlib chooses the format by suffix).
-FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 #: Draws taken from the Laplace Gaussian when a result has no MCMC draws.
 GAUSSIAN_DRAWS = 20_000
-
-
-def check_figure_path(path, argument: str = "path") -> Path:
-    """``path`` if matplotlib can write its suffix and its folder exists; ``argument`` names it in errors."""
-    path = Path(path)
-    where = Argument(argument, str(path))
-    if path.suffix.lower() not in FIGURE_SUFFIXES:
-        raise BrdfInputError(where, f": the file must end in {', '.join(FIGURE_SUFFIXES)}")
-    if not path.parent.is_dir():
-        raise BrdfInputError(where, f": folder {path.parent} does not exist")
-    return path
 
 
 def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, truths=None, seed: int = 0):
@@ -85,8 +71,7 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
     what = "MCMC posterior" if result.draws is not None else f"{method} Gaussian"
     figure.suptitle(f"{result.model}: {what} (lines: fitted optimum)", y=1.02)
     if path is not None:
-        with atomic_path(path) as temporary:
-            figure.savefig(temporary, format=path.suffix[1:].lower(), dpi=110, bbox_inches="tight")
+        save_figure(figure, path, dpi=110, bbox_inches="tight")
     return figure
 
 

@@ -8,9 +8,16 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from .._files import atomic_path
+from ..data.samples import Samples
+from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
 from ..physics.models.specs import spec_of
+
+#: File types figures are written as (matplotlib chooses the format by suffix).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 #: Colours of the first channels (r, g, b look like themselves); further channels take matplotlib's cycle.
 CHANNEL_COLOURS = {"r": "#d62728", "g": "#2ca02c", "b": "#1f77b4", "value": "#333333", "y": "#333333"}
@@ -36,9 +43,36 @@ def channel_colour(channels: Sequence[str], index: int) -> str:
     return f"C{index % 10}"
 
 
-def save_figure(figure, path: str | os.PathLike, dpi: int = 120) -> Path:
-    """Write ``figure`` to ``path`` (format from the suffix) atomically: a temporary file renamed into place."""
+def check_figure_path(path, argument: str = "path") -> Path:
+    """``path`` if matplotlib can write its suffix and its folder exists; ``argument`` names it in errors."""
+    path = Path(path)
+    where = Argument(argument, str(path))
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        raise BrdfInputError(where, f": the file must end in {', '.join(FIGURE_SUFFIXES)}")
+    if not path.parent.is_dir():
+        raise BrdfInputError(where, f": folder {path.parent} does not exist")
+    return path
+
+
+def checked_samples(samples) -> Samples:
+    """``samples`` if it is a :class:`Samples`, else a one-line error naming the argument."""
+    if not isinstance(samples, Samples):
+        kind = f"an empty {type(samples).__name__}" if isinstance(samples, Sequence) and not samples else None
+        raise BrdfInputError(
+            Argument("samples"), f" must be Samples (from brdffit.load_samples), got {kind or type(samples).__name__}"
+        )
+    return samples
+
+
+def evenly_spread(count: int, wanted: int) -> np.ndarray:
+    """Indices of ``wanted`` items (all if fewer) spread evenly over ``count``, the first and last included."""
+    return np.unique(np.round(np.linspace(0, count - 1, min(wanted, count))).astype(int))
+
+
+def save_figure(figure, path: str | os.PathLike, dpi: int = 120, **options) -> Path:
+    """Write ``figure`` to ``path`` (format from the suffix) atomically: a temporary file renamed into place.
+    ``options`` go to matplotlib's ``savefig`` (``bbox_inches="tight"``)."""
     path = Path(path)
     with atomic_path(path) as temporary:
-        figure.savefig(temporary, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
+        figure.savefig(temporary, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png", **options)
     return path

@@ -18,7 +18,7 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
-from .figures import as_list, label, save_figure
+from .figures import as_list, check_figure_path, label, save_figure
 from .render import (
     LIGHTS,
     MAX_DISTANCE_DEGREES,
@@ -73,6 +73,7 @@ def sphere(
         raise BrdfInputError(Argument("samples"), f" must be Samples or None, got {type(samples).__name__}")
     choice("lights", lights, LIGHTINGS)
     size = whole_number("size", size, minimum=16, maximum=2048)
+    path = None if path is None else check_figure_path(path)  # before the work
     lightings = tuple(LIGHTS) if lights == "both" else (lights,)
     inside, _ = sphere_normals(size)
 

@@ -1,0 +1,178 @@
+"""Maps of a fit's residuals, in the units of its loss, to see where a model misses the data.
+
+A goniometer's data (few light directions) get one polar map per light direction over the viewer's hemisphere
+(``θo`` as the radius, ``φo − φi`` as the angle); dense or random data one binned map over Rusinkiewicz's (1998)
+half and difference angles ``(θh, θd)``. Colours diverge about 0 with symmetric limits: red where the model lies
+above the data, blue below.
+"""
+
+import os
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..data.samples import Samples
+from ..data.summary import half_difference_angles
+from ..errors import Argument, BrdfInputError
+from ..fitting.losses import LOSSES
+from ..fitting.results import FitResult
+from ..physics.geometry import direction_to_spherical
+from .figures import check_figure_path, checked_samples, evenly_spread, label, save_figure
+
+#: Data with at most this many distinct light directions are a goniometer's: one map per light direction.
+MAX_LIGHTS = 12
+#: At most this many maps; more light directions are evenly chosen among them (in increasing θi).
+MAX_MAPS = 6
+#: Maps per row.
+MAP_COLUMNS = 3
+#: The colour limits are ± this percentile of the |residuals| shown, so a few outliers do not wash out the rest.
+LIMIT_PERCENTILE = 99
+#: Bins per axis of the (θh, θd) map, the finest that leave on average this many samples per bin.
+HALF_DIFFERENCE_BINS = (90, 60, 45, 30, 18, 9)
+SAMPLES_PER_BIN = 10
+COLOURMAP = "RdBu_r"
+
+
+def residuals(result: FitResult, samples: Samples, *, path: str | os.PathLike | None = None) -> Figure:
+    """Where the fit ``result`` misses ``samples``: its residuals (``result.residuals``, the loss's units, ``T(f) −
+    T(y)`` scaled by weight and sigma; > 0 where the model lies above the data), averaged over the channels.
+
+    Goniometer data (at most :data:`MAX_LIGHTS` distinct light directions, ``Samples.light_directions``): one polar
+    map per light direction (at most :data:`MAX_MAPS`, evenly chosen), each sample a dot at radius θo (degrees) and
+    angle ``φo − φi`` (0 towards the light, on the left; 180° the mirror side, on the right), the light's direction
+    marked ×, the mirror direction +. Other data: the mean residual in bins of the half and difference angles
+    ``(θh, θd)`` (Rusinkiewicz 1998, degrees), bins without samples left grey. The colour scale is diverging,
+    centred at 0, with limits ± the :data:`LIMIT_PERCENTILE`-th percentile of the |residuals| shown (of the bin
+    means, for the binned map). ``path``: also save the figure there (``.png``, ``.pdf``, ``.svg``).
+    Returns the matplotlib :class:`~matplotlib.figure.Figure`.
+    """
+    if not isinstance(result, FitResult):
+        raise BrdfInputError(Argument("result"), f" must be one FitResult, got {type(result).__name__}")
+    checked_samples(samples)
+    if tuple(result.channels) != tuple(samples.channels):
+        raise BrdfInputError(
+            Argument("result"),
+            f": {label(result)} has channels {', '.join(result.channels)} but the samples have"
+            f" {', '.join(samples.channels)}",
+        )
+    path = None if path is None else check_figure_path(path)
+    mean_residual = np.mean(result.residuals(samples), axis=1)
+    lights, light_index = samples.light_directions()
+    if len(lights) <= MAX_LIGHTS:
+        figure = _light_maps(samples, mean_residual, light_index, len(lights), colour_bar_label(result, samples))
+    else:
+        figure = _half_difference_map(samples, mean_residual, colour_bar_label(result, samples))
+    figure.suptitle(f"{label(result)} on {samples.source}: where the fit misses", fontsize=11)
+    if path is not None:
+        save_figure(figure, path)
+    return figure
+
+
+def colour_bar_label(result: FitResult, samples: Samples) -> str:
+    """What the colours are: the loss's residual, how it is scaled, over which channels, and its sign."""
+    scaled = (" × √weight" if samples.weight is not None else "") + (" ÷ σ" if samples.sigma is not None else "")
+    channels = samples.channels[0] if samples.n_channels == 1 else f"mean of {samples.n_channels} channels"
+    return f"{result.loss}-loss residual{scaled} ({channels})\n{LOSSES[result.loss].summary}\n> 0: model above the data"
+
+
+def symmetric_limit(values: np.ndarray) -> float:
+    """± this limit holds the :data:`LIMIT_PERCENTILE`-th percentile of |values| (finite ones; 1 if all are 0)."""
+    magnitudes = np.abs(values[np.isfinite(values)])
+    limit = float(np.percentile(magnitudes, LIMIT_PERCENTILE)) if magnitudes.size else 0.0
+    return limit if limit > 0 else 1.0
+
+
+def _light_maps(
+    samples: Samples, mean_residual: np.ndarray, light_index: np.ndarray, n_lights: int, bar_label: str
+) -> Figure:
+    theta_i = samples.theta_i
+    # Lights in increasing θi (the mean over the samples that share one), then evenly chosen.
+    order = np.argsort([np.mean(theta_i[light_index == k]) for k in range(n_lights)], kind="stable")
+    shown = order[evenly_spread(n_lights, MAX_MAPS)]
+    selected = np.isin(light_index, shown)
+    limit = symmetric_limit(mean_residual[selected])
+    columns = min(MAP_COLUMNS, len(shown))
+    rows = -(-len(shown) // columns)
+    figure = Figure(figsize=(0.4 + 3.3 * columns + 1.6, 0.7 + 3.4 * rows), layout="constrained")
+    _, phi_i = direction_to_spherical(samples.wi)
+    _, phi_o = direction_to_spherical(samples.wo)
+    theta_o = samples.theta_o
+    mappable = None
+    axes = []
+    for index, light in enumerate(shown):
+        members = light_index == light
+        axis = figure.add_subplot(rows, columns, index + 1, projection="polar")
+        axes.append(axis)
+        axis.set_theta_zero_location("W")  # towards the light on the left, the mirror side on the right
+        axis.set_theta_direction(-1)
+        delta = np.mod(phi_o[members] - phi_i[members], 2 * np.pi)
+        order_drawn = np.argsort(np.abs(mean_residual[members]))  # the largest residuals on top
+        mappable = axis.scatter(
+            delta[order_drawn],
+            theta_o[members][order_drawn],
+            c=mean_residual[members][order_drawn],
+            s=_dot_area(int(members.sum())),
+            cmap=COLOURMAP,
+            vmin=-limit,
+            vmax=limit,
+            linewidths=0,
+        )
+        light_theta = float(np.mean(theta_i[members]))
+        axis.plot([np.pi], [light_theta], marker="+", color="k", markersize=9, linestyle="", gid="mirror")
+        axis.plot([0.0], [light_theta], marker="x", color="k", markersize=6, linestyle="", gid="light")
+        axis.set_rlim(0, 90)
+        axis.set_rticks([30, 60])
+        axis.set_rlabel_position(67.5)  # between the azimuth labels
+        axis.set_yticklabels(["30°", "60°"], fontsize=7)
+        axis.tick_params(axis="x", labelsize=7)
+        light_phi = float(np.degrees(phi_i[members][0]))
+        azimuth = f", φi = {light_phi:.3g}°" if abs(light_phi) > 0.25 and light_theta > 0.25 else ""
+        axis.set_title(f"θi = {light_theta:.3g}°{azimuth} ({int(members.sum())} samples)", fontsize=9)
+    bar = figure.colorbar(mappable, ax=axes, shrink=0.8, extend="both")
+    bar.set_label(bar_label, fontsize=8)
+    shown_note = f"{len(shown)} of {n_lights} light directions; " if len(shown) < n_lights else ""
+    figure.text(
+        0.01,
+        0.005,
+        f"{shown_note}angle: φo − φi (0° towards the light), radius: θo (0–90°); × the light, + the mirror direction",
+        fontsize=8,
+        color="0.3",
+    )
+    return figure
+
+
+def _half_difference_map(samples: Samples, mean_residual: np.ndarray, bar_label: str) -> Figure:
+    theta_h, theta_d = half_difference_angles(samples)
+    bins = next((n for n in HALF_DIFFERENCE_BINS if samples.n_samples >= SAMPLES_PER_BIN * n * n), 9)
+    edges = np.linspace(0.0, 90.0, bins + 1)
+    column = np.clip(np.searchsorted(edges, theta_h, side="right") - 1, 0, bins - 1)
+    row = np.clip(np.searchsorted(edges, theta_d, side="right") - 1, 0, bins - 1)
+    cell = row * bins + column
+    counts = np.bincount(cell, minlength=bins * bins)
+    sums = np.bincount(cell, weights=mean_residual, minlength=bins * bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = np.where(counts > 0, sums / counts, np.nan).reshape(bins, bins)
+    limit = symmetric_limit(means)
+    figure = Figure(figsize=(6.4, 5.0), layout="constrained")
+    axis = figure.add_subplot()
+    axis.set_facecolor("0.85")
+    mesh = axis.pcolormesh(edges, edges, np.ma.masked_invalid(means), cmap=COLOURMAP, vmin=-limit, vmax=limit)
+    axis.set_xlabel("θh (°), half vector from the normal")
+    axis.set_ylabel("θd (°), light from the half vector")
+    axis.set_xlim(0, 90)
+    axis.set_ylim(0, 90)
+    axis.set_xticks(np.arange(0, 91, 15))
+    axis.set_yticks(np.arange(0, 91, 15))
+    axis.set_aspect("equal")
+    axis.set_title(
+        f"mean residual in {90 / bins:.3g}° × {90 / bins:.3g}° bins ({samples.n_samples} samples; grey: none)",
+        fontsize=9,
+    )
+    bar = figure.colorbar(mesh, ax=axis, extend="both")
+    bar.set_label(bar_label, fontsize=8)
+    return figure
+
+
+def _dot_area(count: int) -> float:
+    """Dot area (points²): dots that touch for a dense grid of a thousand, larger when few."""
+    return float(np.clip(15000.0 / max(count, 1), 3.0, 80.0))
