@@ -12,6 +12,7 @@ The public API::
     result.uncertainty["stderr"], print(result)                  # errors; the table shows value ± error
     sampled = brdffit.sample_posterior(result, samples)          # MCMC for an existing result; sampled.draws
     brdffit.corner_plot(sampled, "corner.png")
+    brdffit.plots.slices([result, other], samples, path="slices.png")  # also polar, residuals, sphere
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
 below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
@@ -74,10 +75,19 @@ if TYPE_CHECKING:
     from .uncertainty.laplace import laplace_uncertainty as laplace_uncertainty
     from .uncertainty.mcmc import MCMC as MCMC
     from .uncertainty.mcmc import sample_posterior as sample_posterior
+    from .views import plots as plots
     from .views.corner import corner_plot as corner_plot
 
 
+#: Modules of the public API, also imported on first use.
+_MODULES = {"plots": ".views.plots"}
+
+
 def __getattr__(name: str):
+    if name in _MODULES:
+        module = importlib.import_module(_MODULES[name], __name__)
+        globals()[name] = module
+        return module
     if name in _EXPORTS:
         value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
         globals()[name] = value
@@ -86,7 +96,7 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+    return sorted([*globals(), *_EXPORTS, *_MODULES])
 
 
-__all__ = ["__version__", *_EXPORTS]
+__all__ = ["__version__", *_EXPORTS, *_MODULES]

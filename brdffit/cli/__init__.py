@@ -1,8 +1,8 @@
 """The ``brdffit`` command line: the parser, and a module per command that it loads on demand.
 
-Each command module (``fit.py``, ``compare.py``, ``synth.py``, ``models.py``, ``info.py``, ``convert.py``) has
-``configure(parser)``, which adds its arguments, and ``run(args) -> int``. Only the command being run is
-imported and configured, so ``brdffit --help`` and ``--version`` import no JAX and no solver.
+Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``synth.py``, ``models.py``, ``info.py``,
+``convert.py``) has ``configure(parser)``, which adds its arguments, and ``run(args) -> int``. Only the command
+being run is imported and configured, so ``brdffit --help`` and ``--version`` import no JAX and no solver.
 
 Exit status: 0 success; 1 a fit did not converge (its result is still written, with ``converged: false``);
 2 bad input or usage, reported in one line on stderr, with nothing written; 130 interrupted (Ctrl-C), with
@@ -24,6 +24,7 @@ EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 COMMANDS = {
     "fit": "fit a model to samples files",
     "compare": "fit several models to one samples file and rank them by cross-validated loss",
+    "plot": "figures of fits against their samples: slices, polar plots, residual maps, lit spheres",
     "synth": "write synthetic samples of a model",
     "models": "list the models, their parameters and domains",
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",

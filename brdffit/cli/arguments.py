@@ -15,7 +15,15 @@ from typing import Any
 from ..errors import Argument, BrdfInputError
 
 #: Flags whose name is not the argument's with ``_`` as ``-`` (``max_theta`` → ``--max-theta``).
-FLAGS = {"n_starts": "--starts"}
+FLAGS = {
+    "n_starts": "--starts",
+    # brdffit plot's positional files and its -o
+    "results": "RESULT",
+    "result": "RESULT",
+    "samples": "SAMPLES",
+    "path": "-o",
+    "output": "-o",
+}
 
 
 def flag(name: str) -> str:

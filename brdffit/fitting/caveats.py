@@ -16,8 +16,8 @@ import numpy as np
 from .._jax import float64, jit
 from ..data.reciprocity import reciprocity
 from ..data.samples import Samples
-from ..physics.geometry import above_horizon, spherical_to_direction
 from ..physics.domains import UnitInterval
+from ..physics.geometry import above_horizon, spherical_to_direction
 from ..physics.models import Model, Params
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.

@@ -44,7 +44,7 @@ from .fit import MAX_STEPS, N_STARTS, compiled_solver, fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
 from .problem import Problem, build_problem, cost, residuals
-from .results import FitResult
+from .results import FitResult, read_json_object
 
 #: The criterion models are ranked by.
 CRITERION = "cv_loss"
@@ -86,9 +86,36 @@ class ModelScore:
             "cv_stderr": self.cv_stderr,
             "fold_losses": list(self.fold_losses),
             "converged": result.converged,
+            "n_steps": result.n_steps,
+            "message": result.message,
             "warnings": list(result.warnings),
             "params": result.params,
         }
+
+    @classmethod
+    def from_dict(cls, entry: dict[str, Any], comparison: dict[str, Any]) -> "ModelScore":
+        """One entry of a comparison file's ``models``; ``comparison`` is the whole file (its loss, channels)."""
+        result = FitResult(
+            model=entry["model"],
+            model_options=dict(entry["model_options"]),
+            channels=tuple(comparison["channels"]),
+            params=entry["params"],
+            loss=comparison["loss"],
+            cost=float(entry["cost"]),
+            rmse=float(entry["rmse"]),
+            n_samples=int(comparison["n_samples"]),
+            n_steps=int(entry.get("n_steps", 0)),
+            converged=bool(entry["converged"]),
+            message=str(entry.get("message", "")),
+            warnings=list(entry["warnings"]),
+        )
+        return cls(
+            entry["spec"],
+            int(entry["k"]),
+            *(_number(entry[key]) for key in ("aic", "bic", "cv_loss", "cv_stderr")),
+            [_number(value) for value in entry["fold_losses"]],
+            result,
+        )
 
 
 @dataclass(frozen=True)
@@ -128,7 +155,25 @@ class Comparison:
         }
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+        # Strict JSON: a fold without held-out values has no loss, written as null.
+        return json.dumps(_nulls(self.to_dict()), indent=2, allow_nan=False) + "\n"
+
+    @classmethod
+    def from_dict(cls, content: dict[str, Any], source: str = "comparison") -> "Comparison":
+        """A comparison file's content, checked: a one-line error for anything else."""
+        try:
+            return cls(
+                str(content["samples"]),
+                int(content["n_samples"]),
+                tuple(content["channels"]),
+                str(content["loss"]),
+                int(content["folds"]),
+                str(content["fold_kind"]),
+                int(content["seed"]),
+                [ModelScore.from_dict(entry, content) for entry in content["models"]],
+            )
+        except (KeyError, TypeError, ValueError) as error:
+            raise BrdfInputError(f"{source}: not a brdffit comparison file (missing or bad {error})") from None
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the comparison's JSON atomically."""
@@ -186,6 +231,32 @@ def compare(
         bar.close()
     ranked = sorted(scores, key=lambda score: (math.isnan(score.cv_loss), score.cv_loss))
     return Comparison(samples.source, samples.n_samples, samples.channels, loss, split.count, split.kind, seed, ranked)
+
+
+def is_comparison(content: dict[str, Any]) -> bool:
+    """Whether a JSON object is a comparison file (rather than a result file)."""
+    return "criterion" in content and "models" in content
+
+
+def load_comparison(path: str | os.PathLike) -> Comparison:
+    """Read a comparison file written by :meth:`Comparison.save` or ``brdffit compare -o``."""
+    return Comparison.from_dict(read_json_object(path, "brdffit comparison file"), str(path))
+
+
+def _number(value: Any) -> float:
+    """A JSON number, or null read as NaN."""
+    return math.nan if value is None else float(value)
+
+
+def _nulls(value: Any) -> Any:
+    """``value`` with every NaN float replaced by None (JSON null)."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, dict):
+        return {key: _nulls(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_nulls(item) for item in value]
+    return value
 
 
 def _model(one: str | Model) -> Model:

@@ -208,6 +208,11 @@ def save_result(result: FitResult, path: str | os.PathLike) -> None:
 
 def load_result(path: str | os.PathLike) -> FitResult:
     """Read a result file written by :func:`save_result` or ``brdffit fit``."""
+    return FitResult.from_dict(read_json_object(path, "brdffit result file"), str(path))
+
+
+def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
+    """The JSON object in the file ``path``, or a one-line error naming the file and ``what`` it should be."""
     path = Path(path)
     try:
         content = json.loads(path.read_text(encoding="utf-8"))
@@ -216,8 +221,8 @@ def load_result(path: str | os.PathLike) -> FitResult:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise BrdfInputError(f"{path}: not a readable JSON file ({error})") from None
     if not isinstance(content, dict):
-        raise BrdfInputError(f"{path}: not a brdffit result file (not a JSON object)")
-    return FitResult.from_dict(content, str(path))
+        raise BrdfInputError(f"{path}: not a {what} (not a JSON object)")
+    return content
 
 
 def _to_json(value: Any, indent: str = "") -> str:

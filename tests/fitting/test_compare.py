@@ -11,7 +11,7 @@ from paths import TAPE
 
 import data_synth
 from brdffit import BrdfInputError, FitWarning, Samples, fit, load_samples
-from brdffit.fitting.compare import compare, default_specs
+from brdffit.fitting.compare import Comparison, compare, default_specs, load_comparison
 from brdffit.fitting.folds import make_folds
 
 #: A gonioreflectometer grid: 6 light zeniths × 18 view zeniths × 24 azimuths.
@@ -104,3 +104,15 @@ def test_bad_arguments_are_refused_before_any_fit():
         compare(samples, ["ward"], "wrd")
     with pytest.raises(BrdfInputError, match=r"^folds=1 is not allowed"):
         compare(samples, ["ward"], folds=1)
+
+
+def test_a_comparison_file_reads_back(tmp_path):
+    name, options, params = CASES[1]
+    samples = data_synth.synthesize(name, params, *GRID, noise=0.01, seed=2, **options)
+    comparison = quiet(compare, samples, ["lambert", "ward"], folds=3)
+    comparison.save(tmp_path / "compare.json")
+    back = load_comparison(tmp_path / "compare.json")
+    assert back.to_dict() == comparison.to_dict()
+    assert back.best.result.to_dict() | {"fit": None} == comparison.best.result.to_dict() | {"fit": None}
+    with pytest.raises(BrdfInputError, match="not a brdffit comparison file"):
+        Comparison.from_dict({"criterion": "cv_loss", "models": []}, "x.json")

@@ -1,0 +1,134 @@
+"""``brdffit plot``: figures of one or more fits against the samples they were fitted to.
+
+``brdffit plot RESULT.json [RESULT.json …] SAMPLES --kind slices|polar|residuals|sphere|all [-o FILE | OUTDIR/]``.
+A comparison file (``brdffit compare -o``) counts as its best models. Every output path is checked, and the
+samples read, before any figure is drawn.
+"""
+
+import argparse
+import os
+from pathlib import Path
+
+from ..errors import BrdfInputError
+from . import EXIT_OK
+from .arguments import add_loading_options, load, output_file
+
+#: Fits a comparison file contributes: its best and those within one standard error of it, at most this many.
+FROM_A_COMPARISON = 4
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from ..views.plots import KINDS
+    from ..views.render import LIGHTS
+
+    parser.add_argument(
+        "files",
+        metavar="RESULT.json [RESULT.json …] SAMPLES",
+        nargs="+",
+        help="one or more result files (or a comparison file from brdffit compare -o), then the samples file",
+    )
+    parser.add_argument(
+        "--kind",
+        default="all",
+        metavar="KIND",
+        help=f"{', '.join(KINDS)} or all (default all: one file each)",
+    )
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="the figure (.png, .pdf, .svg), or a folder (OUTDIR/) for several; default SAMPLES-stem.KIND.png here",
+    )
+    parser.add_argument(
+        "--lights",
+        default="both",
+        metavar="L",
+        help=f"sphere: {', '.join(LIGHTS)} or both (default both, one row each)",
+    )
+    parser.add_argument(
+        "--incidences",
+        metavar="DEG,…",
+        help="slices and polar: the light zeniths to show (default: the data's, at most 4)",
+    )
+    add_loading_options(parser)
+    parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..checks import choice
+    from ..views.plots import KINDS
+
+    if len(args.files) < 2:
+        raise BrdfInputError("give one or more result files, then the samples file they were fitted to")
+    *result_paths, samples_path = args.files
+    kinds = list(KINDS) if args.kind == "all" else [choice("kind", args.kind, [*KINDS, "all"])]
+    incidences = _incidences(args.incidences)
+    results = [fit for path in result_paths for fit in _results(path)]
+    figures = [(kind, index) for kind in kinds for index in (range(len(results)) if kind == "residuals" else [None])]
+    outputs = output_paths(figures, results, args.output, samples_path, args.files)
+    samples = load(samples_path, args)
+    outputs[0].parent.mkdir(parents=True, exist_ok=True)
+    os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
+    written = []
+    for (kind, index), path in zip(figures, outputs, strict=True):
+        if kind == "residuals":
+            KINDS[kind](results[index], samples, path=path)
+        elif kind == "sphere":
+            KINDS[kind](results, samples, lights=args.lights, path=path)
+        else:
+            KINDS[kind](results, samples, incidences=incidences, path=path)
+        written.append(str(path))
+    print(f"wrote {', '.join(written)}")
+    return EXIT_OK
+
+
+def _results(path: str) -> list:
+    """The fits a file holds: a result file's one, or a comparison file's best (and those within one s.e.)."""
+    from ..fitting.compare import Comparison, is_comparison
+    from ..fitting.results import FitResult, read_json_object
+
+    content = read_json_object(path, "brdffit result or comparison file")
+    if not is_comparison(content):
+        return [FitResult.from_dict(content, path)]
+    comparison = Comparison.from_dict(content, path)
+    chosen = [score for score in comparison.models if comparison.within_one_stderr(score)]
+    return [score.result for score in (chosen or comparison.models[:1])[:FROM_A_COMPARISON]]
+
+
+def _incidences(text: str | None):
+    if text is None:
+        return None
+    try:
+        return [float(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise BrdfInputError(f"--incidences {text}: give light zeniths in degrees, separated by commas") from None
+
+
+def output_paths(figures, results, output: str | None, samples_path: str, inputs) -> list[Path]:
+    """Where each figure goes, checked before any work: ``-o FILE`` for one figure, a folder (``-o OUTDIR/``, or
+    the current folder) for several, named ``SAMPLES-stem.KIND[.SPEC].png``."""
+    from ..views.figures import check_figure_path
+
+    stem = Path(samples_path).stem
+    several_results = len(results) > 1
+
+    def name(kind: str, index: int | None) -> str:
+        from ..views.figures import label
+
+        which = f".{label(results[index]).replace(':', '-')}" if index is not None and several_results else ""
+        return f"{stem}.{kind}{which}.png"
+
+    as_folder = output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir())
+    if len(figures) > 1 and output is not None and not as_folder:
+        raise BrdfInputError(f"-o {output}: {len(figures)} figures need a folder; give OUTDIR/")
+    if output is not None and not as_folder:
+        path = output_file(output, "-o", inputs)
+        check_figure_path(output, argument="output")
+        return [path]
+    folder = Path(output) if output else Path(".")
+    if not folder.exists():  # created after every check, as fit's -o OUTDIR/
+        existing = next(parent for parent in folder.parents if parent.exists())
+        if not os.access(existing, os.W_OK):
+            raise BrdfInputError(f"-o {output}: folder {existing} is not writable")
+        return [folder / name(kind, index) for kind, index in figures]
+    return [output_file(folder / name(kind, index), "-o", inputs) for kind, index in figures]

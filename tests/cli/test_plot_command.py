@@ -1,0 +1,95 @@
+"""``brdffit plot`` end to end: every kind written where asked, bad input refused before any figure."""
+
+import json
+
+import pytest
+
+import data_synth
+from brdffit import fit, save_samples
+from brdffit.cli import main
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("plot")
+    samples = data_synth.synthesize(
+        "ward", {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.15}, *data_synth.hemisphere_grid(4, 9, 12), noise=0.01
+    )
+    save_samples(samples, folder / "ward.csv")
+    for model in ("ward", "lambert"):
+        fit(samples, model).save(folder / f"{model}.json")
+    rgb = data_synth.synthesize("lambert", {"rho_d": [0.2, 0.3, 0.4]}, *data_synth.hemisphere_grid(4, 9, 12))
+    save_samples(rgb, folder / "rgb.csv")
+    return folder
+
+
+def run(argv, capsys):
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_every_kind_into_a_folder(files, tmp_path, capsys):
+    out_folder = tmp_path / "figures"
+    status, out, err = run(
+        ["plot", files / "ward.json", files / "lambert.json", files / "ward.csv", "-o", f"{out_folder}/"], capsys
+    )
+    assert status == 0, err
+    names = sorted(path.name for path in out_folder.iterdir())
+    assert names == [
+        "ward.polar.png",
+        "ward.residuals.lambert.png",
+        "ward.residuals.ward.png",
+        "ward.slices.png",
+        "ward.sphere.png",
+    ]
+    assert all((out_folder / name).read_bytes().startswith(PNG) for name in names)
+    assert out.startswith("wrote ") and out.count(".png") == 5
+
+
+def test_one_kind_to_a_file_and_a_comparison_as_input(files, tmp_path, capsys):
+    comparison = tmp_path / "compare.json"
+    assert (
+        main(["compare", str(files / "ward.csv"), "--models", "lambert,ward", "--folds", "2", "-o", str(comparison)])
+        == 0
+    )
+    capsys.readouterr()
+    assert json.loads(comparison.read_text())["best"] == "ward"
+    status, _, err = run(
+        ["plot", comparison, files / "ward.csv", "--kind", "slices", "-o", tmp_path / "s.svg"], capsys
+    )
+    assert status == 0, err
+    assert (tmp_path / "s.svg").read_text().lstrip().startswith("<?xml")
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["{w}", "{s}", "--kind", "slice"],
+            "--kind 'slice' is not allowed; choose one of: slices, polar, residuals, sphere, all",
+        ),
+        (["{w}", "{s}", "-o", "{t}/one.png"], "-o {t}/one.png: 4 figures need a folder; give OUTDIR/"),
+        (["{w}", "{s}", "--kind", "polar", "-o", "{t}/x.jpg"], "-o {t}/x.jpg: the file must end in .png, .pdf, .svg"),
+        (["{w}", "{s}", "--kind", "polar", "-o", "{w}"], "is the input"),
+        (["{s}"], "give one or more result files, then the samples file they were fitted to"),
+        (
+            ["{w}", "{r}", "--kind", "slices", "-o", "{t}/c.png"],
+            "RESULT: ward has channels value but the samples have r, g, b",
+        ),
+        (
+            ["{w}", "{s}", "--incidences", "a,b", "--kind", "slices", "-o", "{t}/i.png"],
+            "--incidences a,b: give light zeniths",
+        ),
+        (["{w}", "{s}", "--kind", "sphere", "--lights", "sun", "-o", "{t}/l.png"], "--lights 'sun' is not allowed"),
+    ],
+)
+def test_bad_input_is_one_line_and_writes_nothing(files, tmp_path, capsys, argv, message):
+    where = {"w": files / "ward.json", "s": files / "ward.csv", "r": files / "rgb.csv", "t": tmp_path}
+    before = (files / "ward.json").read_bytes()
+    status, out, err = run(["plot", *(part.format(**where) for part in argv)], capsys)
+    assert status == 2 and out == "" and err.count("\n") == 1, err
+    assert message.format(**where) in err
+    assert list(tmp_path.iterdir()) == [] and (files / "ward.json").read_bytes() == before
