@@ -13,6 +13,7 @@ The public API::
     sampled = brdffit.sample_posterior(result, samples)          # MCMC for an existing result; sampled.draws
     brdffit.corner_plot(sampled, "corner.png")
     brdffit.plots.slices([result, other], samples, path="slices.png")  # also polar, residuals, sphere
+    brdffit.report(samples, path="report.html")                 # compare, fit, plot: one HTML file
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
 below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
@@ -48,6 +49,7 @@ _EXPORTS = {
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
     "corner_plot": ".views.corner",
+    "report": ".views.report",
     "enable_compilation_cache": ".cache",
 }
 
@@ -77,6 +79,7 @@ if TYPE_CHECKING:
     from .uncertainty.mcmc import sample_posterior as sample_posterior
     from .views import plots as plots
     from .views.corner import corner_plot as corner_plot
+    from .views.report import report as report
 
 
 #: Modules of the public API, also imported on first use.

@@ -1,8 +1,9 @@
 """The ``brdffit`` command line: the parser, and a module per command that it loads on demand.
 
-Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``synth.py``, ``models.py``, ``info.py``,
-``convert.py``) has ``configure(parser)``, which adds its arguments, and ``run(args) -> int``. Only the command
-being run is imported and configured, so ``brdffit --help`` and ``--version`` import no JAX and no solver.
+Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``report.py``, ``synth.py``, ``models.py``,
+``info.py``, ``convert.py``) has ``configure(parser)``, which adds its arguments, and ``run(args) -> int``.
+Only the command being run is imported and configured, so ``brdffit --help`` and ``--version`` import no JAX
+and no solver.
 
 Exit status: 0 success; 1 a fit did not converge (its result is still written, with ``converged: false``);
 2 bad input or usage, reported in one line on stderr, with nothing written; 130 interrupted (Ctrl-C), with
@@ -25,6 +26,7 @@ COMMANDS = {
     "fit": "fit a model to samples files",
     "compare": "fit several models to one samples file and rank them by cross-validated loss",
     "plot": "figures of fits against their samples: slices, polar plots, residual maps, lit spheres",
+    "report": "compare models on one samples file and write a self-contained HTML report",
     "synth": "write synthetic samples of a model",
     "models": "list the models, their parameters and domains",
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",

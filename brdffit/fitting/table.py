@@ -14,13 +14,13 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     options = f" ({options})" if options else ""
     size = f"{result.n_samples} samples × {len(result.channels)} channel(s)"
     lines = [f"{result.model}{options} fit{what}: {size}, loss {result.loss}"]
-    rows = list(_parameter_rows(result.params))
-    errors = dict(_parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
+    rows = list(parameter_rows(result.params))
+    errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
     label_width = max(len("parameter"), *(len(label) for label, _ in rows))
     columns = [str(c) for c in result.channels]
     cells = {
         label: [
-            _number(v, e, bool(errors))
+            value_with_error(v, e, bool(errors))
             for v, e in zip(_as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True)
         ]
         for label, value in rows
@@ -39,7 +39,7 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     return "\n".join(lines)
 
 
-def _parameter_rows(params: dict[str, Any]):
+def parameter_rows(params: dict[str, Any]):
     """(label, value) pairs in file order; Lafortune lobes become ``lobe 1 rho_s`` and so on."""
     for name, value in params.items():
         if name == "lobes":
@@ -54,7 +54,7 @@ def _as_list(value) -> list:
     return value if isinstance(value, list) else [value]
 
 
-def _number(value: float, error: float | None = None, has_error: bool = False) -> str:
+def value_with_error(value: float, error: float | None = None, has_error: bool = False) -> str:
     """``value`` to 6 significant digits, or ``value ± error`` with the error to 2 digits and the value to match.
 
     ``has_error`` with ``error`` None (undetermined) gives ``value ± ?``.

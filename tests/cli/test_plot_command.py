@@ -57,9 +57,7 @@ def test_one_kind_to_a_file_and_a_comparison_as_input(files, tmp_path, capsys):
     )
     capsys.readouterr()
     assert json.loads(comparison.read_text())["best"] == "ward"
-    status, _, err = run(
-        ["plot", comparison, files / "ward.csv", "--kind", "slices", "-o", tmp_path / "s.svg"], capsys
-    )
+    status, _, err = run(["plot", comparison, files / "ward.csv", "--kind", "slices", "-o", tmp_path / "s.svg"], capsys)
     assert status == 0, err
     assert (tmp_path / "s.svg").read_text().lstrip().startswith("<?xml")
 
