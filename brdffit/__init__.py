@@ -3,6 +3,7 @@
 The public API::
 
     samples = brdffit.load_samples("samples.csv")
+    print(brdffit.describe(samples))                             # what brdffit info prints
     result = brdffit.fit(samples, model="ward", loss="log")
     result.params, result.to_json(), result.predict(wi, wo)
     values = brdffit.evaluate("cook-torrance", params, wi, wo, fresnel="schlick")
@@ -37,6 +38,7 @@ _EXPORTS = {
     "Samples": ".data.samples",
     "load_samples": ".data.load",
     "save_samples": ".data.load",
+    "describe": ".data.summary",
     "LOSSES": ".fitting.losses",
     "FitResult": ".fitting.results",
     "load_result": ".fitting.results",
@@ -60,6 +62,7 @@ if TYPE_CHECKING:
     from .data.load import load_samples as load_samples
     from .data.load import save_samples as save_samples
     from .data.samples import Samples as Samples
+    from .data.summary import describe as describe
     from .errors import BrdfInputError as BrdfInputError
     from .errors import FitWarning as FitWarning
     from .errors import InputWarning as InputWarning

@@ -1,29 +1,57 @@
-"""The notebooks run: their code cells executed in order (no Jupyter needed), figures drawn off-screen."""
+"""The notebooks run: their code cells executed in order (no Jupyter needed), figures drawn off-screen.
 
+A cell's last expression is evaluated as Jupyter would display it; every figure shown (returned by a cell, or drawn
+with pyplot) must render to pixels that are finite and not blank.
+"""
+
+import ast
 import json
 import warnings
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 import pytest
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
 
 
+def run_cell(source: str, name: str, namespace: dict):
+    """Execute a cell; return the value of its last expression (what Jupyter displays), or None."""
+    tree = ast.parse(source)
+    last = tree.body.pop() if tree.body and isinstance(tree.body[-1], ast.Expr) else None
+    exec(compile(tree, name, "exec"), namespace)
+    if last is None:
+        return None
+    return eval(compile(ast.Expression(last.value), name, "eval"), namespace)
+
+
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[path.stem for path in NOTEBOOKS])
 def test_notebook_runs(notebook, monkeypatch):
+    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     import brdffit
 
     matplotlib.use("Agg")
     monkeypatch.chdir(notebook.parent)
     cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
     namespace: dict = {"__name__": "__notebook__"}
+    shown = []
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", brdffit.UncertaintyWarning)  # the notebook shows them on purpose
+        warnings.simplefilter("ignore", brdffit.UncertaintyWarning)  # the notebooks show them on purpose
+        warnings.simplefilter("ignore", brdffit.FitWarning)  # the losing models' caveats, shown in the comparison
         for cell in cells:
             if cell["cell_type"] == "code":
-                exec(compile("".join(cell["source"]), f"{notebook.name}", "exec"), namespace)
-    import matplotlib.pyplot as plt
-
-    assert plt.get_fignums(), "the notebook draws figures"
+                value = run_cell("".join(cell["source"]), notebook.name, namespace)
+                if isinstance(value, Figure):
+                    shown.append(value)
+    shown += [plt.figure(number) for number in plt.get_fignums()]
+    assert shown, "the notebook draws figures"
+    for figure in shown:
+        canvas = FigureCanvasAgg(figure)
+        canvas.draw()
+        pixels = np.asarray(canvas.buffer_rgba(), dtype=float)
+        assert np.all(np.isfinite(pixels)) and pixels.std() > 0
     plt.close("all")

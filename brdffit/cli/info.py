@@ -1,7 +1,6 @@
 """``brdffit info``: what a samples file holds, read as a fit would read it."""
 
 import argparse
-from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import add_loading_options, load
@@ -14,9 +13,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..data.load import detect_format
     from ..data.summary import describe
 
-    samples = load(args.input, args)
-    print(describe(samples, detect_format(Path(args.input), args.format)))
+    print(describe(load(args.input, args)))
     return EXIT_OK

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ..physics.geometry import to_half_difference
+from ..physics.geometry import direction_to_spherical, to_half_difference
 from .reciprocity import MIN_PAIRS, reciprocity
 from .samples import Provenance, Samples
 
@@ -16,12 +16,14 @@ def half_difference_angles(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
     return np.degrees(theta_h), np.degrees(theta_d)
 
 
-def describe(samples: Samples, format_name: str) -> str:
-    """A few lines a person reads to judge whether the samples can determine a model, and were read right."""
+def describe(samples: Samples, format_name: str | None = None) -> str:
+    """What ``brdffit info`` prints: a few lines a person reads to judge whether the samples can determine a model,
+    and were read right. ``format_name``: how to name the format (default: the one they were read from)."""
+    if format_name is None:
+        format_name = samples.provenance.format if samples.provenance else "arrays"
     n, c = samples.n_samples, samples.n_channels
     shown = ", ".join(samples.channels[:6]) + (f", … ({c} in all)" if c > 6 else "")
-    azimuth_i = np.arctan2(samples.wi[:, 1], samples.wi[:, 0])
-    azimuth_o = np.arctan2(samples.wo[:, 1], samples.wo[:, 0])
+    azimuth_i, azimuth_o = direction_to_spherical(samples.wi)[1], direction_to_spherical(samples.wo)[1]
     delta_phi = np.degrees(np.abs(np.angle(np.exp(1j * (azimuth_o - azimuth_i)))))
     theta_h, theta_d = half_difference_angles(samples)
     cells = np.unique((np.minimum(theta_h, 89.999) // CELL) * 100 + np.minimum(theta_d, 89.999) // CELL)

@@ -118,7 +118,6 @@ def check_report_path(path, argument: str = "path") -> Path:
 
 def _page(samples: Samples, comparison: Comparison, shown: list[FitResult]) -> str:
     source = html.escape(samples.source)
-    format_name = samples.provenance.format if samples.provenance else "arrays"
     today = datetime.date.today().isoformat()
     parts = [
         "<!DOCTYPE html>",
@@ -128,7 +127,7 @@ def _page(samples: Samples, comparison: Comparison, shown: list[FitResult]) -> s
         f'<p class="note">brdffit {__version__}, {today}. {samples.n_samples} samples × {samples.n_channels}'
         f" channel(s), loss {html.escape(comparison.loss)}.</p>",
         "<h2>The data</h2>",
-        f"<pre>{html.escape(describe(samples, format_name))}</pre>",
+        f"<pre>{html.escape(describe(samples))}</pre>",
         "<h2>Which model</h2>",
         _comparison_table(comparison),
     ]
