@@ -17,7 +17,9 @@ NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.i
 
 
 def run_cell(source: str, name: str, namespace: dict):
-    """Execute a cell; return the value of its last expression (what Jupyter displays), or None."""
+    """Execute a cell; return the value of its last expression (what Jupyter displays), or None. IPython's magics
+    (``%matplotlib inline``: show figures made without pyplot) are Jupyter's business and are left out here."""
+    source = "".join(line for line in source.splitlines(keepends=True) if not line.lstrip().startswith("%"))
     tree = ast.parse(source)
     last = tree.body.pop() if tree.body and isinstance(tree.body[-1], ast.Expr) else None
     exec(compile(tree, name, "exec"), namespace)

@@ -21,7 +21,6 @@ compiled solver: a fold is the whole problem with its held-out rows switched off
 folds cost a few Levenberg-Marquardt steps each and no compilation.
 """
 
-import json
 import math
 import os
 from collections.abc import Sequence
@@ -44,7 +43,7 @@ from .fit import MAX_STEPS, N_STARTS, compiled_solver, fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
 from .problem import Problem, build_problem, cost, residuals
-from .results import FitResult, read_json_object
+from .results import FitResult, json_text, read_json_object
 
 #: The criterion models are ranked by.
 CRITERION = "cv_loss"
@@ -156,7 +155,7 @@ class Comparison:
 
     def to_json(self) -> str:
         # Strict JSON: a fold without held-out values has no loss, written as null.
-        return json.dumps(_nulls(self.to_dict()), indent=2, allow_nan=False) + "\n"
+        return json_text(_nulls(self.to_dict())) + "\n"
 
     @classmethod
     def from_dict(cls, content: dict[str, Any], source: str = "comparison") -> "Comparison":

@@ -158,7 +158,7 @@ class FitResult:
 
     def to_json(self) -> str:
         """The result file's text: indented objects, lists of numbers on one line."""
-        return _to_json(self.to_dict()) + "\n"
+        return json_text(self.to_dict()) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the result file atomically (:func:`save_result`)."""
@@ -225,13 +225,14 @@ def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
     return content
 
 
-def _to_json(value: Any, indent: str = "") -> str:
-    # allow_nan=False: a NaN or infinity must never reach a file that claims to be JSON.
+def json_text(value: Any, indent: str = "") -> str:
+    """``value`` as brdffit's files write JSON: objects indented, lists of numbers on one line; strict (a NaN or
+    infinity never reaches a file that claims to be JSON: ``allow_nan=False``)."""
     if isinstance(value, dict) and value:
         inner = indent + "  "
-        items = [f"{inner}{json.dumps(str(key))}: {_to_json(item, inner)}" for key, item in value.items()]
+        items = [f"{inner}{json.dumps(str(key))}: {json_text(item, inner)}" for key, item in value.items()]
         return "{\n" + ",\n".join(items) + "\n" + indent + "}"
     if isinstance(value, list) and any(isinstance(item, dict | list) for item in value):
         inner = indent + "  "
-        return "[\n" + ",\n".join(inner + _to_json(item, inner) for item in value) + "\n" + indent + "]"
+        return "[\n" + ",\n".join(inner + json_text(item, inner) for item in value) + "\n" + indent + "]"
     return json.dumps(value, allow_nan=False)
