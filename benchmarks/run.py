@@ -21,6 +21,8 @@ Sections (issue 3):
 (g) Reading a full MERL file (issue 5): 1,458,000 bins to direction pairs.
 (h) ``brdffit compare`` of 4 models × 5 folds on the 10k-sample example (issue 12) against the four plain
     ``brdffit fit`` runs of the same models, each a fresh process without a compilation cache, in turns.
+(i) A 256² lit sphere (``brdffit.plots.sphere``'s renderer) of Ward, Cook-Torrance and 2-lobe Lafortune, in a
+    fresh process: the first render (compilation included) and later ones, under 1 and 4 lights.
 
 ``--sections`` runs some of them; the others keep their results from the last
 run in ``latest.json`` (each section records its date).
@@ -209,6 +211,16 @@ def compare_section(repeats: int, folder: Path) -> dict:
     }
 
 
+def render_section(repeats: int) -> dict:
+    """(i): the sphere renderer's time per model, each model in fresh processes."""
+    models = ("ward", "cook-torrance", "lafortune")
+    results = {}
+    for model in models:
+        log(f"(i) rendering a 256² sphere of {model}")
+        results[model] = repeated(repeats, "render", "--model", model)
+    return results
+
+
 def mcmc_section(repeats: int) -> dict:
     log("(f) mcmc: 32 walkers × 2000 steps on the example")
     return repeated(repeats, "mcmc", "--walkers", "32", "--steps", "2000")
@@ -352,6 +364,15 @@ def table(results: dict) -> str:
             f" {len(compared['models'])} plain `brdffit fit` runs ({ratio:.2f}×;"
             f" round by round {', '.join(f'{c / f:.2f}×' for c, f in rounds)}), no compilation cache."
         )
+    rendered = results.get("render")
+    if rendered:
+        cells = ", ".join(
+            f"{model} {1000 * run['point']['first_seconds']:.0f} ms first / {1000 * run['point']['seconds']:.1f} ms"
+            f" (4 lights: {1000 * run['environment']['seconds']:.1f} ms)"
+            for model, run in rendered.items()
+            if model != "date"
+        )
+        lines.append(f"(i) A 256² lit sphere, first render (compiling) / later ones, one light: {cells}.")
     return "\n".join(lines)
 
 
@@ -362,8 +383,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcfgh",
-        help="which to run: a (with d, e), b, c, f, g, h; default abcfgh (the README's table needs all)",
+        default="abcfghi",
+        help="which to run: a (with d, e), b, c, f, g, h, i; default abcfghi (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -388,6 +409,8 @@ def main() -> None:
             results["merl_load"] = merl_load_section(args.repeats, folder) | {"date": today}
         if "h" in args.sections:
             results["compare"] = compare_section(args.repeats, folder) | {"date": today}
+        if "i" in args.sections:
+            results["render"] = render_section(args.repeats) | {"date": today}
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -10,6 +10,7 @@ samples in memory to the result (parameters and cost) in hand.
     python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000
     python benchmarks/worker.py mcmc --walkers 32 --steps 2000
     python benchmarks/worker.py merl-load --data FILE.binary
+    python benchmarks/worker.py render --model ward
 """
 
 import argparse
@@ -242,6 +243,39 @@ def merl_load(args) -> dict:
     return {"seconds": time.perf_counter() - clock, "n_samples": samples.n_samples, "peak_rss_mb": peak_rss_mb()}
 
 
+#: (i): the models rendered, with parameters of real materials (Ngan et al. 2005) and the real tape's 2-lobe fit.
+RENDERED = {
+    "ward": ({}, {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}),
+    "cook-torrance": ({}, {"kd": [0.0187, 0.0145, 0.00961], "ks": [0.3209, 0.2725, 0.1821], "m": 0.258, "f0": 0.0688}),
+    "lafortune": (
+        {"lobes": 2},
+        {
+            "rho_d": [0.39],
+            "lobes": [
+                {"rho_s": [0.27], "cxy": 0.577, "cz": 0.578, "n": 1780.0},
+                {"rho_s": [0.47], "cxy": -0.585, "cz": 0.561, "n": 45.2},
+            ],
+        },
+    ),
+}
+
+
+def render(args) -> dict:
+    """(i): a 256² lit sphere of a model in a fresh process, compile included (first) and compiled (median of 7)."""
+    from brdffit.views.render import render_sphere
+
+    options, params = RENDERED[args.model]
+    times = {}
+    for lights in ("point", "environment"):
+        runs = []
+        for _ in range(8):
+            clock = time.perf_counter()
+            render_sphere(args.model, params, size=256, lights=lights, **options)
+            runs.append(time.perf_counter() - clock)
+        times[lights] = {"first_seconds": runs[0], "seconds": float(np.median(runs[1:]))}
+    return {"model": args.model, "size": 256, "seconds": times["point"]["first_seconds"], **times}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -263,8 +297,11 @@ def main() -> None:
     posterior.add_argument("--steps", type=int, default=2000)
     loading = commands.add_parser("merl-load")
     loading.add_argument("--data", required=True)
+    rendering = commands.add_parser("render")
+    rendering.add_argument("--model", required=True, choices=list(RENDERED))
     args = parser.parse_args()
-    output = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc, "merl-load": merl_load}[args.command](args)
+    commands = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc, "merl-load": merl_load, "render": render}
+    output = commands[args.command](args)
     print(json.dumps(output))
 
 
