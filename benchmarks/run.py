@@ -62,6 +62,17 @@ MATERIALS = {
     "ward": {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146},
 }
 SCIPY_SOLVERS = ("scipy-trf", "scipy-lm", "scipy-lm-exact")
+#: The results' sections and the letters the table calls them by.
+SECTION_LETTERS = {
+    "cook-torrance": "a, d, e",
+    "ward": "a, d, e",
+    "batch": "b",
+    "cli": "c",
+    "mcmc": "f",
+    "merl_load": "g",
+    "compare": "h",
+    "render": "i",
+}
 
 
 def log(message: str) -> None:
@@ -261,10 +272,20 @@ def machine() -> dict:
 def table(results: dict) -> str:
     """The markdown summary the README shows."""
     info = results["machine"]
+    measured: dict[tuple, list[str]] = {}
+    for key, letter in SECTION_LETTERS.items():
+        section = results.get(key)
+        if isinstance(section, dict) and "date" in section:
+            where = (section["date"], section.get("cpu", "?"), section.get("repeats", "?"))
+            measured.setdefault(where, []).append(letter)
+    runs = "; ".join(
+        f"({', '.join(dict.fromkeys(letters))}) on {date}, {cpu}, medians of {repeats} runs"
+        for (date, cpu, repeats), letters in measured.items()
+    )
     lines = [
-        f"Measured {info['date']} on {info['cpu']}, {info['cores']} cores, {info['backend']} "
-        f"(jax {info['jax']}, optimistix {info['optimistix']}, scipy {info['scipy']}); medians of "
-        f"{results['repeats']} runs, each in a fresh process; in (a) and (b) the solvers take turns, round by round.",
+        f"Measured {runs}; {info['cores']} cores, {info['backend']} (jax {info['jax']}, optimistix"
+        f" {info['optimistix']}, scipy {info['scipy']}); each run in a fresh process; in (a) and (b) the solvers take"
+        " turns, round by round. Compare ratios within one section: the machines differ.",
         "",
         "| (a) MERL-size fit, 1,458,000 × RGB | Cook-Torrance | cost | Ward | cost |",
         "|---|---|---|---|---|",
@@ -370,7 +391,7 @@ def table(results: dict) -> str:
             f"{model} {1000 * run['point']['first_seconds']:.0f} ms first / {1000 * run['point']['seconds']:.1f} ms"
             f" (4 lights: {1000 * run['environment']['seconds']:.1f} ms)"
             for model, run in rendered.items()
-            if model != "date"
+            if isinstance(run, dict)
         )
         lines.append(f"(i) A 256² lit sphere, first render (compiling) / later ones, one light: {cells}.")
     return "\n".join(lines)
@@ -394,23 +415,25 @@ def main() -> None:
         results = {}
     results |= {"machine": machine(), "repeats": args.repeats, "quick": args.quick}
     today = datetime.date.today().isoformat()
+    # Each section says where and when it was measured: a later run of some sections keeps the others' figures.
+    stamp = {"date": today, "cpu": results["machine"]["cpu"], "repeats": args.repeats}
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-") as temporary:
         folder = Path(temporary)
         if "a" in args.sections:
             for model_name in MATERIALS:
-                results[model_name] = merl_section(model_name, merl_size, args.repeats, folder) | {"date": today}
+                results[model_name] = merl_section(model_name, merl_size, args.repeats, folder) | stamp
         if "b" in args.sections:
-            results["batch"] = batch_section(materials, batch_size, args.repeats) | {"date": today}
+            results["batch"] = batch_section(materials, batch_size, args.repeats) | stamp
         if "c" in args.sections:
-            results["cli"] = cli_section(args.repeats, folder) | {"date": today}
+            results["cli"] = cli_section(args.repeats, folder) | stamp
         if "f" in args.sections:
-            results["mcmc"] = mcmc_section(args.repeats) | {"date": today}
+            results["mcmc"] = mcmc_section(args.repeats) | stamp
         if "g" in args.sections:
-            results["merl_load"] = merl_load_section(args.repeats, folder) | {"date": today}
+            results["merl_load"] = merl_load_section(args.repeats, folder) | stamp
         if "h" in args.sections:
-            results["compare"] = compare_section(args.repeats, folder) | {"date": today}
+            results["compare"] = compare_section(args.repeats, folder) | stamp
         if "i" in args.sections:
-            results["render"] = render_section(args.repeats) | {"date": today}
+            results["render"] = render_section(args.repeats) | stamp
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")
