@@ -51,6 +51,52 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
 
 
+def add_comparison_options(command: argparse.ArgumentParser) -> None:
+    """The options of a model comparison (``compare`` and ``report``): the samples, the models, the loss, the folds,
+    the solver's settings, the seed and the reading options."""
+    from ..fitting.fit import MAX_STEPS, N_STARTS
+    from ..fitting.losses import LOSSES
+
+    command.add_argument("samples", metavar="SAMPLES", help="samples file: CSV, MERL, ALTA, ASTM")
+    command.add_argument(
+        "--models",
+        metavar="SPEC,…",
+        help="models to compare, each NAME[:key=value,…] (cook-torrance:fresnel=conductor, lafortune:lobes=2,"
+        " shorthand lafortune:2); default: every model, Lafortune with 1–3 lobes, Cook-Torrance with each Fresnel",
+    )
+    command.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
+    command.add_argument(
+        "--folds", type=int, default=5, metavar="K", help="cross-validation folds (default 5, at least 2)"
+    )
+    command.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
+    command.add_argument("--starts", type=int, default=N_STARTS, metavar="N", help=f"as for fit (default {N_STARTS})")
+    command.add_argument(
+        "--max-steps", type=int, default=MAX_STEPS, metavar="N", help=f"as for fit (default {MAX_STEPS})"
+    )
+    command.add_argument(
+        "--seed", type=int, default=0, help="seed of the folds, the start search's subset and --subsample (default 0)"
+    )
+    add_loading_options(command)
+
+
+def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of :func:`brdffit.compare` that :func:`add_comparison_options` gave, checked (the
+    models and the loss) before any work."""
+    from ..fitting.losses import get_loss
+    from ..physics.models.specs import model_of_spec, split_specs
+
+    get_loss(args.loss)
+    return {
+        "models": None if args.models is None else [model_of_spec(spec) for spec in split_specs(args.models)],
+        "loss": args.loss,
+        "folds": args.folds,
+        "seed": args.seed,
+        "max_theta": args.max_theta,
+        "n_starts": args.starts,
+        "max_steps": args.max_steps,
+    }
+
+
 def add_loading_options(command: argparse.ArgumentParser) -> None:
     """How a samples file is read (:func:`brdffit.load_samples`'s arguments)."""
     from ..data.csv import ANGLE_UNITS
