@@ -10,11 +10,9 @@ import os
 from pathlib import Path
 
 from ..errors import BrdfInputError
+from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
-
-#: Fits a comparison file contributes: its best and those within one standard error of it, at most this many.
-FROM_A_COMPARISON = 4
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -23,9 +21,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument(
         "files",
-        metavar="RESULT.json [RESULT.json …] SAMPLES",
+        metavar="FILE",
         nargs="+",
-        help="one or more result files (or a comparison file from brdffit compare -o), then the samples file",
+        help="one or more result files (or a comparison file from brdffit compare -o), then the samples file last;"
+        " the samples are read as the fits read them (their quantity and --max-theta) unless told otherwise",
     )
     parser.add_argument(
         "--kind",
@@ -57,16 +56,27 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..checks import choice
     from ..views.plots import KINDS
+    from ..views.sphere import LIGHTINGS
 
     if len(args.files) < 2:
         raise BrdfInputError("give one or more result files, then the samples file they were fitted to")
     *result_paths, samples_path = args.files
     kinds = list(KINDS) if args.kind == "all" else [choice("kind", args.kind, [*KINDS, "all"])]
     incidences = _incidences(args.incidences)
-    results = [fit for path in result_paths for fit in _results(path)]
+    choice("lights", args.lights, LIGHTINGS)
+    _not_a_result(samples_path)
+    fits = [(path, fit) for path in result_paths for fit in _results(path)]
+    results = [fit for _, fit in fits]
     figures = [(kind, index) for kind in kinds for index in (range(len(results)) if kind == "residuals" else [None])]
     outputs = output_paths(figures, results, args.output, samples_path, args.files)
-    samples = load(samples_path, args)
+    max_theta = _read_as_fitted(args, fits, samples_path)
+    samples = load(samples_path, args).within(max_theta)
+    for path, fit in fits:
+        if tuple(fit.channels) != samples.channels:
+            raise BrdfInputError(
+                f"{path}: its fit ({label(fit)}) has channels {', '.join(fit.channels)} but {samples_path} has"
+                f" {', '.join(samples.channels)}"
+            )
     outputs[0].parent.mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
     written = []
@@ -87,21 +97,63 @@ def _results(path: str) -> list:
     from ..fitting.compare import Comparison, is_comparison
     from ..fitting.results import FitResult, read_json_object
 
-    content = read_json_object(path, "brdffit result or comparison file")
+    try:
+        content = read_json_object(path, "brdffit result or comparison file")
+    except BrdfInputError as error:
+        raise BrdfInputError(f"{error}; give the result files first and the samples file last") from None
     if not is_comparison(content):
         return [FitResult.from_dict(content, path)]
-    comparison = Comparison.from_dict(content, path)
-    chosen = [score for score in comparison.models if comparison.within_one_stderr(score)]
-    return [score.result for score in (chosen or comparison.models[:1])[:FROM_A_COMPARISON]]
+    return as_list(Comparison.from_dict(content, path))
+
+
+def _not_a_result(path: str) -> None:
+    """Refuse a result or comparison file where the samples file belongs (the last file)."""
+    import json
+
+    try:
+        content = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return  # not JSON: the samples reader says what is wrong with it
+    if isinstance(content, dict) and ("params" in content or "models" in content):
+        raise BrdfInputError(f"{path} is a result file, not samples; the samples file comes last")
+
+
+def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> float | None:
+    """Read the samples as the fits did: their quantity (unless ``--quantity`` says otherwise, which is then
+    warned about) and their ``max_theta``, when the fits agree; returns that ``max_theta``."""
+    import warnings
+
+    from ..errors import InputWarning
+
+    quantities = {fit.quantity for _, fit in fits if fit.quantity is not None}
+    if args.quantity is None and len(quantities) == 1:
+        args.quantity = quantities.pop()
+    else:
+        for path, fit in fits:
+            if fit.quantity is not None and fit.quantity != (args.quantity or "brdf"):
+                warnings.warn(
+                    InputWarning(
+                        f"{path} was fitted to samples read as {fit.quantity}; {samples_path} is read as"
+                        f" {args.quantity or 'brdf'}"
+                    ),
+                    stacklevel=2,
+                )
+    limits = {fit.max_theta for _, fit in fits}
+    return limits.pop() if len(limits) == 1 else None
 
 
 def _incidences(text: str | None):
     if text is None:
         return None
     try:
-        return [float(part) for part in text.split(",") if part.strip()]
+        angles = [float(part) for part in text.split(",") if part.strip()]
     except ValueError:
-        raise BrdfInputError(f"--incidences {text}: give light zeniths in degrees, separated by commas") from None
+        angles = []
+    if not angles or not all(0 <= angle < 90 for angle in angles):
+        raise BrdfInputError(
+            f"--incidences {text}: give light zeniths in degrees, each in [0, 90), separated by commas"
+        )
+    return angles
 
 
 def output_paths(figures, results, output: str | None, samples_path: str, inputs) -> list[Path]:
@@ -119,6 +171,8 @@ def output_paths(figures, results, output: str | None, samples_path: str, inputs
         return f"{stem}.{kind}{which}.png"
 
     as_folder = output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir())
+    if as_folder and Path(output).exists() and not Path(output).is_dir():
+        raise BrdfInputError(f"-o {output}: {output.rstrip('/' + os.sep)} is a file; give a folder (OUTDIR/)")
     if len(figures) > 1 and output is not None and not as_folder:
         raise BrdfInputError(f"-o {output}: {len(figures)} figures need a folder; give OUTDIR/")
     if output is not None and not as_folder:

@@ -111,7 +111,7 @@ def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_
             solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
         for position, index in enumerate(indices):
             one = jax.tree.map(lambda leaf, p=position: leaf[p], solved)
-            results[index] = result_of(model, loss, kept[index], one, max_steps, dtype)
+            results[index] = result_of(model, loss, kept[index], one, max_steps, dtype, max_theta=max_theta)
         bar.update(len(indices))
     return results
 

@@ -119,7 +119,8 @@ class ModelScore:
 
 @dataclass(frozen=True)
 class Comparison:
-    """Models compared on one set of samples, best first (by :data:`CRITERION`)."""
+    """Models compared on one set of samples, best first (by :data:`CRITERION`): ``models`` (also the comparison's
+    items, ``comparison[0]`` the best) are :class:`ModelScore` objects, each with its fit as ``result``."""
 
     source: str
     n_samples: int
@@ -137,6 +138,20 @@ class Comparison:
     def within_one_stderr(self, score: ModelScore) -> bool:
         """Whether ``score``'s held-out loss is within one standard error of the best's."""
         return score.cv_loss <= self.best.cv_loss + self.best.cv_stderr
+
+    def best_results(self, limit: int = 4) -> list[FitResult]:
+        """The fits worth a look: the best and every model within one standard error of it, at most ``limit``."""
+        chosen = [score for score in self.models if self.within_one_stderr(score)] or self.models[:1]
+        return [score.result for score in chosen[:limit]]
+
+    def __getitem__(self, index: int) -> ModelScore:
+        return self.models[index]
+
+    def __iter__(self):
+        return iter(self.models)
+
+    def __len__(self) -> int:
+        return len(self.models)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -222,7 +237,9 @@ def compare(
     try:
         for model in chosen:
             bar.set_description(spec_of(model.name, model.model_options))
-            result = fit_one(samples, model, loss, n_starts=n_starts, max_steps=max_steps, seed=seed)
+            result = fit_one(
+                samples, model, loss, max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, seed=seed
+            )
             fold_losses = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
             scores.append(_score(model, result, samples, fold_losses))
             bar.update(1)

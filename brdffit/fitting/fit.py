@@ -75,7 +75,7 @@ def fit_one(
             starts = [by_lobe.best.theta]
             fewer_lobes_cost = by_lobe.fewer_lobes_cost if search is full else None
             if search is full:  # already solved on every sample
-                return result_of(model, loss, samples, by_lobe.best, max_steps, dtype, fewer_lobes_cost)
+                return result_of(model, loss, samples, by_lobe.best, max_steps, dtype, fewer_lobes_cost, max_theta)
         else:
             starts = starting_points(model, loss, search, n_starts)
             if search is not full and len(starts) > 1:
@@ -86,7 +86,7 @@ def fit_one(
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples))
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
-    return result_of(model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost)
+    return result_of(model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta)
 
 
 def _compile_in_background(solve, model: Model, problem: Problem) -> threading.Thread:
@@ -205,8 +205,10 @@ def result_of(
     max_steps: int,
     dtype: str,
     fewer_lobes_cost: float | None = None,
+    max_theta: float | None = None,
 ) -> FitResult:
-    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``)."""
+    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``); ``samples`` are those fitted, selected
+    by ``max_theta``."""
     converged = bool(solved.converged)
     physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
     domains = model.physical.domains(samples.n_channels)
@@ -226,6 +228,8 @@ def result_of(
         message="" if converged else _failure_message(solved.result, max_steps),
         dtype=dtype,
         warnings=caveats(model, samples, params, float(solved.cost), fewer_lobes_cost),
+        quantity=samples.provenance.quantity if samples.provenance else None,
+        max_theta=max_theta,
     )
 
 

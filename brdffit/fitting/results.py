@@ -84,6 +84,9 @@ class FitResult:
     precision, then refined in double, so the optimum is float64's). ``warnings``
     say what a user must know before trusting the fit (a dead lobe, a parameter
     at a plausible bound, data that are not reciprocal), one line each.
+    ``quantity`` and ``max_theta`` say how the samples were read and selected
+    (what their values were taken as, ``docs/quantities.md``; None for samples
+    made from arrays), so that they can be read the same way again.
     ``uncertainty`` is the :class:`Uncertainty` when one was asked for
     (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
     parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
@@ -103,6 +106,8 @@ class FitResult:
     message: str = ""
     dtype: str = "float64"
     warnings: list[str] = field(default_factory=list)
+    quantity: str | None = None
+    max_theta: float | None = None
     uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -150,6 +155,8 @@ class FitResult:
                 "message": self.message,
                 "dtype": self.dtype,
                 "warnings": list(self.warnings),
+                "quantity": self.quantity,
+                "max_theta": self.max_theta,
             },
         }
         if self.uncertainty is not None:
@@ -182,6 +189,8 @@ class FitResult:
                 message=str(fit.get("message", "")),
                 dtype=str(fit.get("dtype", "float64")),
                 warnings=list(fit.get("warnings", [])),
+                quantity=None if fit.get("quantity") is None else str(fit["quantity"]),
+                max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
                 uncertainty=None
                 if content.get("uncertainty") is None
                 else Uncertainty.from_dict(content["uncertainty"], source),
@@ -230,9 +239,12 @@ def json_text(value: Any, indent: str = "") -> str:
     infinity never reaches a file that claims to be JSON: ``allow_nan=False``)."""
     if isinstance(value, dict) and value:
         inner = indent + "  "
-        items = [f"{inner}{json.dumps(str(key))}: {json_text(item, inner)}" for key, item in value.items()]
+        items = [
+            f"{inner}{json.dumps(str(key), ensure_ascii=False)}: {json_text(item, inner)}"
+            for key, item in value.items()
+        ]
         return "{\n" + ",\n".join(items) + "\n" + indent + "}"
     if isinstance(value, list) and any(isinstance(item, dict | list) for item in value):
         inner = indent + "  "
         return "[\n" + ",\n".join(inner + json_text(item, inner) for item in value) + "\n" + indent + "]"
-    return json.dumps(value, allow_nan=False)
+    return json.dumps(value, allow_nan=False, ensure_ascii=False)

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .._files import atomic_path
+from ..data.load import as_samples
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
@@ -30,8 +31,17 @@ def label(result: FitResult) -> str:
     return spec_of(result.model, result.model_options)
 
 
-def as_list(results: FitResult | Sequence[FitResult]) -> list[FitResult]:
-    """One result or several, as a list."""
+#: The fits a comparison contributes to a figure: its best and those within one standard error, at most this many.
+FROM_A_COMPARISON = 4
+
+
+def as_list(results) -> list[FitResult]:
+    """One result, several, or a :class:`~brdffit.Comparison` (its best fits: ``Comparison.best_results``), as a
+    list."""
+    from ..fitting.compare import Comparison
+
+    if isinstance(results, Comparison):
+        return results.best_results(FROM_A_COMPARISON)
     return [results] if isinstance(results, FitResult) else list(results)
 
 
@@ -55,7 +65,9 @@ def check_figure_path(path, argument: str = "path") -> Path:
 
 
 def checked_samples(samples) -> Samples:
-    """``samples`` if it is a :class:`Samples`, else a one-line error naming the argument."""
+    """``samples`` if it is a :class:`Samples` (a path is read with :func:`brdffit.load_samples`'s defaults), else a
+    one-line error naming the argument."""
+    samples = as_samples(samples)
     if not isinstance(samples, Samples):
         kind = f"an empty {type(samples).__name__}" if isinstance(samples, Sequence) and not samples else None
         raise BrdfInputError(

@@ -48,7 +48,7 @@ def residuals(result: FitResult, samples: Samples, *, path: str | os.PathLike | 
     """
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be one FitResult, got {type(result).__name__}")
-    checked_samples(samples)
+    samples = checked_samples(samples)
     if tuple(result.channels) != tuple(samples.channels):
         raise BrdfInputError(
             Argument("result"),

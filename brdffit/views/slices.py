@@ -25,6 +25,7 @@ from matplotlib.lines import Line2D
 from ..checks import whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError, not_allowed
+from ..fitting.compare import Comparison
 from ..fitting.results import FitResult
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
 from .figures import (
@@ -157,12 +158,13 @@ def slices(
 def checked_arguments(results, samples, path):
     """``results`` as a list of :class:`FitResult` with the samples' channels, the samples, and the figure path
     (None, or a path whose suffix matplotlib writes in a folder that exists); one-line errors naming the argument."""
-    listed = as_list(results) if isinstance(results, FitResult | Sequence) and not isinstance(results, str) else None
+    fits = isinstance(results, FitResult | Comparison | Sequence) and not isinstance(results, str)
+    listed = as_list(results) if fits else None
     if not listed or not all(isinstance(result, FitResult) for result in listed):
         raise BrdfInputError(
             Argument("results"), f" must be a FitResult or a non-empty list of them, got {_described(results)}"
         )
-    checked_samples(samples)
+    samples = checked_samples(samples)
     for result in listed:
         if tuple(result.channels) != tuple(samples.channels):
             raise BrdfInputError(

@@ -18,7 +18,7 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
-from .figures import as_list, check_figure_path, label, save_figure
+from .figures import as_list, check_figure_path, checked_samples, label, save_figure
 from .render import (
     LIGHTS,
     MAX_DISTANCE_DEGREES,
@@ -69,8 +69,7 @@ def sphere(
     results = as_list(results)
     if not results or not all(isinstance(result, FitResult) for result in results):
         raise BrdfInputError(Argument("results"), " must be a FitResult or a non-empty sequence of them")
-    if samples is not None and not isinstance(samples, Samples):
-        raise BrdfInputError(Argument("samples"), f" must be Samples or None, got {type(samples).__name__}")
+    samples = None if samples is None else checked_samples(samples)
     choice("lights", lights, LIGHTINGS)
     size = whole_number("size", size, minimum=16, maximum=2048)
     path = None if path is None else check_figure_path(path)  # before the work

@@ -75,13 +75,18 @@ def test_one_kind_to_a_file_and_a_comparison_as_input(files, tmp_path, capsys):
         (["{s}"], "give one or more result files, then the samples file they were fitted to"),
         (
             ["{w}", "{r}", "--kind", "slices", "-o", "{t}/c.png"],
-            "RESULT: ward has channels value but the samples have r, g, b",
+            "{w}: its fit (ward) has channels value but {r} has r, g, b",
         ),
         (
             ["{w}", "{s}", "--incidences", "a,b", "--kind", "slices", "-o", "{t}/i.png"],
             "--incidences a,b: give light zeniths",
         ),
         (["{w}", "{s}", "--kind", "sphere", "--lights", "sun", "-o", "{t}/l.png"], "--lights 'sun' is not allowed"),
+        (["{w}", "{s}", "--kind", "slices", "--lights", "sun", "-o", "{t}/l.png"], "--lights 'sun' is not allowed"),
+        (["{w}", "{s}", "--lights", "sun", "-o", "{t}/all/"], "--lights 'sun' is not allowed"),
+        (["{w}", "{s}", "--incidences", "200", "--kind", "slices"], "--incidences 200: give light zeniths in degrees"),
+        (["{w}", "{w}"], "ward.json is a result file, not samples; the samples file comes last"),
+        (["{s}", "{w}"], "ward.json is a result file, not samples; the samples file comes last"),
     ],
 )
 def test_bad_input_is_one_line_and_writes_nothing(files, tmp_path, capsys, argv, message):
@@ -91,3 +96,30 @@ def test_bad_input_is_one_line_and_writes_nothing(files, tmp_path, capsys, argv,
     assert status == 2 and out == "" and err.count("\n") == 1, err
     assert message.format(**where) in err
     assert list(tmp_path.iterdir()) == [] and (files / "ward.json").read_bytes() == before
+
+
+def test_the_samples_are_read_as_the_fit_read_them(tmp_path, capsys):
+    """The tape's fit records that it read the values as cosine-weighted-out; plot reads them so again unless told
+    otherwise, and says so when told otherwise."""
+    from paths import TAPE
+
+    result = tmp_path / "tape.json"
+    assert main(["fit", str(TAPE), "--model", "lambert", "--quantity", "cosine-weighted-out", "-o", str(result)]) == 0
+    assert json.loads(result.read_text())["fit"]["quantity"] == "cosine-weighted-out"
+    capsys.readouterr()
+    status, _, err = run(["plot", result, TAPE, "--kind", "residuals", "-o", tmp_path / "r.png"], capsys)
+    assert status == 0 and "warning" not in err
+    status, _, err = run(
+        ["plot", result, TAPE, "--kind", "residuals", "--quantity", "brdf", "-o", tmp_path / "b.png"], capsys
+    )
+    assert status == 0
+    assert (
+        f"brdffit: warning: {result} was fitted to samples read as cosine-weighted-out; {TAPE} is read as brdf" in err
+    )
+
+
+def test_an_existing_file_is_no_folder(files, tmp_path, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    status, _, err = run(["plot", files / "ward.json", files / "ward.csv", "-o", f"{afile}/"], capsys)
+    assert status == 2 and f"-o {afile}/: {afile} is a file; give a folder (OUTDIR/)" in err

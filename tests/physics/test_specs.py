@@ -30,7 +30,8 @@ def test_specs_name_a_model_and_its_options(spec, canonical):
     [
         ("wrd", r"^model spec 'wrd': 'wrd' is not a model; choose one of: lambert, ward,"),
         ("ward:2", r"^model spec 'ward:2': no option of ward takes 2; write key=value \(no options\)$"),
-        ("lafortune:x", r"^model spec 'lafortune:x': no option of lafortune takes 'x'; write key=value \(lobes\)$"),
+        ("lafortune:x", r"^model spec 'lafortune:x': lobes='x' is not allowed; give a whole number from 1 to 8$"),
+        ("lafortune:0", r"^model spec 'lafortune:0': lobes=0 is not allowed; give a whole number from 1 to 8$"),
         ("cook-torrance:fresnel=gold", r"^model spec 'cook-torrance:fresnel=gold': fresnel='gold' is not known"),
         ("lafortune:lobes=0", r"^model spec 'lafortune:lobes=0': lobes=0 is not allowed; give a whole number from 1"),
         ("ward:lobes=2", r"^model spec 'ward:lobes=2': lobes does not apply to model ward; it takes no options$"),
@@ -48,9 +49,13 @@ def test_a_list_of_specs_splits_between_specs_not_inside_one():
         "lafortune:lobes=2",
     ]
     assert split_specs(" lambert , lafortune:2 ,") == ["lambert", "lafortune:2"]
-    # A key=value after a comma belongs to the spec before it (models with several options).
-    assert split_specs("cook-torrance:fresnel=conductor,lobes=2,ward") == [
-        "cook-torrance:fresnel=conductor,lobes=2",
-        "ward",
-    ]
     assert split_specs("") == []
+    # A key=value after a comma belongs to the spec before it (models with several options); anything else starts
+    # a spec, so a misspelt model is named as written, not glued to the one before it.
+    with pytest.raises(BrdfInputError, match=r"^model spec 'cook-torrance:fresnel=conductor,lobes=2': lobes does not"):
+        split_specs("cook-torrance:fresnel=conductor,lobes=2,ward")
+    for text in ("lambert,wrd", "lafortune:2,wrd"):
+        with pytest.raises(BrdfInputError, match=r"^model spec 'wrd': 'wrd' is not a model"):
+            split_specs(text)
+    with pytest.raises(BrdfInputError, match=r"^model spec 'lafortune:lobes=2' is given twice; give each model once$"):
+        split_specs("ward,lafortune:2,lafortune:lobes=2")

@@ -122,7 +122,8 @@ def test_the_figure_draws_finite_visible_pixels_and_saves_a_png(grid_samples, tm
             {"result": result_of({"rho_d": [0.1], "rho_s": [0.1], "alpha": 0.2}, channels=("value",))},
             r"^result: ward has channels value but the samples have r, g, b$",
         ),
-        ({"samples": "samples.csv"}, r"^samples must be Samples \(from brdffit.load_samples\), got str$"),
+        ({"samples": "nowhere/samples.csv"}, r"^nowhere/samples.csv: no such file$"),  # a path is read
+        ({"samples": 3}, r"^samples must be Samples \(from brdffit.load_samples\), got int$"),
         ({"path": "maps.gif"}, r"^path=maps.gif: the file must end in .png, .pdf, .svg$"),
     ],
 )

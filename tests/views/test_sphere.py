@@ -93,5 +93,7 @@ def test_bad_arguments_are_one_line_errors_naming_them():
         sphere(result("ward", WARD), lights="sun")
     with pytest.raises(BrdfInputError, match=r"^results must be a FitResult"):
         sphere([])
-    with pytest.raises(BrdfInputError, match=r"^samples must be Samples or None, got str$"):
-        sphere(result("ward", WARD), "samples.csv")
+    with pytest.raises(BrdfInputError, match=r"^samples must be Samples \(from brdffit.load_samples\), got int$"):
+        sphere(result("ward", WARD), 3)
+    with pytest.raises(BrdfInputError, match=r"^nowhere/samples.csv: no such file$"):  # a path is read
+        sphere(result("ward", WARD), "nowhere/samples.csv")

@@ -23,16 +23,15 @@ def model_of_spec(spec: str) -> Model:
     if name not in MODELS:
         raise BrdfInputError(f"model spec {spec!r}: {name!r} is not a model; choose one of: {', '.join(MODELS)}")
     options: dict[str, Any] = {}
-    for item in filter(None, (part.strip() for part in written.split(","))):
-        key, equals, value = item.partition("=")
-        if equals:
-            options[key.strip()] = _value(value.strip())
-        else:
-            key = _option_accepting(spec, name, _value(key))
-            options[key] = _value(item)
     try:
+        for item in filter(None, (part.strip() for part in written.split(","))):
+            key, equals, value = item.partition("=")
+            if equals:
+                options[key.strip()] = _value(value.strip())
+            else:
+                options[_option_accepting(name, _value(key))] = _value(item)
         return get_model(name, **options)
-    except BrdfInputError as error:
+    except BrdfInputError as error:  # spelled key=value, as specs are written, on the command line too
         raise BrdfInputError(f"model spec {spec!r}: {error}") from None
 
 
@@ -41,7 +40,7 @@ def _value(text: str) -> Any:
     return int(text) if text.isdigit() else text
 
 
-def _option_accepting(spec: str, name: str, value: Any) -> str:
+def _option_accepting(name: str, value: Any) -> str:
     """The one option of model ``name`` that accepts ``value``, for a value written without its key."""
     accepting = []
     for option in model_option_names(name):
@@ -50,21 +49,29 @@ def _option_accepting(spec: str, name: str, value: Any) -> str:
         except BrdfInputError:
             continue
         accepting.append(option)
+    options = model_option_names(name)
+    if not accepting and len(options) == 1:
+        get_model(name, **{options[0]: value})  # the one option's own error: lobes=0 is not allowed; …
     if len(accepting) != 1:
-        takes = ", ".join(model_option_names(name)) or "no options"
+        takes = ", ".join(options) or "no options"
         why = "no option of" if not accepting else "more than one option of"
-        raise BrdfInputError(f"model spec {spec!r}: {why} {name} takes {value!r}; write key=value ({takes})")
+        raise BrdfInputError(f"{why} {name} takes {value!r}; write key=value ({takes})")
     return accepting[0]
 
 
 def split_specs(text: str) -> list[str]:
     """Specs written as one comma-separated list (``ward,cook-torrance:fresnel=conductor,lafortune:lobes=2``), split
-    between specs, not inside one: a piece without ``:`` that is not a model's name (``key=value``, or a bare
-    value) continues the spec before it."""
+    between specs, not inside one: a ``key=value`` piece (no ``:``) continues the spec before it, if that spec has
+    options; anything else starts a spec (so a misspelt model is named as it was written). A spec given twice is an
+    error."""
     specs: list[str] = []
     for piece in filter(None, (part.strip() for part in text.split(","))):
-        if specs and ":" not in piece and piece not in MODELS:
+        if specs and ":" in specs[-1] and ":" not in piece and "=" in piece:
             specs[-1] += "," + piece
         else:
             specs.append(piece)
+    canonical = [spec_of(model.name, model.model_options) for model in map(model_of_spec, specs)]
+    repeated = next((spec for spec in canonical if canonical.count(spec) > 1), None)
+    if repeated is not None:
+        raise BrdfInputError(f"model spec {repeated!r} is given twice; give each model once")
     return specs
