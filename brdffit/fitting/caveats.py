@@ -63,7 +63,7 @@ def _not_reciprocal(samples: Samples) -> list[str]:
     return [
         f"the samples as read ({found.in_force}) are not reciprocal: over {found.pairs} reciprocal pairs the median"
         f" of f(a→b)/f(b→a) is {found.as_read:.3g}; read as {found.best} it is {found.ratios[found.best]:.3g}"
-        f" (the quantity option)"
+        f": read them with --quantity {found.best} (quantity='{found.best}' in Python)"
     ]
 
 

@@ -24,7 +24,7 @@ folds cost a few Levenberg-Marquardt steps each and no compilation.
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache, partial
 from typing import Any
 
@@ -47,6 +47,8 @@ from .results import FitResult, json_text, read_json_object
 
 #: The criterion models are ranked by.
 CRITERION = "cv_loss"
+#: A fold whose held-out loss exceeds this many times the median of the others' is said (one fold dominates the mean).
+DOMINANT_FOLD = 100.0
 
 
 def default_specs() -> list[str]:
@@ -69,6 +71,8 @@ class ModelScore:
     cv_stderr: float
     fold_losses: list[float]
     result: FitResult = field(repr=False)
+    fold_converged: list[bool] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         result = self.result
@@ -84,6 +88,8 @@ class ModelScore:
             "cv_loss": self.cv_loss,
             "cv_stderr": self.cv_stderr,
             "fold_losses": list(self.fold_losses),
+            "fold_converged": list(self.fold_converged),
+            "notes": list(self.notes),
             "converged": result.converged,
             "n_steps": result.n_steps,
             "message": result.message,
@@ -114,6 +120,8 @@ class ModelScore:
             *(_number(entry[key]) for key in ("aic", "bic", "cv_loss", "cv_stderr")),
             [_number(value) for value in entry["fold_losses"]],
             result,
+            [bool(value) for value in entry.get("fold_converged", [])],
+            [str(line) for line in entry.get("notes", [])],
         )
 
 
@@ -240,8 +248,10 @@ def compare(
             result = fit_one(
                 samples, model, loss, max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, seed=seed
             )
-            fold_losses = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
-            scores.append(_score(model, result, samples, fold_losses))
+            fold_losses, fold_converged = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
+            score = _score(model, result, samples, fold_losses)
+            notes = _fold_notes(fold_losses, fold_converged, split, samples)
+            scores.append(replace(score, fold_converged=fold_converged, notes=notes))
             bar.update(1)
     finally:
         bar.close()
@@ -287,20 +297,41 @@ def _model(one: str | Model) -> Model:
 
 def _cross_validated(
     model: Model, loss: Loss, result: FitResult, samples: Samples, problem: Problem, split: Folds, max_steps: int
-) -> list[float]:
-    """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples."""
+) -> tuple[list[float], list[bool]]:
+    """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples, and
+    whether each refit converged."""
     solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
     held_out_cost = _held_out_cost(model, loss)
     theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
     counted = np.ones(samples.n_samples, bool) if samples.weight is None else samples.weight > 0
-    losses = []
+    losses, converged = [], []
     for k in range(split.count):
         held = split.held_out(k)
         n_held = int(np.sum(held & counted)) * samples.n_channels
         fitted = solve(theta0, problem._replace(real=_rows(~held, problem)))
         total = held_out_cost(fitted.theta, problem._replace(real=_rows(held, problem)))
         losses.append(float(total) / n_held if n_held else math.nan)
-    return losses
+        converged.append(bool(fitted.converged))
+    return losses, converged
+
+
+def _fold_notes(losses: list[float], converged: list[bool], split: Folds, samples: Samples) -> list[str]:
+    """What a reader of the ranking must know about a model's folds: refits that did not converge, and a fold whose
+    held-out loss dominates the mean (the model predicts those samples far worse than the rest)."""
+    notes = [
+        f"the refit of fold {k + 1} ({split.describe(k, samples)} held out) did not converge"
+        for k, done in enumerate(converged)
+        if not done
+    ]
+    for k, value in enumerate(losses):
+        others = [other for j, other in enumerate(losses) if j != k and not math.isnan(other)]
+        typical = float(np.median(others)) if others else math.nan
+        if others and typical > 0 and value > DOMINANT_FOLD * typical:
+            notes.append(
+                f"fold {k + 1} ({split.describe(k, samples)} held out) has a held-out loss of {value:.3g},"
+                f" {value / typical:.0f}× the median of the others: the model predicts those samples far worse"
+            )
+    return notes
 
 
 def _rows(mask: np.ndarray, problem: Problem) -> np.ndarray:

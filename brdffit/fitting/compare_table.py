@@ -8,8 +8,9 @@ WARNINGS_OF_FIRST = 3
 
 def comparison_table(comparison) -> str:
     """The ranking of a :class:`~brdffit.fitting.compare.Comparison`: rank, mark, spec, k, cost, rmse, AIC, BIC, the
-    cross-validated loss with its standard error and the count of warnings; then the key and the warnings of the
-    first :data:`WARNINGS_OF_FIRST` models."""
+    cross-validated loss with its standard error and the count of warnings; then the key, the warnings every model
+    shares (about the data) once, the other warnings of the first :data:`WARNINGS_OF_FIRST` models, and every
+    model's notes on its folds."""
     how = (
         "each holding out whole light directions"
         if comparison.fold_kind == "light-direction"
@@ -35,9 +36,18 @@ def comparison_table(comparison) -> str:
             f"  {_number(score.cv_loss):>10} ± {_number(score.cv_stderr):<9} {len(score.result.warnings):>8}{status}"
         )
     lines.append("  * best   = within one standard error of the best")
+    shared = [line for line in comparison.models[0].result.warnings if _in_every(comparison, line)]
+    lines += [f"  every model: warning: {line}" for line in shared]
     for score in comparison.models[:WARNINGS_OF_FIRST]:
-        lines += [f"  {score.spec}: warning: {line}" for line in score.result.warnings]
+        lines += [f"  {score.spec}: warning: {line}" for line in score.result.warnings if line not in shared]
+    for score in comparison.models:
+        lines += [f"  {score.spec}: note: {line}" for line in score.notes]
     return "\n".join(lines)
+
+
+def _in_every(comparison, line: str) -> bool:
+    """Whether every model's fit has the warning ``line`` (one about the data, such as non-reciprocal values)."""
+    return all(line in score.result.warnings for score in comparison.models)
 
 
 def _number(value: float) -> str:

@@ -33,6 +33,14 @@ class Folds(NamedTuple):
         """The mask (N,) of the samples fold ``k`` holds out."""
         return self.fold == k
 
+    def describe(self, k: int, samples: Samples) -> str:
+        """What fold ``k`` holds out, as a person reads it: ``light zeniths 39.4°, 84.4°``, or ``1/5 of the
+        samples, at random``."""
+        if self.kind != "light-direction":
+            return f"1/{self.count} of the samples, at random"
+        zeniths = np.unique(np.round(samples.theta_i[self.held_out(k)], 1))
+        return "light zenith" + ("s " if zeniths.size > 1 else " ") + ", ".join(f"{z:g}°" for z in zeniths)
+
 
 def make_folds(samples: Samples, folds: int = 5, seed: int = 0) -> Folds:
     """``folds`` folds of ``samples`` (module docstring), seeded by ``seed``."""
