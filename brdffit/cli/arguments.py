@@ -110,8 +110,8 @@ def add_loading_options(command: argparse.ArgumentParser) -> None:
     reading.add_argument(
         "--quantity",
         metavar="Q",
-        help=f"what the values are: {', '.join(QUANTITIES)} (cosine-weighted: -in); default: what the file's"
-        " header says, else brdf (brdffit info checks it on reciprocal pairs)",
+        help=f"what the values are: {', '.join(QUANTITIES)} (cosine-weighted means cosine-weighted-in);"
+        " default: what the file's header says, else brdf (brdffit info checks it on reciprocal pairs)",
     )
     reading.add_argument(
         "--angles", default="degrees", metavar="UNIT", help=f"CSV angle columns in {' or '.join(ANGLE_UNITS)}"

@@ -56,6 +56,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..checks import choice
     from ..views.plots import KINDS
+    from ..views.residuals import colour_limit
     from ..views.sphere import LIGHTINGS
 
     if len(args.files) < 2:
@@ -80,9 +81,11 @@ def run(args: argparse.Namespace) -> int:
     outputs[0].parent.mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
     written = []
+    if "residuals" in kinds:  # several fits' maps on one colour scale, so that they compare
+        limit = max(colour_limit(result, samples) for result in results)
     for (kind, index), path in zip(figures, outputs, strict=True):
         if kind == "residuals":
-            KINDS[kind](results[index], samples, path=path)
+            KINDS[kind](results[index], samples, limit=limit, path=path)
         elif kind == "sphere":
             KINDS[kind](results, samples, lights=args.lights, path=path)
         else:

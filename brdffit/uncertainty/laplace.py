@@ -156,11 +156,19 @@ def curvature_at_optimum(density: Density) -> Curvature:
     return Curvature(chi2, inverse, meat, undetermined, condition)
 
 
+#: What a varying scatter means for each method's errors (the end of the ``heteroscedastic`` warning).
+VARYING_SCATTER_MEANS = {
+    "laplace": "so Laplace reports the robust errors (method laplace-robust)",
+    "mcmc": "so the posterior, whose likelihood assumes one scatter, may be too narrow",
+}
+
+
 @float64
 def laplace_estimate(
-    result: FitResult, density: Density, curvature: Curvature | None = None
+    result: FitResult, density: Density, curvature: Curvature | None = None, *, for_method: str = "laplace"
 ) -> tuple[Uncertainty, list[Finding]]:
-    """The Laplace estimate and what it warns about; ``curvature``: :func:`curvature_at_optimum`, when known."""
+    """The Laplace estimate and what it warns about; ``curvature``: :func:`curvature_at_optimum`, when known.
+    ``for_method``: the method whose warnings these are (MCMC reuses what the curvature at the optimum finds)."""
     model, c, labels = density.model, density.n_channels, density.labels
     v = jnp.asarray(density.optimum)
     k = v.shape[0]
@@ -214,8 +222,8 @@ def laplace_estimate(
                 codes.HETEROSCEDASTIC,
                 "without sigma the Gauss-Newton errors assume the same scatter for every residual, but the"
                 " residuals' scatter varies (e.g. noise proportional to the signal): the heteroscedasticity-robust"
-                f" (sandwich) error of {names[worst]} is {ratio[worst]:.1f}× the Gauss-Newton one, so Laplace reports"
-                " the robust errors (method laplace-robust); give a sigma column for calibrated errors",
+                f" (sandwich) error of {names[worst]} is {ratio[worst]:.1f}× the Gauss-Newton one,"
+                f" {VARYING_SCATTER_MEANS[for_method]}; give a sigma column for calibrated errors",
             )
         )
         method, stderr, covariance = "laplace-robust", robust, robust_covariance

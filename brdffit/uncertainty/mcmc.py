@@ -142,7 +142,7 @@ def sample_and_estimate(
     diagnosis = diagnose(chain, settings, sampled_labels(density.labels, density.has_sigma))
     # What Laplace's approximation finds at the optimum holds for the posterior too: an undetermined parameter
     # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
-    _, at_optimum = laplace_estimate(result, density, curvature)
+    _, at_optimum = laplace_estimate(result, density, curvature, for_method="mcmc")
     found = [finding for finding in at_optimum if finding.code != codes.NOT_CONVERGED]
     if not result.converged:
         found.insert(

@@ -8,6 +8,7 @@ import numpy as np
 from .._jax import float64
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
+from ..fitting.table import value_with_error
 from .figures import check_figure_path, save_figure
 
 #: Draws taken from the Laplace Gaussian when a result has no MCMC draws.
@@ -55,16 +56,20 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
         level = root.level
         root.setLevel(logging.ERROR)  # corner logs "too few points to create valid contours" on the root logger
         try:
+            kept = draws[:, keep]
+            # Titles as the table writes values: the median ± the draws' standard deviation, to the error's digits
+            # (corner's own format gives every parameter the same digits: "0.143" beside an error of 1.5e-05).
             figure = corner.corner(
-                draws[:, keep],
+                kept,
                 labels=labels,
                 truths=marked[keep],
                 quantiles=(0.16, 0.5, 0.84),
-                show_titles=True,
-                title_fmt=".4g",
                 label_kwargs={"fontsize": 9},
-                title_kwargs={"fontsize": 7},
             )
+            diagonal = figure.axes[:: len(labels) + 1]
+            for axis, name, column in zip(diagonal, labels, kept.T, strict=True):
+                value = value_with_error(float(np.median(column)), float(np.std(column)))
+                axis.set_title(f"{name}\n{value}", fontsize=9)
         finally:
             root.setLevel(level)
     method = result.uncertainty.get("method", "")

@@ -22,8 +22,9 @@ FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 #: Colours of the first channels (r, g, b look like themselves); further channels take matplotlib's cycle.
 CHANNEL_COLOURS = {"r": "#d62728", "g": "#2ca02c", "b": "#1f77b4", "value": "#333333", "y": "#333333"}
-#: Line styles that tell several fits apart on one axis (colour already tells the channels apart).
-FIT_STYLES = ("-", "--", ":", "-.")
+#: Line styles that tell several fits apart on one axis (colour already tells the channels apart): solid, dashed,
+#: dotted, dash-dot, long dashes, dash-dot-dot, loose dots; more fits than these repeat them.
+FIT_STYLES = ("-", "--", ":", "-.", (0, (8, 3)), (0, (5, 2, 1, 2, 1, 2)), (0, (1, 4)))
 
 
 def label(result: FitResult) -> str:

@@ -7,6 +7,7 @@ The incidences, in-plane samples and model curves are those of the cartesian sli
 
 import os
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -74,7 +75,7 @@ def polar(
         # The square axes box reaches a quarter of its side below and above the half disc it draws.
         box = (x0 / width, (bottom - wedge / 4) / height, wedge / width, wedge / height)
         axis = figure.add_axes(box, projection="polar")
-        floor, top = value_range([cut])
+        floor, top = value_range([_within_the_data(cut)])
         top *= 0.6  # value_range leaves a factor 2 above the largest value; a rim just above it is enough here
         _draw_polar(
             axis, cut, results, samples.channels, min(max(floor, top / POLAR_RANGE), top / MIN_POLAR_RANGE), top
@@ -96,6 +97,17 @@ def polar(
     if path is not None:
         save_figure(figure, path)
     return figure
+
+
+def _within_the_data(cut: Slice) -> Slice:
+    """``cut`` with its curves kept to the data's span of θo (2° beyond each end), for the radius range: a model's
+    values past the last sample (a grazing peak no sample saw) must not squash the data into the centre. A cut with
+    no data keeps its curves."""
+    if cut.data_theta_o.size == 0:
+        return cut
+    low, high = cut.data_theta_o.min() - 2.0, cut.data_theta_o.max() + 2.0
+    seen = (cut.curve_theta_o >= low) & (cut.curve_theta_o <= high)
+    return replace(cut, curve_theta_o=cut.curve_theta_o[seen], curves=[curve[seen] for curve in cut.curves])
 
 
 def _draw_polar(axis, cut: Slice, results: list[FitResult], channels: Sequence[str], floor: float, top: float):
@@ -151,6 +163,8 @@ def _draw_polar(axis, cut: Slice, results: list[FitResult], channels: Sequence[s
     if count == 0:
         note = f"no samples within {PLANE_TOLERANCE:g}° of this plane"
     else:
-        note = f"{count} samples" + (f", {left_out} values below {floor:.2g} left out" if left_out else "")
+        note = f"{count} sample{'s' if count > 1 else ''}" + (
+            f", {left_out} values below {floor:.2g} left out" if left_out else ""
+        )
     # In the axes box's fraction: the half disc's top is at 0.75, its θ labels take about 0.25 inch above it.
     axis.set_title(f"{incidence_title(cut.incidence)}\n{note}", fontsize=9, y=0.75 + 0.3 / WEDGE_INCHES)

@@ -34,6 +34,7 @@ from ..physics.models import Model
 from ..uncertainty.methods import check_options, with_uncertainty
 from . import plots
 from .figures import label
+from .residuals import colour_limit
 
 #: Suffixes of the report file.
 REPORT_SUFFIXES = (".html", ".htm")
@@ -144,10 +145,11 @@ def _page(samples: Samples, comparison: Comparison, shown: list[FitResult]) -> s
         ),
         _figure(plots.polar(shown, samples), "The plane of incidence as polar plots (radius: BRDF on a log scale)."),
     ]
+    limit = max(colour_limit(result, samples) for result in shown)  # one colour scale: the maps compare
     for result in shown:
         parts.append(
             _figure(
-                plots.residuals(result, samples),
+                plots.residuals(result, samples, limit=limit),
                 f"Where <code>{html.escape(label(result))}</code> misses: its residuals in the loss's units"
                 " (red: the model above the data).",
             )

@@ -7,6 +7,7 @@ above the data, blue below.
 """
 
 import os
+from typing import NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -27,13 +28,17 @@ MAX_MAPS = 6
 MAP_COLUMNS = 3
 #: The colour limits are ± this percentile of the |residuals| shown, so a few outliers do not wash out the rest.
 LIMIT_PERCENTILE = 99
+#: ... and at least this, in the loss's units: residuals below it are rounding (an exact fit shows white).
+LIMIT_FLOOR = 1e-12
 #: Bins per axis of the (θh, θd) map, the finest that leave on average this many samples per bin.
 HALF_DIFFERENCE_BINS = (90, 60, 45, 30, 18, 9)
 SAMPLES_PER_BIN = 10
 COLOURMAP = "RdBu_r"
 
 
-def residuals(result: FitResult, samples: Samples, *, path: str | os.PathLike | None = None) -> Figure:
+def residuals(
+    result: FitResult, samples: Samples, *, limit: float | None = None, path: str | os.PathLike | None = None
+) -> Figure:
     """Where the fit ``result`` misses ``samples``: its residuals (``result.residuals``, the loss's units, ``T(f) −
     T(y)`` scaled by weight and sigma; > 0 where the model lies above the data), averaged over the channels.
 
@@ -43,8 +48,10 @@ def residuals(result: FitResult, samples: Samples, *, path: str | os.PathLike | 
     marked ×, the mirror direction +. Other data: the mean residual in bins of the half and difference angles
     ``(θh, θd)`` (Rusinkiewicz 1998, degrees), bins without samples left grey. The colour scale is diverging,
     centred at 0, with limits ± the :data:`LIMIT_PERCENTILE`-th percentile of the |residuals| shown (of the bin
-    means, for the binned map). ``path``: also save the figure there (``.png``, ``.pdf``, ``.svg``).
-    Returns the matplotlib :class:`~matplotlib.figure.Figure`.
+    means, for the binned map), and never below :data:`LIMIT_FLOOR` (an exact fit shows white, not its rounding);
+    ``limit`` sets it instead, so that the maps of several fits share one scale (:func:`colour_limit`). ``path``:
+    also save the figure there (``.png``, ``.pdf``, ``.svg``). Returns the matplotlib
+    :class:`~matplotlib.figure.Figure`.
     """
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be one FitResult, got {type(result).__name__}")
@@ -56,12 +63,15 @@ def residuals(result: FitResult, samples: Samples, *, path: str | os.PathLike | 
             f" {', '.join(samples.channels)}",
         )
     path = None if path is None else check_figure_path(path)
-    mean_residual = np.mean(result.residuals(samples), axis=1)
-    lights, light_index = samples.light_directions()
-    if len(lights) <= MAX_LIGHTS:
-        figure = _light_maps(samples, mean_residual, light_index, len(lights), colour_bar_label(result, samples))
+    if limit is not None and not (isinstance(limit, float | int) and np.isfinite(limit) and limit > 0):
+        raise BrdfInputError(Argument.given("limit", limit), " is not allowed; give a positive number (or None)")
+    shown = _shown(result, samples)
+    limit = symmetric_limit(shown.values) if limit is None else float(limit)
+    bar_label = colour_bar_label(result, samples)
+    if shown.lights is not None:
+        figure = _light_maps(samples, shown, limit, bar_label)
     else:
-        figure = _half_difference_map(samples, mean_residual, colour_bar_label(result, samples))
+        figure = _half_difference_map(samples, shown, limit, bar_label)
     figure.suptitle(f"{label(result)} on {samples.source}: where the fit misses", fontsize=11)
     if path is not None:
         save_figure(figure, path)
@@ -76,21 +86,78 @@ def colour_bar_label(result: FitResult, samples: Samples) -> str:
 
 
 def symmetric_limit(values: np.ndarray) -> float:
-    """± this limit holds the :data:`LIMIT_PERCENTILE`-th percentile of |values| (finite ones; 1 if all are 0)."""
+    """± this limit holds the :data:`LIMIT_PERCENTILE`-th percentile of |values| (finite ones), at least
+    :data:`LIMIT_FLOOR`."""
     magnitudes = np.abs(values[np.isfinite(values)])
     limit = float(np.percentile(magnitudes, LIMIT_PERCENTILE)) if magnitudes.size else 0.0
-    return limit if limit > 0 else 1.0
+    return max(limit, LIMIT_FLOOR)
 
 
-def _light_maps(
-    samples: Samples, mean_residual: np.ndarray, light_index: np.ndarray, n_lights: int, bar_label: str
-) -> Figure:
+def colour_limit(result: FitResult, samples: Samples) -> float:
+    """The colour limit :func:`residuals` would choose for ``result`` on ``samples``; the largest over several fits
+    puts their maps on one scale."""
+    return symmetric_limit(_shown(result, samples).values)
+
+
+class _Shown(NamedTuple):
+    """What a residual map shows: the channel-mean residual of each sample (N,), and either the light directions
+    mapped (``lights``: the chosen indices, ``light_index`` of each sample) or the (θh, θd) bins (``edges`` (n+1,),
+    ``means`` (n, n), NaN where empty). ``values``: the numbers the colour limit is taken from."""
+
+    mean_residual: np.ndarray
+    values: np.ndarray
+    lights: np.ndarray | None = None
+    light_index: np.ndarray | None = None
+    n_lights: int = 0
+    edges: np.ndarray | None = None
+    means: np.ndarray | None = None
+
+
+def _shown(result: FitResult, samples: Samples) -> _Shown:
+    mean_residual = np.mean(result.residuals(samples), axis=1)
+    lights, light_index = samples.light_directions()
+    if len(lights) <= MAX_LIGHTS:
+        theta_i = samples.theta_i
+        # Lights in increasing θi (the mean over the samples that share one), then evenly chosen.
+        order = np.argsort([np.mean(theta_i[light_index == k]) for k in range(len(lights))], kind="stable")
+        shown = order[evenly_spread(len(lights), MAX_MAPS)]
+        selected = mean_residual[np.isin(light_index, shown)]
+        return _Shown(mean_residual, selected, shown, light_index, len(lights))
+    edges, means = _binned(samples, mean_residual)
+    return _Shown(mean_residual, means, edges=edges, means=means)
+
+
+def _binned(samples: Samples, mean_residual: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean residual in (θh, θd) bins: the finest of :data:`HALF_DIFFERENCE_BINS` that averages at least
+    :data:`SAMPLES_PER_BIN` samples per bin and leaves no empty bin between two full ones along either axis (MERL's
+    θh grid is quadratic: at 1° its bins above 25° alternate full and empty, an artefact of the grid, not a hole
+    in the data). Returns the edges (n + 1,) in degrees and the means (n, n), rows θd, columns θh."""
+    theta_h, theta_d = half_difference_angles(samples)
+    for bins in HALF_DIFFERENCE_BINS:
+        edges = np.linspace(0.0, 90.0, bins + 1)
+        column = np.clip(np.searchsorted(edges, theta_h, side="right") - 1, 0, bins - 1)
+        row = np.clip(np.searchsorted(edges, theta_d, side="right") - 1, 0, bins - 1)
+        cell = row * bins + column
+        counts = np.bincount(cell, minlength=bins * bins).reshape(bins, bins)
+        enough = samples.n_samples >= SAMPLES_PER_BIN * bins * bins
+        if bins == HALF_DIFFERENCE_BINS[-1] or (enough and not _has_gaps(counts > 0)):
+            break
+    sums = np.bincount(cell, weights=mean_residual, minlength=bins * bins).reshape(bins, bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return edges, np.where(counts > 0, sums / counts, np.nan)
+
+
+def _has_gaps(full: np.ndarray) -> bool:
+    """Whether some empty cell lies between two full ones, along a row or a column."""
+    between_columns = ~full[:, 1:-1] & full[:, :-2] & full[:, 2:]
+    between_rows = ~full[1:-1, :] & full[:-2, :] & full[2:, :]
+    return bool(between_columns.any() or between_rows.any())
+
+
+def _light_maps(samples: Samples, shown_maps: _Shown, limit: float, bar_label: str) -> Figure:
     theta_i = samples.theta_i
-    # Lights in increasing θi (the mean over the samples that share one), then evenly chosen.
-    order = np.argsort([np.mean(theta_i[light_index == k]) for k in range(n_lights)], kind="stable")
-    shown = order[evenly_spread(n_lights, MAX_MAPS)]
-    selected = np.isin(light_index, shown)
-    limit = symmetric_limit(mean_residual[selected])
+    mean_residual, light_index, n_lights = shown_maps.mean_residual, shown_maps.light_index, shown_maps.n_lights
+    shown = shown_maps.lights
     columns = min(MAP_COLUMNS, len(shown))
     rows = -(-len(shown) // columns)
     figure = Figure(figsize=(0.4 + 3.3 * columns + 1.6, 0.7 + 3.4 * rows), layout="constrained")
@@ -141,18 +208,9 @@ def _light_maps(
     return figure
 
 
-def _half_difference_map(samples: Samples, mean_residual: np.ndarray, bar_label: str) -> Figure:
-    theta_h, theta_d = half_difference_angles(samples)
-    bins = next((n for n in HALF_DIFFERENCE_BINS if samples.n_samples >= SAMPLES_PER_BIN * n * n), 9)
-    edges = np.linspace(0.0, 90.0, bins + 1)
-    column = np.clip(np.searchsorted(edges, theta_h, side="right") - 1, 0, bins - 1)
-    row = np.clip(np.searchsorted(edges, theta_d, side="right") - 1, 0, bins - 1)
-    cell = row * bins + column
-    counts = np.bincount(cell, minlength=bins * bins)
-    sums = np.bincount(cell, weights=mean_residual, minlength=bins * bins)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        means = np.where(counts > 0, sums / counts, np.nan).reshape(bins, bins)
-    limit = symmetric_limit(means)
+def _half_difference_map(samples: Samples, shown: _Shown, limit: float, bar_label: str) -> Figure:
+    edges, means = shown.edges, shown.means
+    bins = len(edges) - 1
     figure = Figure(figsize=(6.4, 5.0), layout="constrained")
     axis = figure.add_subplot()
     axis.set_facecolor("0.85")

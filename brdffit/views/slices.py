@@ -107,7 +107,7 @@ def slices(
     1/sr on a log axis shared by every panel: points are the samples within :data:`PLANE_TOLERANCE` degrees of the
     plane at that incidence, lines each result's ``predict`` along it (colour: channel; line style: fit, named in
     the legend by :func:`~brdffit.views.figures.label`). Values at or below the axis floor (zeros included) are drawn
-    on the floor as ▽. Dotted vertical lines mark the mirror (``+θi``) and retro (``−θi``) directions. A panel with no
+    on the floor as ▽. Pale vertical bands mark the mirror (``+θi``) and retro (``−θi``) directions. A panel with no
     samples in its plane (random data) says so and still shows the curves. As in Ngan et al. 2005's comparisons.
 
     ``results``: one :class:`FitResult` or several (with the samples' channels). ``incidences``: light zeniths in
@@ -329,7 +329,8 @@ def _draw_slice(axis, cut: Slice, results: list[FitResult], channels: Sequence[s
     """Draw one slice on cartesian axes; True when some data lie at or below the floor (drawn there as ▽)."""
     if cut.plane == "incidence":
         for direction in sorted({cut.incidence.theta_i, -cut.incidence.theta_i}):
-            axis.axvline(direction, color="0.6", linestyle=":", linewidth=0.8, gid="direction")
+            # A thin pale band, unlike any fit's line style.
+            axis.axvline(direction, color="0.85", linestyle="-", linewidth=3, zorder=0, gid="direction")
     below = False
     for index in range(len(results)):
         for channel in range(len(channels)):
@@ -371,7 +372,11 @@ def _draw_slice(axis, cut: Slice, results: list[FitResult], channels: Sequence[s
                 gid=f"floor:{channels[channel]}",
                 clip_on=False,
             )
-    note = f"{count} samples" if count else f"no samples within {PLANE_TOLERANCE:g}° of this plane"
+    note = (
+        f"{count} sample{'s' if count > 1 else ''}"
+        if count
+        else f"no samples within {PLANE_TOLERANCE:g}° of this plane"
+    )
     axis.text(0.02, 0.98, note, transform=axis.transAxes, ha="left", va="top", fontsize=7, color="0.35")
     return below
 
@@ -397,7 +402,7 @@ def legend_handles(results: list[FitResult], channels: Sequence[str], *, below_f
             Line2D([], [], color="0.25", linestyle="", marker="v", markerfacecolor="none", label="data ≤ axis floor")
         )
     if directions:
-        handles.append(Line2D([], [], color="0.6", linestyle=":", label="mirror (+θi), retro (−θi)"))
+        handles.append(Line2D([], [], color="0.85", linestyle="-", linewidth=3, label="mirror (+θi), retro (−θi)"))
     if len(channels) > 1:
         shown = min(len(channels), LEGEND_CHANNELS)
         handles += [

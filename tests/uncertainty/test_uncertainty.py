@@ -94,6 +94,13 @@ def test_without_sigma_a_varying_scatter_is_reported():
     assert "heteroscedasticity-robust" in result.table()
     with_sigma = fit(oak_samples(seed=13), "ward", uncertainty="laplace")
     assert with_sigma.uncertainty["diagnostics"]["robust_stderr"] is None
+    # MCMC's likelihood makes the same one-scatter assumption: its warning says what that means for the posterior.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)
+        sampled = sample_posterior(result, samples, MCMC(walkers=16, steps=120, burn=40, seed=2))
+    (line,) = [line for line in sampled.uncertainty["warnings"] if "heteroscedasticity-robust" in line]
+    assert "the posterior, whose likelihood assumes one scatter, may be too narrow" in line
+    assert "Laplace reports" not in line
 
 
 def test_gauss_newton_matrix_matches_finite_differences():

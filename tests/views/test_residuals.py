@@ -12,7 +12,7 @@ from matplotlib.collections import PathCollection, QuadMesh
 import data_synth
 from brdffit import BrdfInputError, FitResult
 from brdffit.data.summary import half_difference_angles
-from brdffit.views.residuals import LIMIT_PERCENTILE, MAX_MAPS, residuals
+from brdffit.views.residuals import LIMIT_FLOOR, LIMIT_PERCENTILE, MAX_MAPS, colour_limit, residuals
 
 #: What the data are (Ngan et al. 2005's Ward fit of pickled oak) and a model a little off it: residuals of both signs.
 OAK = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}
@@ -132,3 +132,42 @@ def test_bad_arguments_give_one_line_naming_the_argument(grid_samples, arguments
     with pytest.raises(BrdfInputError, match=message) as error:
         residuals(call.pop("result"), call.pop("samples"), **call)
     assert "\n" not in str(error.value)
+
+
+def test_an_exact_fit_shows_white_not_its_rounding(grid_samples):
+    """Residuals of an exact fit are rounding (~1e-17 in log-loss units): the colour limit stays at LIMIT_FLOOR, so
+    the map is white, rather than stretching the rounding to full red and blue."""
+    exact = data_synth.synthesize("ward", OAK, *data_synth.hemisphere_grid(4, 9, 12))
+    figure = residuals(result_of(OAK), exact)
+    assert colour_bar(figure).mappable.get_clim() == (-LIMIT_FLOOR, LIMIT_FLOOR)
+
+
+def test_several_fits_can_share_one_colour_scale(grid_samples):
+    near, far = result_of(OFF), result_of({"rho_d": [0.2, 0.15, 0.1], "rho_s": [0.1, 0.1, 0.1], "alpha": 0.3})
+    shared = max(colour_limit(near, grid_samples), colour_limit(far, grid_samples))
+    assert colour_limit(far, grid_samples) > colour_limit(near, grid_samples)
+    for result in (near, far):
+        assert colour_bar(residuals(result, grid_samples, limit=shared)).mappable.get_clim() == (-shared, shared)
+    with pytest.raises(BrdfInputError, match=r"^limit=0 is not allowed; give a positive number"):
+        residuals(near, grid_samples, limit=0)
+
+
+def test_a_quadratic_theta_h_grid_leaves_no_empty_columns():
+    """MERL's θh bins are (i/90)²·90°: at 1° bins their centres above ~25° leave every other column empty. The map
+    takes the finest bins with no empty cell between two full ones."""
+    from brdffit.physics.geometry import from_half_difference
+
+    theta_h = np.radians((np.arange(90) / 90) ** 2 * 90)
+    theta_d = np.radians(np.arange(0.5, 89, 1.0))
+    phi_d = np.radians(np.arange(0.0, 180.0, 6.0))
+    grid_h, grid_d, grid_p = (a.ravel() for a in np.meshgrid(theta_h, theta_d, phi_d))
+    wi, wo = from_half_difference(grid_h, 0 * grid_h, grid_d, grid_p)
+    above = (wi[:, 2] > 1e-3) & (wo[:, 2] > 1e-3)
+    samples = data_synth.synthesize("ward", OAK, wi[above], wo[above], noise=0.01, seed=3)
+    mesh = next(
+        c for axis in residuals(result_of(OFF), samples).axes for c in axis.collections if isinstance(c, QuadMesh)
+    )
+    full = ~np.ma.getmaskarray(mesh.get_array()).reshape(int(np.sqrt(mesh.get_array().size)), -1)
+    assert not np.any(~full[:, 1:-1] & full[:, :-2] & full[:, 2:])
+    assert samples.n_samples >= 10 * 90 * 90  # enough for 1° bins: only their gaps make the map coarser
+    assert full.shape[0] < 90

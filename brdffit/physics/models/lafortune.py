@@ -23,7 +23,7 @@ import numpy as np
 from ..._arrays import namespace
 from ...checks import whole_number
 from ...errors import BrdfInputError
-from ..domains import EXPONENT, NON_NEGATIVE, Domain, Interval
+from ..domains import EXPONENT, Domain, Interval, Positive
 from ..geometry import safe_power
 from .grids import EXPONENT_GRID
 from .lobe import BoundedShapeCoordinates, Lobe, ShapeCoordinates
@@ -97,8 +97,10 @@ class LafortuneLobe(Lobe):
 
     summary = "(n+2)/(2π) · (cxy (wi_x wo_x + wi_y wo_y) + cz ci co)^n / max(|cxy|, |cz|)^n"
 
-    #: The normalisation (n+2)/(2π) is exact only for cz = 1; published fits reach rho_s = 1.71 (Ngan et al. 2005).
-    specular_domain = NON_NEGATIVE
+    #: The normalisation (n+2)/(2π) is exact only for cz = 1, so rho_s may exceed 1: published fits reach 1.71 (Ngan
+    #: et al. 2005). Far beyond (the real tape's l2 fit put 8·10⁸ on a lobe whose peak no sample saw, fitting its
+    #: tail) the lobe is degenerate: its albedo and exponent trade off, and the fit says so.
+    specular_domain = Positive(allow_zero=True, plausible_max=10.0)
 
     @property
     def parameters(self):
