@@ -48,6 +48,16 @@ CASES = [
             ],
         },
     ),
+    (  # a renderer's metal: GGX with separable Smith (Mitsuba's roughconductor), gold-like index
+        "cook-torrance",
+        {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"},
+        {"kd": [0.01, 0.01, 0.01], "ks": [1.0, 0.8, 0.4], "m": 0.15, "eta": 0.2, "k": 3.9},
+    ),
+    (  # a plastic: Beckmann with height-correlated Smith
+        "cook-torrance",
+        {"fresnel": "dielectric", "distribution": "beckmann", "shadowing": "smith-correlated"},
+        {"kd": [0.3, 0.26, 0.18], "ks": [0.41, 0.35, 0.23], "m": 0.2, "eta": 1.5},
+    ),
 ]
 
 

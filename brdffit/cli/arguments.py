@@ -36,19 +36,34 @@ def spell(argument: Argument) -> str:
     return flag(argument.name) if argument.shown is None else f"{flag(argument.name)} {argument.shown}"
 
 
+#: The model options as flags: each model takes some (``brdffit models`` lists them).
+MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "lobes")
+
+
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
-    """``--model`` and the model options (``--fresnel``, ``--lobes``)."""
+    """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--lobes``)."""
     from ..physics.fresnel import FRESNEL
+    from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models import MODELS
 
     default_text = f" (default {default})" if default else " (default: the model of a result file given as --params)"
     command.add_argument("--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}")
-    command.add_argument(
-        "--fresnel",
-        metavar="KIND",
-        help=f"cook-torrance's Fresnel term: {', '.join(FRESNEL)} (default {next(iter(FRESNEL))})",
-    )
+    for name, kinds, what in (
+        ("fresnel", FRESNEL, "Fresnel term"),
+        ("distribution", DISTRIBUTIONS, "microfacet distribution"),
+        ("shadowing", SHADOWING, "masking-shadowing term"),
+    ):
+        command.add_argument(
+            f"--{name}",
+            metavar="KIND",
+            help=f"cook-torrance's {what}: {', '.join(kinds)} (default {next(iter(kinds))})",
+        )
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
+
+
+def model_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The model options :func:`add_model_options` gave (None where not given: the model's default)."""
+    return {name: getattr(args, name) for name in MODEL_OPTIONS}
 
 
 def add_comparison_options(command: argparse.ArgumentParser) -> None:

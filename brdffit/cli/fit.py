@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..errors import Argument, BrdfInputError
 from . import EXIT_NOT_CONVERGED, EXIT_OK
-from .arguments import add_loading_options, add_model_options, json_argument, load, output_file
+from .arguments import add_loading_options, add_model_options, json_argument, load, model_options, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from ..physics.models import get_model
 
     enable_compilation_cache()
-    model = get_model(args.model, fresnel=args.fresnel, lobes=args.lobes)
+    model = get_model(args.model, **model_options(args))
     get_loss(args.loss)
     mcmc = _uncertainty_settings(args)
     inputs = [*args.samples, *([args.start] if args.start and not args.start.lstrip().startswith("{") else [])]
@@ -219,8 +219,11 @@ def output_paths(inputs: list[str], output: str | None, model, protected: list[s
 
 
 def default_name(path: str, model) -> str:
-    """``<stem>.<model>[.<option>-<value>…].json``: ``tape.lafortune.lobes-2.json``, ``oak.ward.json``."""
-    options = "".join(f".{key}-{value}" for key, value in model.options)
+    """``<stem>.<model>[.<option>-<value>…].json`` with the options that differ from their defaults:
+    ``tape.lafortune.lobes-2.json``, ``oak.cook-torrance.fresnel-conductor.json``, ``oak.ward.json``."""
+    from ..physics.models import chosen_options
+
+    options = "".join(f".{key}-{value}" for key, value in chosen_options(model).items())
     return f"{Path(path).stem}.{model.name}{options}.json"
 
 

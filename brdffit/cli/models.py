@@ -12,6 +12,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..physics.fresnel import FRESNEL
+    from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models import MODELS, get_model, model_option_names
 
     for name in MODELS:
@@ -22,6 +23,10 @@ def run(args: argparse.Namespace) -> int:
         if options:
             print(f"  options: {', '.join(flag(option) for option in options)}")
         if name == "cook-torrance":
+            for option, kinds in (("distribution", DISTRIBUTIONS), ("shadowing", SHADOWING)):
+                described = (getattr(kind, "summary", kind) for kind in kinds.values())
+                listed = ", ".join(f"{value} ({what})" for value, what in zip(kinds, described, strict=True))
+                print(f"  {flag(option)}: {listed}")
             for fresnel, kind in FRESNEL.items():
                 lines = describe_parameters(get_model(name, fresnel=fresnel))
                 print(f"  {flag('fresnel')} {fresnel}: {'; '.join(lines)} ({kind.summary})")

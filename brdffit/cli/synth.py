@@ -5,7 +5,7 @@ import inspect
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_model_options, json_argument, output_file
+from .arguments import add_model_options, json_argument, model_options, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -97,7 +97,7 @@ def _model_and_params(args: argparse.Namespace):
     from ..physics.models import model_for
 
     params = json_argument(args.params, "--params")
-    model_name, options, channels = args.model, {"fresnel": args.fresnel, "lobes": args.lobes}, None
+    model_name, options, channels = args.model, model_options(args), None
     if isinstance(params, dict) and "params" in params and "model" in params:  # a result file
         if args.model not in (None, params["model"]):
             raise BrdfInputError(f"--params {args.params} holds a {params['model']} result, not --model {args.model}")

@@ -120,13 +120,20 @@ def test_a_folder_named_with_a_slash_takes_the_default_name(samples, tmp_path, c
 
 
 def test_default_names_carry_the_options_that_change_the_result(samples, tmp_path, capsys, monkeypatch):
+    """The name carries each option that differs from its default, so fits with other options do not collide."""
     monkeypatch.chdir(tmp_path)
-    for options in (["--model", "cook-torrance"], ["--model", "cook-torrance", "--fresnel", "none"], []):
+    for options in (
+        ["--model", "cook-torrance"],
+        ["--model", "cook-torrance", "--fresnel", "none"],
+        ["--model", "cook-torrance", "--distribution", "ggx", "--shadowing", "smith"],
+        [],
+    ):
         status, _, _ = run(["fit", samples, *options], capsys)
         assert status == 0
     assert sorted(name for name in os.listdir(tmp_path) if name.endswith(".json")) == [
+        "samples.cook-torrance.distribution-ggx.shadowing-smith.json",
         "samples.cook-torrance.fresnel-none.json",
-        "samples.cook-torrance.fresnel-schlick.json",
+        "samples.cook-torrance.json",
         "samples.ward.json",
     ]
 

@@ -100,6 +100,18 @@ _ENERGY_CASES = [
     ("cook-torrance", {"fresnel": "schlick"}, {"ks": [0.4]}, {"m": (0.05, 0.2, 0.6), "f0": (0.04, 1.0)}, 85),
     ("cook-torrance", {"fresnel": "dielectric"}, {"ks": [0.4]}, {"m": (0.05, 0.3), "eta": (1.5,)}, 85),
     ("cook-torrance", {"fresnel": "conductor"}, {"ks": [0.4]}, {"m": (0.05, 0.3), "eta": (0.2,), "k": (3.9,)}, 85),
+    # Smith's masking-shadowing only removes energy (Heitz 2014): with F = 1 and ks = 0.4 below 0.4 + 0.5.
+    *(
+        (
+            "cook-torrance",
+            {"fresnel": "none", "distribution": d, "shadowing": s},
+            {"ks": [0.4]},
+            {"m": (0.05, 0.3, 1.0)},
+            85,
+        )
+        for d in ("beckmann", "ggx")
+        for s in ("smith", "smith-correlated")
+    ),
     ("blinn-phong", {}, {"rho_s": [0.4]}, {"n": (5.0, 50.0, 500.0)}, 85),
     ("phong", {}, {"rho_s": [0.4]}, {"n": (5.0, 50.0, 500.0)}, 85),
 ]
@@ -247,6 +259,10 @@ def _extreme_cases():
             ("cook-torrance", {"fresnel": "conductor"}, {"kd": [0.1], "ks": [0.5], "m": alpha, "eta": 5.0, "k": 10.0}),
             ("cook-torrance", {"fresnel": "none"}, {"kd": [0.1], "ks": [0.5], "m": alpha}),
         ]
+        for distribution in ("beckmann", "ggx"):
+            for shadowing in ("smith", "smith-correlated"):
+                options = {"fresnel": "none", "distribution": distribution, "shadowing": shadowing}
+                cases.append(("cook-torrance", options, {"kd": [0.1], "ks": [0.5], "m": alpha}))
     for n in (1e-2, 1.0, 1e4):
         cases += [
             ("phong", {}, {"rho_d": [0.1], "rho_s": [0.5], "n": n}),
@@ -425,7 +441,11 @@ def test_registry_names_models_and_options():
     with pytest.raises(BrdfInputError, match=r"^lobes=0 is not allowed; give a whole number from 1 to 8"):
         get_model("lafortune", lobes=0)
     assert get_model("lafortune", lobes=3).n_lobes == 3
-    assert get_model("cook-torrance").model_options == {"fresnel": "schlick"}
+    assert get_model("cook-torrance").model_options == {
+        "fresnel": "schlick",
+        "distribution": "beckmann",
+        "shadowing": "v-groove",
+    }
 
 
 def test_evaluate_takes_unit_directions_and_lafortunes_lobes_from_the_parameters(rng):

@@ -38,6 +38,18 @@ def model_option_names(name: str) -> tuple[str, ...]:
     return tuple(inspect.signature(MODELS[name]).parameters)
 
 
+def model_option_defaults(name: str) -> dict[str, Any]:
+    """Each option of model ``name`` with its default (``{"fresnel": "schlick", …}``)."""
+    return {key: parameter.default for key, parameter in inspect.signature(MODELS[name]).parameters.items()}
+
+
+def chosen_options(model: Model) -> dict[str, Any]:
+    """The options of ``model`` that differ from their defaults: what names a fit apart from its model's default
+    (``{"fresnel": "conductor"}``; ``{}`` for Cook-Torrance with Beckmann, V-groove and Schlick)."""
+    defaults = model_option_defaults(model.name)
+    return {key: value for key, value in model.options if defaults.get(key) != value}
+
+
 def get_model(model: "str | Model", **options: Any) -> Model:
     """The model called ``model`` built with ``options``; options given as ``None`` take their default.
 

@@ -1,16 +1,17 @@
-"""Cook-Torrance microfacet lobe: Beckmann distribution, V-groove shadowing, Fresnel.
+"""Cook-Torrance microfacet lobe: a distribution, a masking-shadowing term and a Fresnel term.
 
-Cook & Torrance, "A reflectance model for computer graphics", ACM TOG 1982,
-normalised as in Walter et al., "Microfacet models for refraction through
-rough surfaces", EGSR 2007::
+Cook & Torrance, "A reflectance model for computer graphics", ACM TOG 1982, normalised as in Walter et al.,
+"Microfacet models for refraction through rough surfaces", EGSR 2007::
 
     lobe = F(cos β) · D · G / (4 ci co)
-    D    = exp(-tan²θh / m²) / (π m² ch⁴)                     (Beckmann; m is the rms slope)
-    G    = min(1, 2 ch co / (wo·h), 2 ch ci / (wo·h))       (V-groove, Torrance & Sparrow 1967)
 
-It equals the V-groove model as it is often written, ``F/π · D'G/(ci co)``, with
-``D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)``. The Fresnel term is one of ``fresnel.FRESNEL``. With ``ks = 1`` and
-``F = 1`` the lobe's directional albedo is at most 1.
+with ``D`` and ``G`` of ``microfacet.py`` and ``F`` of ``fresnel.py``. The defaults are Cook and Torrance's own:
+Beckmann's ``D = exp(-tan²θh / m²) / (π m² ch⁴)`` (``m`` the rms slope) and the V-groove
+``G = min(1, 2 ch co / (wo·h), 2 ch ci / (wo·h))`` (Torrance & Sparrow 1967), which equal the form often written
+``F/π · D'G/(ci co)`` with ``D' = exp(-tan²θh/m²)/(4 m² cos⁴θh)``. ``distribution="ggx"`` and
+``shadowing="smith"`` / ``"smith-correlated"`` give the microfacet models renderers implement (Mitsuba's
+``roughconductor`` is GGX or Beckmann with separable Smith; glTF's is GGX with height-correlated Smith); ``m`` is
+then GGX's ``α``. With ``ks = 1`` and ``F = 1`` the lobe's directional albedo is at most 1.
 """
 
 from dataclasses import dataclass
@@ -21,39 +22,31 @@ import jax.numpy as jnp
 from ...checks import choice
 from ..domains import ALBEDO, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL
-from ..geometry import half_vector, tan2_from_cos
+from ..geometry import half_vector
+from ..microfacet import DISTRIBUTIONS, SHADOWING, shadowing
 from .grids import ROUGHNESS_GRID
 from .lobe import MappedLobe
 from .model import Model
 
 
-def beckmann_distribution(cos_theta_h, m):
-    """Beckmann 1963 microfacet distribution ``exp(-tan²θh/m²) / (π m² cos⁴θh)``, in 1/sr."""
-    cos2 = cos_theta_h * cos_theta_h
-    return jnp.exp(-tan2_from_cos(cos_theta_h) / (m * m)) / (jnp.pi * m * m * cos2 * cos2)
-
-
-def v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta):
-    """Torrance-Sparrow V-groove masking-shadowing ``min(1, 2 ch co/(wo·h), 2 ch ci/(wo·h))``.
-
-    ``cos_beta = wi·h = wo·h``.
-    """
-    return jnp.minimum(1.0, 2.0 * cos_theta_h * jnp.minimum(cos_i, cos_o) / cos_beta)
-
-
 @final
 @dataclass(frozen=True)
 class CookTorranceLobe(MappedLobe):
-    """Cook-Torrance lobe with rms slope ``m`` and the Fresnel term named by ``fresnel``."""
+    """Cook-Torrance lobe with roughness ``m``, the ``distribution``, ``shadowing`` and ``fresnel`` terms named."""
 
     fresnel: str = "schlick"
+    distribution: str = "beckmann"
+    shadowing: str = "v-groove"
 
     def __post_init__(self):
         choice("fresnel", self.fresnel, FRESNEL, verb="is not known")
+        choice("distribution", self.distribution, DISTRIBUTIONS, verb="is not known")
+        choice("shadowing", self.shadowing, SHADOWING, verb="is not known")
 
     @property
     def summary(self) -> str:
-        return f"Beckmann D, V-groove G, {self.fresnel} Fresnel, F·D·G/(4 ci co)"
+        distribution = DISTRIBUTIONS[self.distribution].summary
+        return f"{distribution} D, {SHADOWING[self.shadowing]} G, {self.fresnel} Fresnel, F·D·G/(4 ci co)"
 
     @property
     def specular_domain(self) -> Domain:
@@ -76,15 +69,15 @@ class CookTorranceLobe(MappedLobe):
         h = half_vector(wi, wo)
         cos_theta_h = h[:, 2]
         cos_beta = jnp.sum(wi * h, axis=-1)
-        distribution = beckmann_distribution(cos_theta_h, shape["m"])
-        shadowing = v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta)
+        distribution = DISTRIBUTIONS[self.distribution]
+        masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cos_beta)
         fresnel = FRESNEL[self.fresnel].reflectance(cos_beta, shape)
-        return fresnel * distribution * shadowing / (4.0 * cos_i * cos_o)
+        return fresnel * distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
 
 
-def cook_torrance(fresnel: str = "schlick") -> Model:
-    """``kd/π + ks · F·D·G/(4 ci co)``; ``fresnel`` one of schlick (default), dielectric, conductor, none."""
-    lobe = CookTorranceLobe(fresnel)
-    return Model(
-        "cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", (("fresnel", fresnel),)
-    )
+def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shadowing: str = "v-groove") -> Model:
+    """``kd/π + ks · F·D·G/(4 ci co)``; ``fresnel`` one of schlick (default), dielectric, conductor, none;
+    ``distribution`` beckmann (default) or ggx; ``shadowing`` v-groove (default), smith or smith-correlated."""
+    lobe = CookTorranceLobe(fresnel, distribution, shadowing)
+    options = (("fresnel", fresnel), ("distribution", distribution), ("shadowing", shadowing))
+    return Model("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", options)

@@ -35,7 +35,8 @@ class Model:
     """A reflectance model: ``diffuse / π`` plus ``n_lobes`` lobes of one family.
 
     ``name`` is the model's registry name (``ward``); ``options`` the options that define it (``fresnel``,
-    ``lobes``) as sorted ``(key, value)`` pairs, written to the result file as ``model_options``.
+    ``distribution``, ``shadowing``, ``lobes``) as ``(key, value)`` pairs in the order the model's builder takes
+    them, written to the result file as ``model_options``.
     Frozen, hence hashable: JAX treats a model as static configuration.
     """
 

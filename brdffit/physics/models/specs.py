@@ -2,18 +2,20 @@
 
 ``ward``, ``cook-torrance:fresnel=conductor``, ``lafortune:lobes=2``. A value without its key is the value of
 the one option that accepts it (``lafortune:2``, ``cook-torrance:conductor``). The canonical spec of a model
-(:func:`spec_of`) names every option with its key, in the model's order.
+(:func:`spec_of`) names, with its key, every option that differs from its default, in the model's order:
+``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``.
 """
 
 from typing import Any
 
 from ...errors import BrdfInputError
-from . import MODELS, Model, get_model, model_option_names
+from . import MODELS, Model, get_model, model_option_defaults, model_option_names
 
 
 def spec_of(name: str, options: dict[str, Any]) -> str:
-    """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, or ``ward``."""
-    written = ",".join(f"{key}={value}" for key, value in options.items())
+    """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
+    defaults = model_option_defaults(name) if name in MODELS else {}
+    written = ",".join(f"{key}={value}" for key, value in options.items() if defaults.get(key) != value)
     return f"{name}:{written}" if written else name
 
 
