@@ -27,6 +27,8 @@ COMMANDS = {
     "compare": "fit several models to one samples file and rank them by cross-validated loss",
     "plot": "figures of fits against their samples: slices, polar plots, residual maps, lit spheres",
     "report": "compare models on one samples file and write a self-contained HTML report",
+    "export": "a fit for a renderer: a Mitsuba 3 BSDF, a glTF 2.0 material or a MERL table",
+    "render": "a sphere with a fit's Mitsuba 3 BSDF, rendered by Mitsuba (needs the render extra)",
     "synth": "write synthetic samples of a model",
     "models": "list the models, their parameters and domains",
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",

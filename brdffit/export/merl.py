@@ -9,10 +9,11 @@ from ..errors import BrdfInputError
 from ..physics.evaluate import evaluate
 
 
-def write_merl(model, params: dict, path: str | os.PathLike, **model_options) -> None:
-    """Tabulate ``model`` with ``params`` (the result file's dictionary) into a MERL ``.binary`` file.
+def write_merl(model, params: dict, path: str | os.PathLike, **model_options) -> list[str]:
+    """Tabulate ``model`` with ``params`` (the result file's dictionary) into a MERL ``.binary`` file; returns what
+    a user must know (a one-channel model is written as grey, the same table in r, g and b).
 
-    The model (three channels, r, g, b) is evaluated with :func:`brdffit.evaluate` at every bin's
+    The model (three channels, r, g, b, or one) is evaluated with :func:`brdffit.evaluate` at every bin's
     directions (Matusik et al. 2003 table, Rusinkiewicz 1998 angles); bins with a direction below the
     horizon, which MERL never looks up, hold 0. ``model_options`` are the model's options (``fresnel=``).
     """
@@ -20,10 +21,15 @@ def write_merl(model, params: dict, path: str | os.PathLike, **model_options) ->
     above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
     values = np.zeros((N_BINS, len(CHANNELS)))
     computed = evaluate(model, params, wi[above], wo[above], **model_options)
+    notes = []
+    if computed.shape[1] == 1:
+        computed = np.repeat(computed, len(CHANNELS), axis=1)
+        notes.append("one channel: written as grey, the same values in r, g and b")
     if computed.shape[1] != len(CHANNELS):
         name = getattr(model, "name", model)
         raise BrdfInputError(
-            f"{path}: model {name!s} gives {computed.shape[1]} channel(s); a MERL file holds 3 (r, g, b)"
+            f"{path}: model {name!s} gives {computed.shape[1]} channels; a MERL file holds 3 (r, g, b), or grey from 1"
         )
     values[above] = computed
     write_merl_table(values, path)
+    return notes

@@ -112,7 +112,7 @@ def _albedo_above_one(model: Model, params: Params, channels: tuple[str, ...]) -
     """The directional albedo ``∫ f cos θo dωo`` by midpoint quadrature in ``(cos θo, φo)``; a value above
     :data:`ALBEDO_LIMIT` counts only where the grid's even points alone (a grid half as fine) agree within 1%,
     i.e. where the grid resolves the lobe."""
-    fine, coarse = (np.asarray(estimate) for estimate in _directional_albedo(model, params, 256))
+    fine, coarse = (np.asarray(estimate) for estimate in directional_albedos(model, params, 256))
     above = (fine > ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)  # (incidences, C)
     found = []
     for c, channel in enumerate(channels):
@@ -125,17 +125,31 @@ def _albedo_above_one(model: Model, params: Params, channels: tuple[str, ...]) -
     return found
 
 
-def _directional_albedo(model: Model, params: Params, n: int):
-    """Directional albedos (incidences, C) on an n × 2n grid of midpoints in ``(cos θo, φo)``, and the same from
-    its even rows and columns alone: one evaluation of the model for both."""
+def directional_albedos(model: Model, params: Params, n: int = 256):
+    """Directional albedos ``∫ f cos θo dωo`` (incidences of :data:`ALBEDO_INCIDENCE`, C) on an n × 2n grid of
+    midpoints in ``(cos θo, φo)``, and the same from its even rows and columns alone: one evaluation of the model
+    for both (:func:`albedo_quadrature`)."""
+    wi, wo = albedo_directions(n)
+    return albedo_quadrature(np.asarray(_brdf(model, params, wi, wo)), n)
+
+
+def albedo_directions(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``wi``, ``wo`` (incidences · 2n², 3) the albedo quadrature evaluates a BRDF at: each incidence of
+    :data:`ALBEDO_INCIDENCE` (azimuth 0) with the viewer at the midpoints of an n × 2n grid in ``(cos θo, φo)``."""
     cos_o = (np.arange(n) + 0.5) / n
     phi_o = (np.arange(2 * n) + 0.5) * np.pi / n
     cos_grid, phi_grid = np.meshgrid(cos_o, phi_o, indexing="ij")
     wo = spherical_to_direction(np.arccos(cos_grid.ravel()), phi_grid.ravel())
     incidences = len(ALBEDO_INCIDENCE)
     wi = np.repeat(spherical_to_direction(np.radians(np.array(ALBEDO_INCIDENCE)), np.zeros(incidences)), len(wo), 0)
-    values = np.asarray(_brdf(model, params, wi, np.tile(wo, (incidences, 1))))
-    weighted = values.reshape(incidences, n, 2 * n, -1) * cos_grid[None, :, :, None]
+    return wi, np.tile(wo, (incidences, 1))
+
+
+def albedo_quadrature(values: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The directional albedos (incidences, C) of BRDF ``values`` at :func:`albedo_directions`, by the midpoint rule
+    in ``(cos θo, φo)`` (``dω cos θo = d cos θo dφo``), on the whole grid and on its even rows and columns alone."""
+    cos_grid = ((np.arange(n) + 0.5) / n)[:, None]
+    weighted = values.reshape(len(ALBEDO_INCIDENCE), n, 2 * n, -1) * cos_grid[None, :, :, None]
     fine = weighted.sum(axis=(1, 2)) / n * (np.pi / n)
     coarse = weighted[:, ::2, ::2].sum(axis=(1, 2)) * 4 / n * (np.pi / n)
     return fine, coarse

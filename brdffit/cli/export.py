@@ -1,0 +1,49 @@
+"""``brdffit export RESULT.json --to mitsuba|gltf|merl``: a fit in a form a renderer reads.
+
+Exact where the renderer has the fitted model; otherwise the renderer's model is fitted to the fitted BRDF and
+the error is printed and stored in the file (``brdffit/export``).
+"""
+
+import argparse
+from pathlib import Path
+
+from . import EXIT_OK
+from .arguments import output_file
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from ..export.targets import TARGETS
+
+    parser.add_argument("result", metavar="RESULT.json", help="a result file of brdffit fit")
+    parser.add_argument(
+        "--to",
+        required=True,
+        metavar="TARGET",
+        help="; ".join(f"{name}: {target.description}" for name, target in TARGETS.items()),
+    )
+    parser.add_argument(
+        "--format",
+        metavar="FORMAT",
+        help="mitsuba: xml (default; mitsuba.load_file takes it) or dict (a Python file defining bsdf for"
+        " mitsuba.load_dict)",
+    )
+    parser.add_argument(
+        "-o", "--output", metavar="FILE", help="the file (default: RESULT's stem with the target's suffix, here)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..cache import enable_compilation_cache
+    from ..export.targets import TARGETS, export, export_format
+    from ..fitting.results import load_result
+
+    kind = export_format(args.to, args.format)
+    default = Path(args.result).stem + TARGETS[args.to].formats[kind]
+    path = output_file(args.output or default, "-o", [args.result])
+    result = load_result(args.result)
+    enable_compilation_cache()
+    lines = export(result, args.to, path, kind)
+    print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")
+    for line in lines:
+        print(f"  {line}")
+    return EXIT_OK

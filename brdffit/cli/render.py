@@ -1,0 +1,37 @@
+"""``brdffit render RESULT.json -o sphere.png``: a sphere with the fit's Mitsuba 3 BSDF, rendered by Mitsuba."""
+
+import argparse
+from pathlib import Path
+
+from . import EXIT_OK
+from .arguments import output_file
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("result", metavar="RESULT.json", help="a result file of brdffit fit")
+    parser.add_argument(
+        "-o", "--output", metavar="FILE", help="the image, .png (default: RESULT's stem + .mitsuba.png, here)"
+    )
+    parser.add_argument("--size", type=int, default=256, metavar="PIXELS", help="image width and height (default 256)")
+    parser.add_argument("--spp", type=int, default=64, metavar="N", help="samples per pixel (default 64)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..checks import whole_number
+    from ..errors import Argument, BrdfInputError
+    from ..export.mitsuba_render import mitsuba, render_sphere
+    from ..fitting.results import load_result
+
+    whole_number("size", args.size, 16, 4096)
+    whole_number("spp", args.spp, 1)
+    output = args.output or f"{Path(args.result).stem}.mitsuba.png"
+    if Path(output).suffix.lower() != ".png":
+        raise BrdfInputError(Argument("output", output), ": the image must end in .png")
+    path = output_file(output, "-o", [args.result])
+    result = load_result(args.result)
+    mitsuba()  # before the export's fit: say at once when Mitsuba is missing
+    exported = render_sphere(result, path, size=args.size, spp=args.spp)
+    print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
+    for line in exported.comment_lines()[1:]:
+        print(f"  {line}")
+    return EXIT_OK

@@ -1,0 +1,210 @@
+"""A fit as a Mitsuba 3 BSDF: exact where Mitsuba has the model, else Mitsuba's model fitted to it, with the error.
+
+Mitsuba 3's ``roughconductor`` (Jakob et al., Mitsuba 3 documentation, "Rough conductor material") is
+``specular_reflectance · F(cos β) · D · G / (4 ci co)`` with GGX or Beckmann ``D``, separable Smith ``G`` and the
+exact conductor Fresnel term of a complex index ``eta + i k`` (``material="none"``: ``F = 1``); ``diffuse`` is
+``reflectance / π``. So brdffit's Cook-Torrance with ``shadowing="smith"`` maps exactly:
+
+==============================  ==================================================================================
+brdffit                         Mitsuba 3
+==============================  ==================================================================================
+``distribution``                ``distribution`` (``beckmann``, ``ggx``); ``m`` is ``alpha``
+``fresnel="conductor"``         ``eta``, ``k``
+``fresnel="dielectric"``        ``eta``, ``k = 0`` (the conductor formula with ``k = 0`` is the dielectric one)
+``fresnel="none"``              ``material="none"``
+``ks``, ``kd``                  ``specular_reflectance``, ``diffuse.reflectance``, joined by ``blendbsdf``
+==============================  ==================================================================================
+
+Mitsuba's ``blendbsdf`` averages: ``(1 − w)·first + w·second``. The export divides the albedos by the weights,
+``reflectance = kd/(1 − w)`` and ``specular_reflectance = ks/w``, with ``w = max ks / (max kd + max ks)`` over the
+channels, which keeps both within [0, 1] whenever ``max kd + max ks ≤ 1``; Mitsuba refuses RGB reflectances above 1
+("Invalid RGB reflectance value … must be in the range [0, 1]"), so a fit beyond that is scaled into range and the
+error said. Mitsuba's Beckmann ``G1`` is Walter et al.'s rational approximation (2007, eq. 27), within 0.5% of
+the exact ``erf`` form brdffit uses.
+
+Every other model (Ward, Phong, Lafortune, the V-groove and height-correlated shadowing, Schlick's Fresnel) has no
+Mitsuba counterpart: the export fits Mitsuba's model (GGX and Beckmann ``roughconductor`` with a diffuse term,
+the better of the two) to the fitted BRDF (``approximate.py``) and reports how far it lies.
+"""
+
+import pprint
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import BrdfInputError
+from ..fitting.results import FitResult
+from ..physics.models import get_model
+from ..physics.models.specs import spec_of
+from .approximate import Approximation, approximation_error, refit
+
+#: The Mitsuba 3 scene-description version the XML declares.
+XML_VERSION = "3.0.0"
+#: The models that stand in for one Mitsuba cannot express: Cook-Torrance as ``roughconductor`` plus ``diffuse``.
+STAND_INS = (
+    {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"},
+    {"fresnel": "conductor", "distribution": "beckmann", "shadowing": "smith"},
+)
+
+
+@dataclass(frozen=True)
+class MitsubaExport:
+    """A Mitsuba 3 BSDF as ``mitsuba.load_dict`` takes it (``bsdf``), the fit it was made from (``source``, a model
+    spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it), how far
+    that lies from the source (``approximation``, None when exact) and what a user must know (``notes``)."""
+
+    bsdf: dict[str, Any]
+    source: str
+    exported: FitResult
+    approximation: Approximation | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def exact(self) -> bool:
+        return self.approximation is None
+
+    def to_xml(self) -> str:
+        """Mitsuba 3 XML of the BSDF (``mitsuba.load_string`` takes it), with a comment on where it came from."""
+        lines = [f"<!-- {line} -->" for line in self.comment_lines()]
+        lines += _xml(self.bsdf, indent="", version=XML_VERSION)
+        return "\n".join(lines) + "\n"
+
+    def to_python(self) -> str:
+        """A Python module: ``bsdf``, the dictionary ``mitsuba.load_dict(bsdf)`` takes, and ``approximation``."""
+        comment = "".join(f"# {line}\n" for line in self.comment_lines())
+        approximation = None if self.approximation is None else self.approximation.to_dict()
+        return (
+            f"{comment}bsdf = {pprint.pformat(self.bsdf, sort_dicts=False)}\n"
+            f"approximation = {pprint.pformat(approximation, sort_dicts=False)}\n"
+        )
+
+    def comment_lines(self) -> list[str]:
+        made = f"brdffit {__version__}: Mitsuba 3 BSDF of a {self.source} fit"
+        if self.exact:
+            beckmann = self.exported.model_options.get("distribution") == "beckmann"
+            how = "exact" + (" but for Mitsuba's Beckmann G1 (Walter's approximation, within 0.5%)" if beckmann else "")
+        else:
+            how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
+            how += self.approximation.line()
+        return [made, how, *self.notes]
+
+
+def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
+    """The Mitsuba 3 BSDF of ``result`` (module docstring): exact where Mitsuba has the model, else the better of
+    Mitsuba's GGX and Beckmann ``roughconductor`` (with ``diffuse``) fitted to the fitted BRDF."""
+    source = spec_of(result.model, result.model_options)
+    notes = _channel_notes(result)
+    if _is_exact(result):
+        bsdf, scale = _bsdf(result)
+        if scale == 1.0:
+            return MitsubaExport(bsdf, source, result, None, notes)
+        notes.append(
+            f"its albedos exceed what Mitsuba's RGB reflectances hold (kd + ks up to {1 / scale:.3g}):"
+            f" scaled by {scale:.3g}"
+        )
+        return MitsubaExport(bsdf, source, result, approximation_error(result, _scaled(result, scale)), notes)
+    candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
+    exported, _ = min(candidates, key=lambda pair: pair[1].rmse)
+    bsdf, scale = _bsdf(exported)
+    if scale != 1.0:
+        notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
+    approximation = approximation_error(result, _scaled(exported, scale))
+    return MitsubaExport(bsdf, source, exported, approximation, notes)
+
+
+def _is_exact(result: FitResult) -> bool:
+    if result.model == "lambert":
+        return True
+    options = get_model(result.model, **result.model_options).model_options
+    return (
+        result.model == "cook-torrance"
+        and options["shadowing"] == "smith"
+        and options["fresnel"] in ("conductor", "dielectric", "none")
+    )
+
+
+def _rgb(values) -> list[float]:
+    """Albedos as Mitsuba's linear RGB: three channels as they are, one as grey."""
+    values = [float(value) for value in values]
+    return values * 3 if len(values) == 1 else values
+
+
+def _channel_notes(result: FitResult) -> list[str]:
+    channels = tuple(result.channels)
+    if len(channels) == 1:
+        return [f"one channel ({channels[0]}): written as grey, the same value in r, g and b"]
+    if len(channels) != 3:
+        raise BrdfInputError(
+            f"a Mitsuba BSDF holds RGB albedos; this fit has {len(channels)} channels ({', '.join(channels)}):"
+            " fit with 1 or 3 channels (load_samples(..., spectral_to='rgb'))"
+        )
+    if channels == ("x", "y", "z"):
+        raise BrdfInputError(
+            "this fit's channels are CIE XYZ; Mitsuba's scalar_rgb takes linear sRGB: fit the samples read with"
+            " spectral_to='rgb' (--spectral-to rgb)"
+        )
+    return []
+
+
+def _bsdf(result: FitResult) -> tuple[dict[str, Any], float]:
+    """The Mitsuba dictionary of an exactly expressible ``result``, and the factor its albedos were scaled by
+    (1 unless Mitsuba's [0, 1] range forced it)."""
+    if result.model == "lambert":
+        diffuse = np.asarray(_rgb(result.params["rho_d"]))
+        scale = min(1.0, 1.0 / max(diffuse.max(), 1e-300))
+        return {"type": "diffuse", "reflectance": _rgb_value(diffuse * scale)}, scale
+    params, options = result.params, get_model(result.model, **result.model_options).model_options
+    kd, ks = np.asarray(_rgb(params["kd"])), np.asarray(_rgb(params["ks"]))
+    specular: dict[str, Any] = {"type": "roughconductor", "distribution": options["distribution"]}
+    specular["alpha"] = float(params["m"])
+    if options["fresnel"] == "none":
+        specular["material"] = "none"
+    else:
+        specular["eta"] = float(params["eta"])
+        specular["k"] = float(params.get("k", 0.0))
+    total = kd.max() + ks.max()
+    scale = min(1.0, 1.0 / max(total, 1e-300))
+    kd, ks = kd * scale, ks * scale
+    weight = ks.max() / max(kd.max() + ks.max(), 1e-300)
+    if weight >= 1.0 or kd.max() == 0.0:
+        return specular | {"specular_reflectance": _rgb_value(ks)}, scale
+    diffuse = {"type": "diffuse", "reflectance": _rgb_value(kd / (1.0 - weight))}
+    if weight == 0.0:
+        return diffuse, scale
+    specular["specular_reflectance"] = _rgb_value(ks / weight)
+    return {"type": "blendbsdf", "weight": float(weight), "diffuse": diffuse, "specular": specular}, scale
+
+
+def _rgb_value(values: np.ndarray) -> dict[str, Any]:
+    """Mitsuba's ``rgb`` texture of three numbers (plain floats: the Python form writes them as such)."""
+    return {"type": "rgb", "value": [float(value) for value in values]}
+
+
+def _scaled(result: FitResult, scale: float):
+    """``result``'s BRDF times ``scale``, as ``brdf(wi, wo)``."""
+    return lambda wi, wo: scale * result.predict(wi, wo)
+
+
+def _xml(node: dict[str, Any], indent: str, version: str | None = None, name: str | None = None) -> list[str]:
+    """The XML lines of a Mitsuba dictionary node (a BSDF, its nested BSDFs and their properties)."""
+    attributes = f' version="{version}"' if version else ""
+    attributes += f' type="{node["type"]}"'
+    attributes += f' name="{name}"' if name else ""
+    lines = [f"{indent}<bsdf{attributes}>"]
+    inner = indent + "    "
+    for key, value in node.items():
+        if key == "type":
+            continue
+        if isinstance(value, dict) and value.get("type") == "rgb":
+            rgb = ", ".join(repr(float(v)) for v in value["value"])
+            lines.append(f'{inner}<rgb name="{key}" value="{rgb}"/>')
+        elif isinstance(value, dict):
+            lines += _xml(value, inner, name=key)
+        elif isinstance(value, str):
+            lines.append(f'{inner}<string name="{key}" value="{value}"/>')
+        else:
+            lines.append(f'{inner}<float name="{key}" value="{float(value)!r}"/>')
+    lines.append(f"{indent}</bsdf>")
+    return lines

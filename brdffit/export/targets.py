@@ -1,0 +1,72 @@
+"""The export targets, by the name ``brdffit export --to`` takes: what each writes, in which formats, and how.
+
+Every writer imports its module when it runs, so naming the targets (``brdffit export --help``) costs nothing.
+"""
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..checks import choice
+from ..errors import Argument, BrdfInputError
+
+
+@dataclass(frozen=True)
+class Target:
+    """An export target: ``description``, its ``formats`` (name → default suffix, the first the default) and
+    ``write(result, path, format) -> lines``, the lines a user should read (exact or how far, notes)."""
+
+    description: str
+    formats: dict[str, str]
+    write: Callable
+
+
+def _mitsuba(result, path: Path, kind: str) -> list[str]:
+    from .._files import write_text_atomic
+    from .mitsuba import mitsuba_bsdf
+
+    exported = mitsuba_bsdf(result)
+    write_text_atomic(path, exported.to_xml() if kind == "xml" else exported.to_python())
+    return exported.comment_lines()[1:]
+
+
+def _gltf(result, path: Path, kind: str) -> list[str]:
+    from .gltf import write_gltf
+
+    _, approximation, notes = write_gltf(result, path)
+    return [f"approximate: the glTF BRDF fitted to it, {approximation.line()}", *notes]
+
+
+def _merl(result, path: Path, kind: str) -> list[str]:
+    from .merl import write_merl
+
+    return ["exact: the fitted model tabulated", *write_merl(result.model, result.params, path, **result.model_options)]
+
+
+#: The targets: Mitsuba 3 (XML for ``mitsuba.load_file``, or a Python dictionary for ``mitsuba.load_dict``),
+#: glTF 2.0 and MERL.
+TARGETS = {
+    "mitsuba": Target("a Mitsuba 3 BSDF", {"xml": ".xml", "dict": ".mitsuba.py"}, _mitsuba),
+    "gltf": Target("a glTF 2.0 material (pbrMetallicRoughness)", {"gltf": ".gltf"}, _gltf),
+    "merl": Target("a MERL table (90 × 90 × 180 bins)", {"binary": ".binary"}, _merl),
+}
+
+
+def export_format(to: str, format: str | None = None) -> str:
+    """The format a target writes: ``format`` if the target takes it, its first by default; one-line errors."""
+    choice("to", to, TARGETS)
+    formats = TARGETS[to].formats
+    kind = next(iter(formats)) if format is None else format
+    if kind not in formats:
+        raise BrdfInputError(
+            Argument("format", kind), f" does not apply to target {to}; it writes {', '.join(formats)}"
+        )
+    return kind
+
+
+def export(result, to: str, path: str | os.PathLike, format: str | None = None) -> list[str]:
+    """Write ``result`` (a :class:`~brdffit.FitResult`) for the renderer ``to`` (:data:`TARGETS`) to ``path``,
+    atomically; returns the lines a user should read (whether it is exact, how far it lies otherwise, notes)."""
+    kind = export_format(to, format)
+    return TARGETS[to].write(result, Path(path), kind)
