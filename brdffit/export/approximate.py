@@ -18,6 +18,8 @@ from ..fitting.results import FitResult
 from ..physics.geometry import spherical_to_direction
 from ..physics.models import Model, get_model
 
+#: An approximation whose rmse exceeds this fraction of the BRDF's own rms misses its shape, and says so.
+POOR_SHAPE = 0.5
 #: The grid a fit is tabulated on: light zeniths, viewer zeniths (midpoints of equal bins over [0°, 90°)) and viewer
 #: azimuths (midpoints of equal bins over [0°, 360°)); 12 × 45 × 72 = 38,880 pairs, every 2° in θo and 5° in φo.
 GRID = (12, 45, 72)
@@ -36,28 +38,43 @@ def dense_grid(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarr
 
 @dataclass(frozen=True)
 class Approximation:
-    """How far an approximating BRDF lies from the fitted one: ``rmse`` over :func:`dense_grid` (1/sr) and the
-    worst relative difference of their directional albedos (``albedo_error``, a fraction) over the incidences and
-    channels, at ``albedo_incidence`` (degrees) in channel ``albedo_channel``."""
+    """How far an approximating BRDF lies from the fitted one: ``rmse`` over :func:`dense_grid` (1/sr), the same as
+    a fraction of the fitted BRDF's own rms there (``relative_rmse``: the shape's error, which albedos cannot see,
+    e.g. a retro-reflective lobe turned forward), and the worst relative difference of their directional albedos
+    (``albedo_error``, a fraction) over the incidences and channels, at ``albedo_incidence`` (degrees) in channel
+    ``albedo_channel``."""
 
     rmse: float
     albedo_error: float
     albedo_incidence: float
     albedo_channel: str
+    relative_rmse: float = float("nan")
 
     def to_dict(self) -> dict:
         return {
             "rmse": self.rmse,
+            "relative_rmse": self.relative_rmse,
             "albedo_error": self.albedo_error,
             "albedo_incidence": self.albedo_incidence,
             "albedo_channel": self.albedo_channel,
         }
 
+    def warnings(self, target: str) -> list[str]:
+        """What a user must know about this approximation by ``target`` (a renderer's model)."""
+        if not self.relative_rmse > POOR_SHAPE:
+            return []
+        return [
+            f"{target} misses most of this BRDF's shape ({self.relative_rmse:.0%} of its rms): no such material"
+            " reflects like it (a retro-reflective lobe, say); look at the sphere before using it"
+        ]
+
     def line(self) -> str:
-        """One line a person reads: ``rmse 0.0021 1/sr, directional albedo within 3.2% (θi = 80°, channel r)``."""
+        """One line a person reads: ``rmse 0.0021 1/sr (4.1% of the BRDF's rms) over the hemisphere, directional
+        albedo within 3.2% (worst at θi = 80°, channel r)``."""
         return (
-            f"rmse {self.rmse:.3g} 1/sr over the hemisphere, directional albedo within {self.albedo_error:.2%}"
-            f" (worst at θi = {self.albedo_incidence:g}°, channel {self.albedo_channel})"
+            f"rmse {self.rmse:.3g} 1/sr ({self.relative_rmse:.1%} of the BRDF's rms) over the hemisphere,"
+            f" directional albedo within {self.albedo_error:.2%} (worst at θi = {self.albedo_incidence:g}°,"
+            f" channel {self.albedo_channel})"
         )
 
 
@@ -70,13 +87,15 @@ def tabulated(result: FitResult, shape: tuple[int, int, int] = GRID) -> Samples:
 def approximation_error(result: FitResult, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> Approximation:
     """How far ``brdf(wi, wo) -> (N, C)`` (1/sr) lies from ``result``'s fitted BRDF (:class:`Approximation`)."""
     wi, wo = dense_grid()
-    rmse = float(np.sqrt(np.mean((brdf(wi, wo) - result.predict(wi, wo)) ** 2)))
+    fitted = result.predict(wi, wo)
+    rmse = float(np.sqrt(np.mean((brdf(wi, wo) - fitted) ** 2)))
+    relative = rmse / max(float(np.sqrt(np.mean(fitted**2))), 1e-300)
     original = _albedos(lambda a, b: result.predict(a, b))
     approximate = _albedos(brdf)
-    relative = np.abs(approximate - original) / np.maximum(original, 1e-12)
-    worst = np.unravel_index(int(np.argmax(relative)), relative.shape)
+    albedo = np.abs(approximate - original) / np.maximum(original, 1e-12)
+    worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)
     return Approximation(
-        rmse, float(relative[worst]), float(ALBEDO_INCIDENCE[worst[0]]), str(result.channels[worst[1]])
+        rmse, float(albedo[worst]), float(ALBEDO_INCIDENCE[worst[0]]), str(result.channels[worst[1]]), relative
     )
 
 

@@ -111,6 +111,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     if scale != 1.0:
         notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
     approximation = approximation_error(result, _scaled(exported, scale))
+    notes += approximation.warnings("Mitsuba's microfacet model")
     return MitsubaExport(bsdf, source, exported, approximation, notes)
 
 

@@ -150,3 +150,20 @@ def test_mitsubas_beckmann_g1_is_within_its_documented_approximation():
             ours = 1.0 / (1.0 + float(beckmann_lambda(jnp.asarray(math.cos(theta)), alpha)))
             worst = max(worst, abs(theirs - ours) / ours)
     assert worst <= 0.005
+
+
+def test_a_retro_reflector_is_said_to_be_missed():
+    """The real tape's 2-lobe Lafortune fit (a sharp lobe back towards the light): no microfacet model reflects
+    like that, so the export's rmse is most of the BRDF's own rms, and a note says to look before using it."""
+    tape = {
+        "rho_d": [0.39],
+        "lobes": [
+            {"rho_s": [0.27], "cxy": 0.577, "cz": 0.578, "n": 1780.0},
+            {"rho_s": [0.47], "cxy": -0.585, "cz": 0.561, "n": 45.2},
+        ],
+    }
+    result = FitResult("lafortune", {"lobes": 2}, ("value",), tape, "log", 0.0, 0.0, 0, 0, True)
+    exported = mitsuba_bsdf(result)
+    assert exported.approximation.relative_rmse > 0.5
+    assert any("misses most of this BRDF's shape" in note for note in exported.notes)
+    assert any("misses most of this BRDF's shape" in line for line in exported.comment_lines())
