@@ -107,3 +107,15 @@ def test_bad_input_is_one_line_and_writes_nothing(results, tmp_path, capsys, arg
     assert message.format(**where) in err
     assert list(tmp_path.iterdir()) == [] and (results / "metal.json").read_bytes() == before
     json.loads(before)
+
+
+def test_gltf_says_how_far_it_lies(results, tmp_path, capsys):
+    output = tmp_path / "metal.gltf"
+    status, out, err = run(["export", results / "metal.json", "--to", "gltf", "-o", output], capsys)
+    assert status == 0, err
+    assert out.splitlines()[1].startswith("  approximate: the glTF BRDF fitted to it, rmse ")
+    document = json.loads(output.read_text())
+    assert document["asset"]["version"] == "2.0"
+    material = document["materials"][0]
+    assert len(material["pbrMetallicRoughness"]["baseColorFactor"]) == 4
+    assert material["extras"]["brdffit"]["approximation"]["rmse"] > 0

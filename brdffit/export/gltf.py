@@ -1,0 +1,653 @@
+"""A fitted BRDF as a glTF 2.0 material: the glTF metallic-roughness BRDF, fitted to it, and the ``.gltf`` file.
+
+**The glTF BRDF** (:func:`gltf_brdf`), as the glTF 2.0 specification's Appendix B ("BRDF Implementation",
+Khronos) writes its *complete model*, in 1/sr, with ``α = roughness²``::
+
+    material        = mix(dielectric_brdf, metal_brdf, metallic)
+                    = (1 − metallic) · dielectric_brdf + metallic · metal_brdf
+    metal_brdf      = conductor_fresnel(f0 = baseColor, bsdf = specular_brdf(α))
+                    = (baseColor + (1 − baseColor) (1 − |V·H|)⁵) · specular_brdf
+    dielectric_brdf = fresnel_mix(ior = 1.5, base = diffuse_brdf(baseColor), layer = specular_brdf(α))
+                    = (1 − fr) · baseColor/π + fr · specular_brdf,   fr = f0 + (1 − f0)(1 − |V·H|)⁵,
+                      f0 = ((1 − ior)/(1 + ior))² = 0.04
+    specular_brdf   = V · D,   D = α² / (π ((N·H)² (α² − 1) + 1)²)                      (GGX)
+                               V = G / (4 |N·L| |N·V|),   G = 1 / (1 + Λ(L) + Λ(V))    (height-correlated Smith)
+
+``L = wi`` (towards the light), ``V = wo`` (towards the viewer), ``H = normalize(L + V)``, ``N`` the normal (``z``).
+D is GGX (Trowbridge & Reitz 1975; Walter, Marschner, Li & Torrance, "Microfacet models for refraction through
+rough surfaces", EGSR 2007, eq. 33); Λ is GGX's Smith term, ``(−1 + sqrt(1 + α² tan²θ))/2`` (Walter et al. 2007;
+Heitz, "Understanding the masking-shadowing function in microfacet-based BRDFs", JCGT 2014), and
+``1/(1 + Λ(L) + Λ(V))`` is Heitz's height-correlated masking-shadowing (eq. 99). Written out,
+``V = 0.5 / (|N·L| sqrt((N·V)² (1 − α²) + α²) + |N·V| sqrt((N·L)² (1 − α²) + α²))``: the form the Khronos glTF
+Sample Viewer and Filament implement. **Appendix B itself writes the separable form**
+``G = G1(L) G1(V) = 1/((1 + Λ(L))(1 + Λ(V)))``; brdffit follows the renderers (and the issue that asked for this
+export). The separable form is darker by the fraction ``Λ(L)Λ(V)/((1 + Λ(L))(1 + Λ(V)))``: 0.2% at ``α = 0.25``
+with both directions at 60° from the normal, 11% at ``α = 1``, more towards grazing angles.
+
+**The optimised single-F form.** Appendix B, until Khronos's fix of 2024 (glTF issue #2386, pull request #2392),
+ended with a "simplified" implementation: ``c_diff = lerp(baseColor, 0, metallic)``,
+``f0 = lerp(0.04, baseColor, metallic)``, ``F = f0 + (1 − f0)(1 − |V·H|)⁵``, ``f = (1 − F) c_diff/π + F · V · D``.
+Its specular part equals the mix's exactly (the Schlick terms are linear in ``f0``), but its diffuse part is
+``(1 − metallic)(1 − F) baseColor/π`` where the mix has ``(1 − metallic)(1 − fr) baseColor/π``, and
+``F − fr = metallic (baseColor − 0.04)(1 − |V·H|)⁵``: the two agree at metallic 0 and 1 and differ by
+``metallic (1 − metallic)(baseColor − 0.04) baseColor (1 − |V·H|)⁵ / π`` in between (for baseColor 1 and
+metallic 0.5, the single-F form's diffuse term is half the mix's: 0.0764 1/sr less at normal incidence).
+brdffit implements the mix, as the specification now writes it.
+
+**Energy.** The metal is single-scattering GGX: it loses the light that scatters between microfacets and never
+reflects more than it receives. The dielectric's ``fresnel_mix`` weights the diffuse base by ``1 − fr`` of each
+pair's ``|V·H|``, not by the layer's directional albedo, and can: a white dielectric of roughness 0.5 reflects 1.08
+times the light it receives at θi = 80° (``tests/export/test_gltf.py``). That is the specification's model.
+
+**Extensions.** ``KHR_materials_specular`` (ratified; its "Implementation" section) with ``KHR_materials_ior``
+changes only the dielectric::
+
+    dielectric_brdf = fresnel_mix(f0_color = specularColor, ior, weight = specular, base, layer)
+                    = (1 − specular · max(fr.r, fr.g, fr.b)) · base + specular · fr · layer,
+                      fr = f0 + (1 − f0)(1 − |V·H|)⁵,   f0 = min(((1 − ior)/(1 + ior))² · specularColor, 1)
+
+With the defaults (specular 1, specularColor (1, 1, 1), ior 1.5) ``fr`` is the same in every channel and this is
+the core model exactly. ``ior`` is 0 or at least 1 (KHR_materials_ior); 0 gives ``f0 = min(specularColor, 1)``.
+
+**The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.dense_grid`
+(:func:`~brdffit.export.approximate.tabulated`) and the glTF parameters are fitted to it with the fit's own loss
+(residual ``T(f) − T(y)``, ``fitting/losses.py``) by Levenberg-Marquardt (``optimistix.least_squares`` with
+brdffit's solver, ``fitting/solver.py``: :func:`_solve` says why not optimistix's own), in unconstrained
+coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters free. The
+extensions are kept only when they lower the grid rmse by :data:`EXTENSION_GAIN` or more. How far the material
+lies from the fitted BRDF is an :class:`~brdffit.export.approximate.Approximation`.
+"""
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from .._files import write_text_atomic
+from .._jax import float64, jit
+from .._version import __version__
+from ..errors import Argument, BrdfInputError
+from ..fitting.fit import MAX_STEPS, TOLERANCES
+from ..fitting.losses import get_loss
+from ..fitting.results import FitResult, json_text
+from ..fitting.solver import OnePassLevenbergMarquardt
+from ..physics.geometry import above_horizon, half_vector, mirror_direction, spherical_to_direction
+from ..physics.microfacet import ggx_distribution, ggx_lambda
+from ..views.render import display_rgb
+from .approximate import Approximation, approximation_error, tabulated
+
+#: The dielectric's index of refraction in core glTF (Appendix B), and the extension's default.
+DEFAULT_IOR = 1.5
+#: The dielectric's reflectance at normal incidence for :data:`DEFAULT_IOR`: ``((1 − 1.5)/(1 + 1.5))² = 0.04``.
+DEFAULT_F0 = ((1.0 - DEFAULT_IOR) / (1.0 + DEFAULT_IOR)) ** 2  # as ior_f0 computes it
+#: The extensions are kept only when they lower the rmse over the grid by at least this fraction: a material with
+#: extensions renders only where a renderer supports them, so they must earn their place.
+EXTENSION_GAIN = 0.05
+#: A core fit whose grid rmse is below this fraction of the values' rms is exact: nothing is left to improve.
+EXACT_FIT = 1e-9
+#: The GGX ``α`` never goes below this (roughness 0.001): at ``α = 0`` the distribution is a delta, ``0/0`` at the
+#: mirror direction.
+MIN_ALPHA = 1e-6
+#: The largest index of refraction written; a dielectric ``f0`` beyond its ``((ior − 1)/(ior + 1))² = 0.36`` is written
+#: with ``ior = 0`` (``f0 = 1``) and the specular colour (:func:`_material_of`); diamond's 2.42 gives 0.17.
+MAX_IOR = 4.0
+#: A fitted factor this close to 0 or 1 is written as 0 or 1 (the logistic reaches its ends only at infinity).
+EDGE = 1e-6
+#: Starting roughnesses; each is tried as a dielectric (metallic ≈ 0) and as a metal (metallic ≈ 1).
+START_ROUGHNESS = (0.15, 0.4, 0.75)
+START_METALLIC = (0.02, 0.98)
+#: Extra starts with the extensions free, at each of :data:`START_ROUGHNESS`: a dielectric with a weak specular
+#: layer (``specular`` weight 0.1) whose Fresnel term is nearly flat (``f0`` 0.9): a lobe without glTF's rise
+#: towards grazing angles (Ward, Phong, Lafortune), which the core model's ``f0 = 0.04`` cannot give.
+START_FLAT_FRESNEL = (0.1, 0.9)
+#: A fitted BRDF that sends this many times more light back towards the light than into the mirror direction is a
+#: retro-reflector. glTF's BRDF peaks near the mirror direction: its retro/mirror ratio is at most ~1.03 (θi = 60°,
+#: the dielectric's diffuse term dimmed by the mirror's larger Fresnel term).
+RETRO_RATIO = 1.1
+RETRO_INCIDENCE = (30.0, 60.0)
+
+
+# ---------------------------------------------------------------------- the BRDF
+def ior_f0(ior):
+    """The reflectance at normal incidence of a dielectric of index ``ior`` in air: ``((1 − ior)/(1 + ior))²``."""
+    return ((1.0 - ior) / (1.0 + ior)) ** 2
+
+
+def dielectric_f0(specular_color, ior):
+    """The dielectric's reflectance at normal incidence (3,): ``min(((1 − ior)/(1 + ior))² · specularColor, 1)``
+    (KHR_materials_specular with KHR_materials_ior; ``0.04`` per channel for the defaults)."""
+    return jnp.minimum(ior_f0(ior) * jnp.asarray(specular_color), 1.0)
+
+
+def _material_brdf(base_color, metallic, roughness, specular, dielectric_reflectance, wi, wo):
+    """The glTF BRDF (N, 3) in 1/sr, with the dielectric's ``f0`` (3,) given directly (the module docstring)."""
+    visible, wi, wo = above_horizon(wi, wo)
+    cos_i, cos_o = wi[:, 2:3], wo[:, 2:3]
+    h = half_vector(wi, wo)
+    v_dot_h = jnp.abs(jnp.sum(wo * h, axis=-1, keepdims=True))
+    alpha = jnp.maximum(roughness * roughness, MIN_ALPHA)
+    distribution = ggx_distribution(h[:, 2:3], alpha)
+    # V = G / (4 ci co) with G = 1/(1 + Λ(wi) + Λ(wo)): height-correlated Smith (Heitz 2014, eq. 99)
+    visibility = 1.0 / (4.0 * cos_i * cos_o * (1.0 + ggx_lambda(cos_i, alpha) + ggx_lambda(cos_o, alpha)))
+    specular_brdf = visibility * distribution  # (N, 1)
+    schlick_weight = (1.0 - v_dot_h) ** 5  # Schlick 1994: F = f0 + (1 − f0)(1 − |V·H|)⁵
+    base_color = jnp.asarray(base_color)
+    metal_brdf = (base_color + (1.0 - base_color) * schlick_weight) * specular_brdf
+    fresnel = dielectric_reflectance + (1.0 - dielectric_reflectance) * schlick_weight  # (N, 3)
+    diffuse_brdf = base_color / jnp.pi
+    dielectric_brdf = (1.0 - specular * jnp.max(fresnel, axis=-1, keepdims=True)) * diffuse_brdf
+    dielectric_brdf = dielectric_brdf + specular * fresnel * specular_brdf
+    material = (1.0 - metallic) * dielectric_brdf + metallic * metal_brdf
+    return jnp.where(visible[:, None], material, 0.0)
+
+
+@float64
+def gltf_brdf(
+    base_color,
+    metallic,
+    roughness,
+    wi,
+    wo,
+    *,
+    specular=1.0,
+    specular_color=(1.0, 1.0, 1.0),
+    ior=DEFAULT_IOR,
+):
+    """The glTF 2.0 metallic-roughness BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3), JAX.
+
+    ``base_color`` (3,) linear RGB, ``metallic`` and ``roughness`` in [0, 1] (``α = roughness²``); ``specular``
+    (in [0, 1]), ``specular_color`` (3,) (≥ 0) and ``ior`` (0 or ≥ 1) are ``KHR_materials_specular``'s and
+    ``KHR_materials_ior``'s, and their defaults give the core model exactly. The model is the module docstring's:
+    Appendix B's complete model ``mix(dielectric_brdf, metal_brdf, metallic)`` (not its former single-F
+    shortcut), GGX with height-correlated Smith (as the Khronos Sample Viewer and Filament implement it;
+    Appendix B writes the separable Smith form) and Schlick's Fresnel term in ``|V·H|``.
+
+    Zero where either direction is at or below the horizon; finite, with finite derivatives with respect to the
+    parameters, for both cosines in (0, 1] (θ = 89.9° included) and roughness down to 0.001 (``α`` is held at
+    :data:`MIN_ALPHA` or above). Traceable and differentiable (``jax.grad``, ``jax.jit``).
+    """
+    wi, wo = jnp.asarray(wi), jnp.asarray(wo)
+    reflectance = dielectric_f0(specular_color, ior)
+    return _material_brdf(base_color, metallic, roughness, specular, reflectance, wi, wo)
+
+
+@jit
+def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_color, ior, wi, wo):
+    return gltf_brdf(base_color, metallic, roughness, wi, wo, specular=specular, specular_color=specular_color, ior=ior)
+
+
+# ---------------------------------------------------------------------- the material
+def _unit_interval(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise BrdfInputError(Argument.given(name, value), " is not allowed; give a number in [0, 1]")
+    if not 0.0 <= float(value) <= 1.0:
+        raise BrdfInputError(Argument.given(name, value), " is not allowed; give a number in [0, 1]")
+    return float(value)
+
+
+def _three_numbers(name: str, value, upper: float | None) -> tuple[float, float, float]:
+    allowed = "three numbers in [0, 1] (linear RGB)" if upper == 1.0 else "three numbers ≥ 0 (linear RGB)"
+    try:
+        numbers = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        numbers = np.full(1, np.nan)
+    if numbers.shape != (3,) or not np.all(np.isfinite(numbers)) or np.any(numbers < 0):
+        raise BrdfInputError(Argument.given(name, value), f" is not allowed; give {allowed}")
+    if upper is not None and np.any(numbers > upper):
+        raise BrdfInputError(Argument.given(name, value), f" is not allowed; give {allowed}")
+    return tuple(float(c) for c in numbers)
+
+
+@dataclass(frozen=True)
+class GltfMaterial:
+    """A glTF 2.0 metallic-roughness material: ``base_color`` (3 floats in [0, 1], linear RGB), ``metallic`` and
+    ``roughness`` (in [0, 1]); ``specular`` (in [0, 1]) and ``specular_color`` (3 floats ≥ 0) of
+    ``KHR_materials_specular`` and ``ior`` (0 or ≥ 1; 0 means ``f0 = 1``) of ``KHR_materials_ior``, each None
+    when not used (its default applies: 1, (1, 1, 1), 1.5)."""
+
+    base_color: tuple[float, float, float]
+    metallic: float
+    roughness: float
+    specular: float | None = None
+    specular_color: tuple[float, float, float] | None = None
+    ior: float | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "base_color", _three_numbers("base_color", self.base_color, 1.0))
+        object.__setattr__(self, "metallic", _unit_interval("metallic", self.metallic))
+        object.__setattr__(self, "roughness", _unit_interval("roughness", self.roughness))
+        if self.specular is not None:
+            object.__setattr__(self, "specular", _unit_interval("specular", self.specular))
+        if self.specular_color is not None:
+            object.__setattr__(self, "specular_color", _three_numbers("specular_color", self.specular_color, None))
+        if self.ior is not None:
+            ior = self.ior
+            number = not isinstance(ior, bool) and isinstance(ior, int | float | np.floating | np.integer)
+            if not number or not (ior == 0 or 1.0 <= ior < math.inf):
+                raise BrdfInputError(Argument.given("ior", ior), " is not allowed; give 0 or a finite number ≥ 1")
+            object.__setattr__(self, "ior", float(ior))
+
+    @property
+    def extensions(self) -> tuple[str, ...]:
+        """The glTF extensions this material uses, in the order the file lists them."""
+        used = []
+        if self.specular is not None or self.specular_color is not None:
+            used.append("KHR_materials_specular")
+        if self.ior is not None:
+            used.append("KHR_materials_ior")
+        return tuple(used)
+
+    def brdf(self, wi, wo) -> np.ndarray:
+        """This material's BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3) (:func:`gltf_brdf`)."""
+        with float64():
+            values = _gltf_brdf_compiled(
+                np.asarray(self.base_color),
+                self.metallic,
+                self.roughness,
+                1.0 if self.specular is None else self.specular,
+                np.asarray(self.specular_color or (1.0, 1.0, 1.0)),
+                DEFAULT_IOR if self.ior is None else self.ior,
+                np.asarray(wi, dtype=np.float64),
+                np.asarray(wo, dtype=np.float64),
+            )
+        return np.asarray(values)
+
+    def to_gltf(self, name: str, extras: dict[str, Any] | None = None) -> dict[str, Any]:
+        """A complete glTF 2.0 document (JSON as Python objects) holding this material alone, named ``name``:
+        ``asset`` (version 2.0, brdffit as the generator), ``materials[0].pbrMetallicRoughness`` with
+        ``baseColorFactor`` (opaque: alpha 1), ``metallicFactor`` and ``roughnessFactor``, the extensions'
+        objects and the top-level ``extensionsUsed`` only where the material uses them, and ``extras`` (the
+        material's, for application data) when given."""
+        material: dict[str, Any] = {
+            "name": str(name),
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [*self.base_color, 1.0],
+                "metallicFactor": self.metallic,
+                "roughnessFactor": self.roughness,
+            },
+        }
+        extensions: dict[str, Any] = {}
+        if "KHR_materials_specular" in self.extensions:
+            specular: dict[str, Any] = {}
+            if self.specular is not None:
+                specular["specularFactor"] = self.specular
+            if self.specular_color is not None:
+                specular["specularColorFactor"] = list(self.specular_color)
+            extensions["KHR_materials_specular"] = specular
+        if self.ior is not None:
+            extensions["KHR_materials_ior"] = {"ior": self.ior}
+        if extensions:
+            material["extensions"] = extensions
+        if extras is not None:
+            material["extras"] = extras
+        document: dict[str, Any] = {"asset": {"version": "2.0", "generator": f"brdffit {__version__}"}}
+        if extensions:
+            document["extensionsUsed"] = list(extensions)
+        document["materials"] = [material]
+        return document
+
+
+# ---------------------------------------------------------------------- the fit
+def _logistic(u):
+    return jax.nn.sigmoid(u)
+
+
+def _logit(p: float) -> float:
+    return math.log(p / (1.0 - p))
+
+
+def _parameters(theta, n_channels: int, extended: bool):
+    """Physical parameters of the unconstrained vector ``theta``: base colour (C), metallic, roughness, and, when
+    ``extended``, the specular weight and the dielectric's ``f0`` (C); else weight 1 and ``f0`` 0.04."""
+    base = _logistic(theta[:n_channels])
+    metallic = _logistic(theta[n_channels])
+    roughness = _logistic(theta[n_channels + 1])
+    if extended:
+        weight = _logistic(theta[n_channels + 2])
+        reflectance = _logistic(theta[n_channels + 3 : 2 * n_channels + 3])
+    else:
+        weight = jnp.ones((), theta.dtype)
+        reflectance = jnp.full((n_channels,), DEFAULT_F0, theta.dtype)
+    return base, metallic, roughness, weight, reflectance
+
+
+def _model_values(theta, wi, wo, n_channels: int, extended: bool):
+    base, metallic, roughness, weight, reflectance = _parameters(theta, n_channels, extended)
+    # One channel is grey: the same base colour and f0 in r, g and b; the BRDF's r channel is the value.
+    values = _material_brdf(
+        jnp.broadcast_to(base, (3,)),
+        metallic,
+        roughness,
+        weight,
+        jnp.broadcast_to(reflectance, (3,)),
+        wi,
+        wo,
+    )
+    return values[:, :n_channels]
+
+
+class _Sums(NamedTuple):
+    """What :class:`~brdffit.fitting.solver.OnePassLevenbergMarquardt` asks of a pass (``fitting/problem.Sums``)."""
+
+    cost: jax.Array  # rᵀr
+    gradient: jax.Array  # Jᵀr, (k,)
+    gram: jax.Array  # JᵀJ, (k, k)
+    squared_error: jax.Array  # Σ (f − y)², (1/sr)²
+
+
+@jit(static_argnames=("loss_name", "n_channels", "extended"))
+def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended: bool):
+    """Levenberg-Marquardt from ``theta`` on the residuals ``T(f) − T(y)`` (N, C) of the loss ``loss_name``: the
+    optimum, its sum of squared residuals ``Σ r²``, the step count and whether the solver met its tolerances.
+
+    The solver is brdffit's (``fitting/solver.py``): optimistix's ``least_squares`` loop and trust region with
+    Marquardt's scaled damping and MINPACK's stopping tests, at the fits' float64 tolerances
+    (``fitting/fit.py``). optimistix's own ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate
+    whose factor heads for 0 or 1 (metallic 0 for a plastic, 1 for a metal) has a vanishing Jacobian column,
+    gets vanishing steps and crawls; measured on exact glTF data of a metal, 200 steps left ``1 − metallic``
+    at 1e-5, and its Cauchy test (every parameter step small) never passed. Here such a column drops out of
+    the step once it is below ``ε`` of the largest, and the fit stops on the cost's relative change.
+    """
+    transform = get_loss(loss_name).transform
+    cos_i = wi[:, 2:3]
+    target = transform(measured, measured, cos_i)
+
+    def residuals(theta):
+        return transform(_model_values(theta, wi, wo, n_channels, extended), measured, cos_i) - target
+
+    def normal_equations(theta, _):
+        r = residuals(theta).reshape(-1)
+        jacobian = jax.jacfwd(residuals)(theta).reshape(r.size, -1)
+        error = _model_values(theta, wi, wo, n_channels, extended) - measured
+        return _Sums(r @ r, jacobian.T @ r, jacobian.T @ jacobian, jnp.sum(error * error))
+
+    ftol, gtol, atol = TOLERANCES["float64"]
+    solver = OnePassLevenbergMarquardt(normal_equations=normal_equations, rtol=ftol, atol=atol, gtol=gtol)
+    solution = optx.least_squares(
+        lambda theta, _: jnp.zeros(measured.shape, theta.dtype),  # shapes only: the solver asks normal_equations
+        solver,
+        theta,
+        max_steps=MAX_STEPS,
+        throw=False,
+    )
+    return (
+        solution.value,
+        2.0 * solution.state.f_info.f,
+        solution.stats["num_steps"],
+        solution.result == optx.RESULTS.successful,
+    )
+
+
+def _starts(values: np.ndarray) -> list[np.ndarray]:
+    """Core starting points: each roughness of :data:`START_ROUGHNESS` as a dielectric and as a metal. A
+    dielectric's base colour starts at π times the median value (mostly the diffuse term); a metal's at the
+    median's colour, scaled to 0.9 in its brightest channel."""
+    median = np.maximum(np.median(values, axis=0), 1e-6)
+    dielectric_base = np.clip(np.pi * median, 0.02, 0.95)
+    metal_base = np.clip(0.9 * median / median.max(), 0.02, 0.95)
+    starts = []
+    for metallic in START_METALLIC:
+        base = dielectric_base if metallic < 0.5 else metal_base
+        for roughness in START_ROUGHNESS:
+            starts.append(np.array([*(_logit(b) for b in base), _logit(metallic), _logit(roughness)]))
+    return starts
+
+
+def _snapped(value: float) -> float:
+    return 0.0 if value < EDGE else 1.0 if value > 1.0 - EDGE else value
+
+
+def _material_of(theta: np.ndarray, n_channels: int, extended: bool) -> GltfMaterial:
+    """The :class:`GltfMaterial` of a solution; the dielectric's fitted ``f0`` becomes ``specular_color`` and ``ior``.
+
+    ``f0`` fixes only the product ``((1 − ior)/(1 + ior))² · specularColor``, which brdffit writes so that every
+    factor stays in the ranges renderers expect (``specularColorFactor`` ≤ 1, an ``ior`` of a real dielectric):
+
+    * every channel's ``f0`` at most 0.04: ``ior`` 1.5 (omitted), ``specularColor = f0/0.04``;
+    * the largest ``f0max`` up to that of :data:`MAX_IOR`: ``specularColor = f0/f0max`` (1 in its largest
+      channel) and ``ior = (1 + sqrt(f0max))/(1 − sqrt(f0max))``;
+    * beyond: ``ior = 0``, which KHR_materials_ior allows for this (``f0 = 1``, "to support the
+      specular-glossiness workflow"), and ``specularColor = f0``.
+    """
+    with float64():
+        base, metallic, roughness, weight, reflectance = (
+            np.asarray(p, dtype=float) for p in _parameters(jnp.asarray(theta), n_channels, extended)
+        )
+    base = np.broadcast_to(base, (3,))
+    material = {
+        "base_color": tuple(_snapped(float(b)) for b in base),
+        "metallic": _snapped(float(metallic)),
+        "roughness": _snapped(float(roughness)),
+    }
+    if extended:
+        reflectance = np.broadcast_to(reflectance, (3,))
+        largest = float(reflectance.max())
+        if largest <= DEFAULT_F0:
+            specular_color, ior = reflectance / DEFAULT_F0, None
+        elif largest <= ior_f0(MAX_IOR):
+            root = math.sqrt(largest)
+            specular_color, ior = reflectance / largest, (1.0 + root) / (1.0 - root)
+        else:
+            specular_color, ior = reflectance, 0.0
+        material |= {
+            "specular": _snapped(float(weight)),
+            "specular_color": tuple(float(min(c, 1.0)) for c in specular_color),
+            "ior": ior,
+        }
+    return GltfMaterial(**material)
+
+
+def _grid_rmse(material: GltfMaterial, wi, wo, values: np.ndarray) -> float:
+    predicted = material.brdf(wi, wo)[:, : values.shape[1]]
+    return float(np.sqrt(np.mean((predicted - values) ** 2)))
+
+
+@float64
+def fit_material(wi, wo, values, loss: str = "log") -> tuple[GltfMaterial, list[str]]:
+    """The glTF material whose BRDF fits ``values`` (N, 3: linear RGB, or N, 1: grey) at pairs ``wi``, ``wo`` (N, 3)
+    best in ``loss`` (a name of ``brdffit.LOSSES``; residual ``T(f) − T(y)``), and notes on the choice (one line
+    each).
+
+    Levenberg-Marquardt (:func:`_solve`) in unconstrained coordinates (logistic maps onto [0, 1] for base colour,
+    metallic and roughness) from the starts of :data:`START_ROUGHNESS` × :data:`START_METALLIC`, the best kept;
+    then with ``KHR_materials_specular``'s weight and the dielectric's ``f0`` free as well (``f0`` per channel in
+    (0, 1), written as specular colour and ``ior``: :func:`_material_of`), from the core optimum and from the
+    dielectric starts with a nearly flat Fresnel term (:data:`START_FLAT_FRESNEL`). The extensions are kept
+    only when they lower the rmse over the samples by :data:`EXTENSION_GAIN` or more. One channel is fitted as
+    grey (the same base colour in r, g and b).
+    """
+    loss_name = get_loss(loss).name
+    wi, wo = np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64)
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 2 or values.shape[1] not in (1, 3) or values.shape[0] == 0:
+        raise BrdfInputError(
+            Argument("values"), f" has shape {values.shape}; give (N, 3) linear RGB or (N, 1) grey values"
+        )
+    if wi.shape != (len(values), 3) or wo.shape != (len(values), 3):
+        raise BrdfInputError(
+            Argument("wi"), f" and wo must have shape ({len(values)}, 3), got {wi.shape} and {wo.shape}"
+        )
+    if not np.all(np.isfinite(values)):
+        raise BrdfInputError(Argument("values"), " must be finite")
+    n_channels = values.shape[1]
+
+    def best(starts, extended: bool) -> _Solved:
+        solved = []
+        for theta in starts:
+            found = _solve(
+                jnp.asarray(theta), wi, wo, values, loss_name=loss_name, n_channels=n_channels, extended=extended
+            )
+            solved.append(_Solved(np.asarray(found[0]), float(found[1]), int(found[2]), bool(found[3])))
+        return min(solved, key=lambda one: one.cost)
+
+    core = best(_starts(values), extended=False)
+    core_material = _material_of(core.theta, n_channels, False)
+    core_rmse = _grid_rmse(core_material, wi, wo, values)
+    if core_rmse <= EXACT_FIT * float(np.sqrt(np.mean(values**2))):
+        return core_material, _unconverged(core)
+    from_core = np.concatenate([core.theta, [_logit(0.995)], np.full(n_channels, _logit(DEFAULT_F0))])
+    weight, reflectance = START_FLAT_FRESNEL
+    flat = [
+        np.concatenate([start, [_logit(weight)], np.full(n_channels, _logit(reflectance))])
+        for start in _starts(values)[: len(START_ROUGHNESS)]  # the dielectric starts come first
+    ]
+    extended = best([from_core, *flat], extended=True)
+    extended_material = _material_of(extended.theta, n_channels, True)
+    extended_rmse = _grid_rmse(extended_material, wi, wo, values)
+    gain = 1.0 - extended_rmse / core_rmse
+    if gain >= EXTENSION_GAIN:
+        return extended_material, [
+            f"{' and '.join(extended_material.extensions)} used: they lower the rmse from {core_rmse:.4g} to"
+            f" {extended_rmse:.4g} 1/sr ({gain:.1%}, at least {EXTENSION_GAIN:.0%} asked)",
+            *_unconverged(extended),
+        ]
+    return core_material, [
+        f"no extensions: KHR_materials_specular and KHR_materials_ior would lower the rmse by only {max(gain, 0):.1%}"
+        f" (from {core_rmse:.4g} to {extended_rmse:.4g} 1/sr; {EXTENSION_GAIN:.0%} asked)",
+        *_unconverged(core),
+    ]
+
+
+class _Solved(NamedTuple):
+    theta: np.ndarray  # the unconstrained parameters (_parameters)
+    cost: float  # Σ r² of the loss
+    n_steps: int
+    converged: bool
+
+
+def _unconverged(solved: _Solved) -> list[str]:
+    if solved.converged:
+        return []
+    return [
+        f"the glTF fit stopped after {solved.n_steps} steps without meeting its tolerances: the material may lie"
+        " farther from the fitted BRDF than the best glTF material would"
+    ]
+
+
+# ---------------------------------------------------------------------- from a fit result
+def _xyz_to_rgb_matrix() -> np.ndarray:
+    """IEC 61966-2-1's XYZ → linear sRGB matrix, as ``views/render.display_rgb`` applies it (rows: r, g, b)."""
+    return display_rgb(np.eye(3), ("x", "y", "z"))[0].T
+
+
+def _channel_plan(channels: Sequence[str]) -> tuple[str, list[str]]:
+    """How ``channels`` become glTF's linear RGB: ``rgb``, ``xyz`` or ``grey``, with the notes a user reads."""
+    channels = tuple(channels)
+    if len(channels) == 3 and channels == ("x", "y", "z"):
+        return "xyz", ["channels x, y, z (CIE XYZ) converted to linear sRGB (IEC 61966-2-1) for the material"]
+    if len(channels) == 3:
+        notes = [] if channels == ("r", "g", "b") else [f"channels {', '.join(channels)} taken as r, g, b"]
+        return "rgb", notes
+    if len(channels) == 1:
+        return "grey", [f"one channel ({channels[0]}): the material is grey (the same base colour in r, g and b)"]
+    raise BrdfInputError(
+        Argument("result"),
+        f" has {len(channels)} channels ({', '.join(channels)}); a glTF material takes three (r, g, b, or x, y, z"
+        " as CIE XYZ) or one (grey)",
+    )
+
+
+def _retro_reflection_note(result: FitResult) -> list[str]:
+    """A note when ``result`` reflects more light back towards the light than into the mirror direction by
+    :data:`RETRO_RATIO` or more at an incidence of :data:`RETRO_INCIDENCE`, in every channel."""
+    theta = np.radians(np.array(RETRO_INCIDENCE))
+    wi = spherical_to_direction(theta, np.zeros_like(theta))
+    retro = np.asarray(result.predict(wi, wi))
+    mirror = np.asarray(result.predict(wi, mirror_direction(wi)))
+    ratio = (retro / np.maximum(mirror, 1e-300)).min(axis=1)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] < RETRO_RATIO:
+        return []
+    return [
+        f"the fitted BRDF is retro-reflective (at θi = {RETRO_INCIDENCE[worst]:g}° it sends {ratio[worst]:.3g} times"
+        " more light back towards the light than into the mirror direction); glTF's BRDF peaks near the mirror"
+        " direction, so no glTF material can reproduce it: the material is only the closest one in the loss"
+    ]
+
+
+def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str]]:
+    if not isinstance(result, FitResult):
+        raise BrdfInputError(Argument("result"), f" must be a FitResult, not {type(result).__name__}")
+    plan, notes = _channel_plan(result.channels)
+    samples = tabulated(result)
+    values = samples.values
+    if plan == "xyz":
+        values = values @ _xyz_to_rgb_matrix().T
+    material, fit_notes = fit_material(samples.wi, samples.wo, values, result.loss)
+    if plan == "xyz":
+        rgb_to_xyz = np.linalg.inv(_xyz_to_rgb_matrix())
+        approximation = approximation_error(result, lambda wi, wo: material.brdf(wi, wo) @ rgb_to_xyz.T)
+    elif plan == "grey":
+        approximation = approximation_error(result, lambda wi, wo: material.brdf(wi, wo)[:, :1])
+    else:
+        approximation = approximation_error(result, material.brdf)
+    warnings = approximation.warnings("glTF's metallic-roughness BRDF")
+    return material, approximation, notes + fit_notes + _retro_reflection_note(result) + warnings
+
+
+def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:
+    """The glTF material closest to ``result``'s fitted BRDF, and how far it lies from it.
+
+    The fitted BRDF is tabulated on ``export.approximate.dense_grid`` and :func:`fit_material` fits glTF's BRDF to
+    it with ``result``'s loss. Channels: r, g, b (any three) as they are; x, y, z (CIE XYZ) converted to linear
+    sRGB first (``views/render.display_rgb``); one channel as grey; other counts are refused. The
+    :class:`~brdffit.export.approximate.Approximation` compares the material with the fit in the fit's own
+    channels (the material's RGB converted back to XYZ; its r channel for grey). :func:`write_gltf` also returns
+    the notes on these choices.
+    """
+    material, approximation, _ = _fit(result)
+    return material, approximation
+
+
+def _plain(value):
+    """``value`` with numpy scalars and arrays as Python numbers and lists (for JSON)."""
+    if isinstance(value, dict):
+        return {str(key): _plain(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(item) for item in value]
+    if isinstance(value, np.ndarray | np.generic):
+        return value.tolist()
+    return value
+
+
+def write_gltf(result: FitResult, path: str | os.PathLike) -> tuple[GltfMaterial, Approximation, list[str]]:
+    """Fit a glTF material to ``result`` (:func:`fit_gltf`) and write it as a ``.gltf`` file (JSON; ``.glb``, binary
+    glTF, is refused), atomically.
+
+    The file is a glTF 2.0 document holding the material alone (:meth:`GltfMaterial.to_gltf`), named after the
+    file; the material's ``extras.brdffit`` holds the approximation (``rmse`` in 1/sr over the grid, the worst
+    relative ``albedo_error`` and where), the notes, and the source fit's model, options, channels, loss and
+    parameters. Returns the material, the approximation and the notes (one line each).
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".glb":
+        raise BrdfInputError(
+            Argument.given("path", str(path)), " is not allowed: .glb is binary glTF; brdffit writes .gltf (JSON)"
+        )
+    if not path.parent.is_dir():
+        raise BrdfInputError(f"{path}: the folder {path.parent} does not exist")
+    material, approximation, notes = _fit(result)
+    extras = {
+        "brdffit": {
+            "version": __version__,
+            "approximation": approximation.to_dict(),
+            "notes": notes,
+            "source": {
+                "model": result.model,
+                "model_options": dict(result.model_options),
+                "channels": list(result.channels),
+                "loss": result.loss,
+                "params": result.params,
+            },
+        }
+    }
+    document = material.to_gltf(path.stem, extras=_plain(extras))
+    write_text_atomic(path, json_text(document) + "\n")
+    return material, approximation, notes
