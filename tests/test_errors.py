@@ -33,7 +33,11 @@ def samples():
         (dict(dtype="float16"), "dtype='float16' is not allowed; choose one of: float64, float32"),
         (dict(max_theta=95), "max_theta=95 is not allowed; give degrees in (0, 90]"),
         (dict(fresnel="schlick"), "fresnel does not apply to model ward; it takes no options"),
-        (dict(max_step=3), "max_step is not an argument of the fit, nor an option of any model (fresnel, lobes)"),
+        (
+            dict(max_step=3),
+            "max_step is not an argument of the fit, nor an option of any model"
+            " (distribution, fresnel, lobes, shadowing)",
+        ),
         (
             dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)),
             "walkers=4 is too few for 8 sampled parameters; give at least 16",

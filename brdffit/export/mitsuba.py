@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
 from ..physics.models import get_model
 from ..physics.models.specs import spec_of
@@ -139,12 +139,14 @@ def _channel_notes(result: FitResult) -> list[str]:
     if len(channels) != 3:
         raise BrdfInputError(
             f"a Mitsuba BSDF holds RGB albedos; this fit has {len(channels)} channels ({', '.join(channels)}):"
-            " fit with 1 or 3 channels (load_samples(..., spectral_to='rgb'))"
+            " fit samples of 1 or 3 channels (spectral ones read with ",
+            Argument("spectral_to", "rgb"),
+            ")",
         )
     if channels == ("x", "y", "z"):
         raise BrdfInputError(
-            "this fit's channels are CIE XYZ; Mitsuba's scalar_rgb takes linear sRGB: fit the samples read with"
-            " spectral_to='rgb' (--spectral-to rgb)"
+            "this fit's channels are CIE XYZ; Mitsuba's scalar_rgb takes linear sRGB: fit the samples read with ",
+            Argument("spectral_to", "rgb"),
         )
     return []
 

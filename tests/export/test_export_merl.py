@@ -22,10 +22,13 @@ def test_the_table_holds_the_model_at_every_bin_and_reads_back(tmp_path):
     assert path.stat().st_size == 12 + 3 * N_BINS * 8
 
 
-def test_a_model_without_three_channels_is_refused(tmp_path):
-    path = tmp_path / "grey.binary"
+def test_a_model_of_two_channels_is_refused_and_one_is_written_grey(tmp_path):
+    path = tmp_path / "two.binary"
     with pytest.raises(BrdfInputError) as error:
-        write_merl("lambert", {"rho_d": 0.5}, path)
+        write_merl("lambert", {"rho_d": [0.5, 0.4]}, path)
     message = str(error.value)
-    assert message.startswith(str(path)) and "1 channel(s)" in message and "3 (r, g, b)" in message
+    assert message.startswith(str(path)) and "2 channels" in message and "3 (r, g, b), or grey from 1" in message
     assert not path.exists()
+    notes = write_merl("lambert", {"rho_d": [0.5]}, tmp_path / "grey.binary")
+    assert notes == ["one channel: written as grey, the same values in r, g and b"]
+    assert (tmp_path / "grey.binary").exists()
