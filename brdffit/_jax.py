@@ -11,7 +11,7 @@ the setting per thread; a thread that brdffit starts enters it itself.
 import functools
 from collections.abc import Callable
 
-import jax
+from ._lazy import jax
 
 #: XLA options for the CPU backend, measured on the MERL-size Cook-Torrance solver (2-core Xeon, jax 0.10.2):
 #: XLA's newer CPU "fusion emitters" (the default) compile it in 1.3–1.4 s, the classic loop emitters in 0.5–0.6 s,
@@ -56,7 +56,10 @@ def jit(fun=None, **jit_arguments):
     """
     if fun is None:
         return functools.partial(jit, **jit_arguments)
-    plain = jax.jit(fun, **jit_arguments)
+
+    @functools.cache
+    def plain():
+        return jax.jit(fun, **jit_arguments)
 
     @functools.cache
     def top_level():
@@ -66,7 +69,7 @@ def jit(fun=None, **jit_arguments):
     def call(*args, **kwargs):
         with float64():
             if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
-                return plain(*args, **kwargs)
+                return plain()(*args, **kwargs)
             return top_level()(*args, **kwargs)
 
     def precompile(*args, **kwargs) -> None:

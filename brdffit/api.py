@@ -15,7 +15,8 @@ from .data.load import as_samples
 from .data.samples import Samples
 from .errors import FitWarning
 from .fitting.batch import fit_many
-from .fitting.fit import MAX_STEPS, N_STARTS, checked, fit_one
+from .fitting.defaults import MAX_STEPS, N_STARTS
+from .fitting.fit import checked, fit_one
 from .fitting.results import FitResult
 from .physics.models import Model, model_for
 from .uncertainty.mcmc import MCMC, check_walkers

@@ -6,6 +6,7 @@ The command line enables it; Python users call :func:`enable_compilation_cache`.
 """
 
 import os
+import sys
 from pathlib import Path
 
 #: The environment variable that moves the cache; set it to an empty string to turn the cache off.
@@ -36,6 +37,11 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None
+    if "jax" not in sys.modules:
+        # JAX reads these when it is imported: a command that never computes never pays for importing it.
+        os.environ["JAX_COMPILATION_CACHE_DIR"] = str(folder)
+        os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0"
+        return folder
     import jax
 
     jax.config.update("jax_compilation_cache_dir", str(folder))

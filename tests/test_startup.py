@@ -41,6 +41,66 @@ def test_help_and_version_import_no_jax(argv, status, said):
     assert said in done.stdout + done.stderr
 
 
+LAMBERT_RESULT = (
+    '{"model": "lambert", "model_options": {}, "channels": ["r", "g", "b"], "params": {"rho_d": [0.2, 0.3, 0.4]},'
+    ' "fit": {"loss": "log", "cost": 0, "rmse": 0, "n_samples": 1, "n_steps": 1, "converged": true}}'
+)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["models"],
+        ["info", "{example}"],
+        ["info", "{tape}", "--quantity", "cosine-weighted-out"],
+        ["convert", "{example}", "{tmp}/oak.dat"],
+        ["export", "{tmp}/lambert.json", "--to", "mitsuba", "-o", "{tmp}/lambert.xml"],
+        ["fit", "--help"],
+        ["compare", "--help"],
+        ["export", "--help"],
+    ],
+    ids=lambda argv: " ".join(argv[:2]),
+)
+def test_commands_that_compute_nothing_import_no_jax(argv, tmp_path):
+    """Listing the models, describing or converting a file, an exact Mitsuba export (a mapping of parameters) and
+    the commands' help need no JAX (0.4–1 s to import): ``brdffit/_lazy.py``. The cache is turned on as a fit's is
+    (``cache.py`` then leaves it to JAX's environment variables)."""
+    from paths import EXAMPLE, TAPE
+
+    (tmp_path / "lambert.json").write_text(LAMBERT_RESULT)
+    argv = [part.format(example=EXAMPLE, tape=TAPE, tmp=tmp_path) for part in argv]
+    code = "\n".join(
+        [
+            "import sys",
+            "from brdffit.cli import main",
+            f"status = main({argv!r})",
+            "assert status == 0, status",
+            "assert 'jax' not in sys.modules, 'jax imported'",
+        ]
+    )
+    environment = {**os.environ, CACHE_VARIABLE: str(tmp_path / "cache")}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=environment)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_cache_set_before_jax_is_imported_is_jaxs(tmp_path):
+    """Turned on before JAX is imported, the cache waits in JAX's environment variables; JAX then uses it."""
+    folder = str(tmp_path / "cache")
+    code = "\n".join(
+        [
+            "import sys",
+            "from brdffit.cache import enable_compilation_cache",
+            f"enable_compilation_cache({folder!r})",
+            "assert 'jax' not in sys.modules",
+            "import jax",
+            f"assert jax.config.jax_compilation_cache_dir == {folder!r}, jax.config.jax_compilation_cache_dir",
+            "assert jax.config.jax_persistent_cache_min_compile_time_secs == 0",
+        ]
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+
+
 def test_the_lazy_names_and_the_type_checkers_imports_agree():
     """``_EXPORTS`` and ``_MODULES`` (what loads at run time) and the ``TYPE_CHECKING`` block (what IDEs see) list
     the same names, from the same modules."""

@@ -69,7 +69,7 @@ def model_options(args: argparse.Namespace) -> dict[str, Any]:
 def add_comparison_options(command: argparse.ArgumentParser) -> None:
     """The options of a model comparison (``compare`` and ``report``): the samples, the models, the loss, the folds,
     the solver's settings, the seed and the reading options."""
-    from ..fitting.fit import MAX_STEPS, N_STARTS
+    from ..fitting.defaults import MAX_STEPS, N_STARTS
     from ..fitting.losses import LOSSES
 
     command.add_argument("samples", metavar="SAMPLES", help="samples file: CSV, MERL, ALTA, ASTM")

@@ -14,7 +14,7 @@ from .arguments import add_loading_options, add_model_options, json_argument, lo
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from ..fitting.fit import MAX_STEPS, N_STARTS
+    from ..fitting.defaults import MAX_STEPS, N_STARTS
     from ..fitting.losses import LOSSES
 
     parser.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s): CSV, MERL, ALTA, ASTM")

@@ -74,7 +74,8 @@ from .._files import write_text_atomic
 from .._jax import float64, jit
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
-from ..fitting.fit import MAX_STEPS, TOLERANCES
+from ..fitting.defaults import MAX_STEPS
+from ..fitting.fit import TOLERANCES
 from ..fitting.losses import get_loss
 from ..fitting.results import FitResult, json_text
 from ..fitting.solver import OnePassLevenbergMarquardt

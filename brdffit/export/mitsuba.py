@@ -29,7 +29,7 @@ the better of the two) to the fitted BRDF (``approximate.py``) and reports how f
 
 import pprint
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,7 +38,9 @@ from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult
 from ..physics.models import get_model
 from ..physics.models.specs import spec_of
-from .approximate import Approximation, approximation_error, refit
+
+if TYPE_CHECKING:
+    from .approximate import Approximation
 
 #: The Mitsuba 3 scene-description version the XML declares.
 XML_VERSION = "3.0.0"
@@ -52,14 +54,16 @@ STAND_INS = (
 @dataclass(frozen=True)
 class MitsubaExport:
     """A Mitsuba 3 BSDF as ``mitsuba.load_dict`` takes it (``bsdf``), the fit it was made from (``source``, a model
-    spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it), how far
-    that lies from the source (``approximation``, None when exact) and what a user must know (``notes``)."""
+    spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it,
+    ``refitted``), how far that lies from the source (``approximation``, None when exact) and what a user must know
+    (``notes``)."""
 
     bsdf: dict[str, Any]
     source: str
     exported: FitResult
-    approximation: Approximation | None = None
+    approximation: "Approximation | None" = None
     notes: list[str] = field(default_factory=list)
+    refitted: bool = False
 
     @property
     def exact(self) -> bool:
@@ -85,6 +89,8 @@ class MitsubaExport:
         if self.exact:
             beckmann = self.exported.model_options.get("distribution") == "beckmann"
             how = "exact" + (" but for Mitsuba's Beckmann G1 (Walter's approximation, within 0.5%)" if beckmann else "")
+        elif not self.refitted:
+            how = f"exact but for the scale into Mitsuba's range: {self.approximation.line()}"
         else:
             how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
             how += self.approximation.line()
@@ -93,18 +99,23 @@ class MitsubaExport:
 
 def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     """The Mitsuba 3 BSDF of ``result`` (module docstring): exact where Mitsuba has the model, else the better of
-    Mitsuba's GGX and Beckmann ``roughconductor`` (with ``diffuse``) fitted to the fitted BRDF."""
+    Mitsuba's GGX and Beckmann ``roughconductor`` (with ``diffuse``) fitted to the fitted BRDF. An exact export
+    maps parameters only (no JAX is imported); the others fit (``approximate.py``)."""
     source = spec_of(result.model, result.model_options)
     notes = _channel_notes(result)
     if _is_exact(result):
         bsdf, scale = _bsdf(result)
         if scale == 1.0:
             return MitsubaExport(bsdf, source, result, None, notes)
+        from .approximate import approximation_error
+
         notes.append(
             f"its albedos exceed what Mitsuba's RGB reflectances hold (kd + ks up to {1 / scale:.3g}):"
             f" scaled by {scale:.3g}"
         )
         return MitsubaExport(bsdf, source, result, approximation_error(result, _scaled(result, scale)), notes)
+    from .approximate import approximation_error, refit
+
     candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
     exported, _ = min(candidates, key=lambda pair: pair[1].rmse)
     bsdf, scale = _bsdf(exported)
@@ -112,7 +123,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
         notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
     approximation = approximation_error(result, _scaled(exported, scale))
     notes += approximation.warnings("Mitsuba's microfacet model")
-    return MitsubaExport(bsdf, source, exported, approximation, notes)
+    return MitsubaExport(bsdf, source, exported, approximation, notes, refitted=True)
 
 
 def _is_exact(result: FitResult) -> bool:

@@ -22,7 +22,8 @@ from .._jax import float64
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import BrdfInputError
-from .fit import MAX_STEPS, N_STARTS, checked, compiled_solver, fit_one, result_of, search_problem, start_vector
+from .defaults import MAX_STEPS, N_STARTS
+from .fit import checked, compiled_solver, fit_one, result_of, search_problem, start_vector
 from .problem import build_problem, padded_size
 from .results import FitResult
 from .starts import starting_points

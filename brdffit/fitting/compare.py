@@ -39,7 +39,8 @@ from ..errors import Argument, BrdfInputError
 from ..physics.fresnel import FRESNEL
 from ..physics.models import Model
 from ..physics.models.specs import model_of_spec, spec_of
-from .fit import MAX_STEPS, N_STARTS, compiled_solver, fit_one
+from .defaults import MAX_STEPS, N_STARTS
+from .fit import compiled_solver, fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
 from .problem import Problem, build_problem, cost, residuals

@@ -25,6 +25,7 @@ from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
 from ..physics.models import MODELS, Model, Params, get_model, model_option_names
 from .caveats import caveats
+from .defaults import MAX_STEPS, N_STARTS
 from .implicit import at_optimum, computed_as
 from .lobes import lobe_by_lobe
 from .losses import Loss, get_loss
@@ -40,8 +41,6 @@ from .starts import search_subset, starting_points
 #: that differ by 1% carry ~1e-4 relative rounding error, so its cost jitters at ~1e-5 and only loose tests can
 #: pass; the float32 stage merely has to land near the optimum, which float64 then refines.
 TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
-MAX_STEPS = 256
-N_STARTS = 3
 
 
 @float64

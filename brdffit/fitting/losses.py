@@ -22,9 +22,7 @@ with a ``sigma`` column every loss is a χ² to first order in ``f - y`` (see
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import jax
-import jax.numpy as jnp
-
+from .._lazy import jax, jnp
 from ..errors import BrdfInputError
 
 #: ε of the ``relative`` loss, in 1/sr: values below it count as if they were ε.

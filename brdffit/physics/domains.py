@@ -23,9 +23,9 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import final
 
-import jax
-import jax.numpy as jnp
 import numpy as np
+
+from .._lazy import jax, jnp
 
 #: Boundary values are moved this far inside the domain before inverting.
 BOUNDARY_OFFSET = 1e-12

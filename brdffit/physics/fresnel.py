@@ -10,8 +10,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import jax.numpy as jnp
-
+from .._lazy import jnp
 from .domains import UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
 
 

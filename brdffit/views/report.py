@@ -27,7 +27,7 @@ from ..data.samples import Samples
 from ..data.summary import describe
 from ..errors import Argument, BrdfInputError, UncertaintyWarning
 from ..fitting.compare import Comparison, compare
-from ..fitting.fit import MAX_STEPS, N_STARTS
+from ..fitting.defaults import MAX_STEPS, N_STARTS
 from ..fitting.results import FitResult
 from ..fitting.table import parameter_rows, value_with_error
 from ..physics.models import Model

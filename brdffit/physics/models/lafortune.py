@@ -17,10 +17,10 @@ for unit directions, the base is at most 1 and ``n`` of 10⁴ stays finite.
 from dataclasses import dataclass
 from typing import final
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..._arrays import namespace
+from ..._lazy import jnp
 from ...checks import whole_number
 from ...errors import BrdfInputError
 from ..domains import EXPONENT, Domain, Interval, Positive

@@ -12,17 +12,21 @@ abstract class may implement methods, a concrete one never overrides them). Most
 :class:`MappedLobe`; Lafortune's is a :class:`Lobe` with coordinates of its own.
 """
 
+from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
+
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, final
+from typing import TYPE_CHECKING, Any, final
 
 import numpy as np
-from jaxtyping import Array, Float
 
 from ..._arrays import namespace
 from ...errors import BrdfInputError
 from ..domains import Domain, MappedDomain
+
+if TYPE_CHECKING:
+    from jaxtyping import Array, Float
 
 #: A lobe's shape: each parameter's value, an array (K,) for K lobes or a number for one.
 Shape = Mapping[str, Any]

@@ -15,19 +15,21 @@ coordinate systems (:attr:`Model.unconstrained`, :attr:`Model.sampling`, :attr:`
 ``coordinates.py``).
 """
 
+from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
+
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import jax
-import jax.numpy as jnp
-from jaxtyping import Array, Float
-
+from ..._lazy import jax, jnp
 from ..geometry import above_horizon
 from .coordinates import PhysicalCoordinates, SamplingCoordinates, UnconstrainedCoordinates
 from .dictionary import ParameterDictionary
 from .lobe import Lobe
 from .params import Params
+
+if TYPE_CHECKING:
+    from jaxtyping import Array, Float
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,13 @@
 """A model's parameters as arrays, the form every computation takes."""
 
-from typing import NamedTuple
+from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
+
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-from jaxtyping import Array, Float
+
+if TYPE_CHECKING:
+    from jaxtyping import Array, Float
 
 
 class Params(NamedTuple):

@@ -13,8 +13,7 @@ normalisation of Akenine-Möller et al., *Real-Time Rendering*::
 from dataclasses import dataclass
 from typing import final
 
-import jax.numpy as jnp
-
+from ..._lazy import jnp
 from ..domains import ALBEDO, EXPONENT
 from ..geometry import half_vector, mirror_direction, safe_power
 from .grids import EXPONENT_GRID
