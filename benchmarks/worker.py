@@ -58,29 +58,31 @@ def scipy_functions(model_name: str):
     competent scipy user would write them (compiled on first call, inside the clock)."""
     import jax
 
-    from brdffit.fitting.problem import residuals
+    from brdffit.fitting.problem import prepared, residuals
 
     model, loss = get_model(model_name), get_loss(LOSS)
 
     def flat(theta, data):
         return residuals(model, loss, theta, data).ravel()
 
-    return jax.jit(flat), jax.jit(jax.jacfwd(flat))
+    return jax.jit(functools.partial(prepared, loss)), jax.jit(flat), jax.jit(jax.jacfwd(flat))
 
 
 def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str, exact: bool):
-    """scipy.optimize.least_squares on the same residuals, from the same start."""
+    """scipy.optimize.least_squares on the same residuals, from the same start, in float64 as brdffit computes
+    (a JAX user turns ``jax_enable_x64`` on; without it every array here would silently become float32)."""
     import jax
     import jax.numpy as jnp
     import scipy.optimize
 
-    from brdffit.fitting.problem import build_problem, prepared
+    from brdffit.fitting.problem import build_problem
+
+    jax.config.update("jax_enable_x64", True)
 
     n = samples.n_samples
     # T(y) and the scale computed once, as brdffit's solver does; then exactly the samples, no padding.
-    problem = jax.jit(functools.partial(prepared, get_loss(LOSS)))(build_problem(samples))
-    problem = jax.tree.map(lambda a: a[:n], problem)
-    residual, jacobian = scipy_functions(model_name)
+    prepare, residual, jacobian = scipy_functions(model_name)
+    problem = jax.tree.map(lambda a: a[:n], prepare(build_problem(samples)))
     out = scipy.optimize.least_squares(
         lambda th: np.asarray(residual(jnp.asarray(th), problem)),
         theta0,
@@ -117,8 +119,8 @@ def steps(args) -> dict:
     import jax.numpy as jnp
 
     from brdffit._jax import jit
-    from brdffit.fitting.fit import compiled_solver
     from brdffit.fitting.problem import build_problem, normal_equations, prepared
+    from brdffit.fitting.solve import compiled_solver
 
     samples = load(args.data)
     model, loss = get_model(args.model), get_loss(LOSS)

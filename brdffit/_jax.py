@@ -11,6 +11,7 @@ the setting per thread; a thread that brdffit starts enters it itself.
 import functools
 from collections.abc import Callable
 
+from . import _programs
 from ._lazy import jax
 
 #: XLA options for the CPU backend, measured on the MERL-size Cook-Torrance solver (2-core Xeon, jax 0.10.2):
@@ -47,15 +48,24 @@ def compiler_options() -> dict | None:
     return CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
 
 
-def jit(fun=None, **jit_arguments):
+def jit(fun=None, *, name: str | None = None, **jit_arguments):
     """``jax.jit`` in :func:`float64` with :func:`compiler_options`, chosen at the first call (importing does no work).
 
     Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
     options only for a program compiled on its own, so inside a traced function (``jit`` or ``vmap`` of a
     caller) the plain ``jax.jit`` is used and the outer program's options apply.
+
+    While the compilation cache is on, a call at the top level runs the program stored for its signature
+    (``_programs.py``): a later process then neither traces nor lowers it. A module-level function is stored
+    under its module and name; a closure only under the ``name`` its caller gives, which must name everything
+    it closes over (``solve[model, loss, max_steps, dtype]``).
     """
     if fun is None:
-        return functools.partial(jit, **jit_arguments)
+        return functools.partial(jit, name=name, **jit_arguments)
+    if name is None and "<" not in getattr(fun, "__qualname__", "<"):  # not a lambda, a closure or a partial
+        name = f"{fun.__module__}.{fun.__qualname__}"
+    static_argnums = jit_arguments.get("static_argnums", ())
+    static_argnums = (static_argnums,) if isinstance(static_argnums, int) else tuple(static_argnums)
 
     @functools.cache
     def plain():
@@ -65,11 +75,20 @@ def jit(fun=None, **jit_arguments):
     def top_level():
         return jax.jit(fun, compiler_options=compiler_options(), **jit_arguments)
 
+    def stored(args, kwargs):
+        """The stored program for a top-level call, or None (``_programs.stored_program``)."""
+        if name is None or kwargs:
+            return None
+        return _programs.stored_program(name, top_level(), args, static_argnums, compiler_options())
+
     @functools.wraps(fun)
     def call(*args, **kwargs):
         with float64():
             if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
                 return plain()(*args, **kwargs)
+            program = stored(args, kwargs)
+            if program is not None:
+                return program(*_programs.dynamic_arguments(args, static_argnums))
             return top_level()(*args, **kwargs)
 
     def precompile(*args, **kwargs) -> None:
@@ -79,7 +98,12 @@ def jit(fun=None, **jit_arguments):
         can run in another thread while the caller does other work.
         """
         with float64():
-            top_level().lower(*args, **kwargs).compile()
+            program = stored(args, kwargs)
+            if program is not None:
+                shapes = _programs.dynamic_arguments(args, static_argnums)
+                program.lower(*shapes).compile()
+            else:
+                top_level().lower(*args, **kwargs).compile()
 
     call.precompile = precompile
     return call

@@ -11,12 +11,13 @@ from collections.abc import Sequence
 from typing import Any
 
 from ._jax import float64
-from .data.load import as_samples
+from .cluster import fit_here, fit_on_cluster
+from .data.load import as_samples, check_read_options
 from .data.samples import Samples
 from .errors import FitWarning
-from .fitting.batch import fit_many
 from .fitting.defaults import MAX_STEPS, N_STARTS
 from .fitting.fit import checked, fit_one
+from .fitting.losses import get_loss
 from .fitting.results import FitResult
 from .physics.models import Model, model_for
 from .uncertainty.mcmc import MCMC, check_walkers
@@ -99,9 +100,12 @@ def fit_batch(
     seed: int = 0,
     uncertainty: str | None = None,
     mcmc: MCMC | None = None,
+    client=None,
+    read_options: dict[str, Any] | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
-    """Fit ``model`` to each of ``samples``; the results come in the same order.
+    """Fit ``model`` to each of ``samples`` (datasets, or paths read with :func:`brdffit.load_samples` and
+    ``read_options``); the results come in the same order.
 
     The options are those of :func:`fit`, applied to every dataset; ``start``
     may also be a list with one parameter dictionary per dataset.
@@ -109,35 +113,38 @@ def fit_batch(
     ``vmap``. ``progress``: a progress bar on stderr (default: when stderr is a
     terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
     settings) adds each result's ``uncertainty`` after the fits.
+    ``client``: a ``dask.distributed.Client``; the fits are spread over its
+    workers (``brdffit/cluster.py``), paths are read there, and the results are
+    those of this process's fit.
     """
     check_options(uncertainty, mcmc)
-    samples = [as_samples(one) for one in samples]
-    if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
-        for one in samples:
-            built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
-            check_walkers(mcmc or MCMC(), built, kept)
-    results = fit_many(
-        samples,
-        model,
-        loss,
+    read_options = dict(read_options or {})
+    check_read_options(read_options)
+    options = dict(
         strategy=strategy,
-        progress=progress,
         max_theta=max_theta,
-        start=start,
         n_starts=n_starts,
         max_steps=max_steps,
         dtype=dtype,
         seed=seed,
-        **model_options,
+        uncertainty=uncertainty,
+        mcmc=mcmc,
     )
+    if client is not None:
+        first_start = start if isinstance(start, dict) or start is None else next(iter(start), None)
+        built = model_for(model, first_start, **model_options) if isinstance(model, str) else model
+        get_loss(loss)
+        results = fit_on_cluster(client, samples, built, loss, read_options=read_options, start=start, **options)
+    else:
+        samples = [as_samples(one, **read_options) for one in samples]
+        if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
+            for one in samples:
+                built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
+                check_walkers(mcmc or MCMC(), built, kept)
+        results = fit_here(samples, model, loss, start=start, progress=progress, **options, **model_options)
     for result in results:
         warn_about(result)
-    if uncertainty is None:
-        return results
-    return [
-        with_uncertainty(result, one.within(max_theta), uncertainty, mcmc=mcmc)
-        for result, one in zip(results, samples, strict=True)
-    ]
+    return results
 
 
 def warn_about(result: FitResult) -> None:

@@ -12,6 +12,8 @@ from pathlib import Path
 #: The environment variable that moves the cache; set it to an empty string to turn the cache off.
 CACHE_VARIABLE = "BRDFFIT_CACHE_DIR"
 
+_enabled: Path | None = None  # the folder enable_compilation_cache turned on, if any
+
 
 def default_cache_dir() -> Path | None:
     """``$BRDFFIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/brdffit/jax``, else ``~/.cache/brdffit/jax``; None if off."""
@@ -26,10 +28,12 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
     """Keep compiled programs in ``path`` (default :func:`default_cache_dir`) across processes.
 
     Every program is cached, however quickly it compiled (JAX's default keeps
-    only those over a second). Returns the folder, or None when the cache is
-    off or the folder cannot be created (a read-only home): fits then compile
-    as usual.
+    only those over a second), and brdffit's own programs are also kept before
+    compiling (``programs/``, ``_programs.py``), so that a later process does not
+    trace them again. Returns the folder, or None when the cache is off or the
+    folder cannot be created (a read-only home): fits then compile as usual.
     """
+    global _enabled
     folder = Path(path) if path is not None else default_cache_dir()
     if folder is None:
         return None
@@ -37,6 +41,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None
+    _enabled = folder
     if "jax" not in sys.modules:
         # JAX reads these when it is imported: a command that never computes never pays for importing it.
         os.environ["JAX_COMPILATION_CACHE_DIR"] = str(folder)
@@ -47,3 +52,8 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
     jax.config.update("jax_compilation_cache_dir", str(folder))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     return folder
+
+
+def programs_folder() -> Path | None:
+    """Where brdffit's exported programs are kept: ``programs/`` in the enabled cache, None while it is off."""
+    return None if _enabled is None else _enabled / "programs"

@@ -32,6 +32,7 @@ LAYERS = {
     "brdffit.fitting": 3,
     "brdffit.uncertainty": 4,
     "brdffit.api": 5,
+    "brdffit.cluster": 5,
     "brdffit.views": 5,
     "brdffit.export": 5,
     "data_synth": 5,

@@ -159,8 +159,12 @@ def load(path: str, args: argparse.Namespace):
     """``path`` read with the loading options of ``args``."""
     from ..data.load import load_samples
 
-    return load_samples(
-        path,
+    return load_samples(path, **read_options(args))
+
+
+def read_options(args: argparse.Namespace) -> dict:
+    """The loading options of ``args`` as ``load_samples`` takes them."""
+    return dict(
         format=args.format,
         angles=args.angles,
         quantity=args.quantity,

@@ -10,7 +10,16 @@ from pathlib import Path
 
 from ..errors import Argument, BrdfInputError
 from . import EXIT_NOT_CONVERGED, EXIT_OK
-from .arguments import add_loading_options, add_model_options, json_argument, load, model_options, output_file
+from .arguments import (
+    add_loading_options,
+    add_model_options,
+    json_argument,
+    load,
+    model_options,
+    output_file,
+    read_options,
+)
+from .cluster import cluster_client
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -54,6 +63,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="result file ('-' for standard output, the table then goes to standard error), or a folder (OUTDIR/)"
         " for several samples files (default: SAMPLES-stem.MODEL[.OPTION-VALUE].json in the current folder)",
     )
+    spread = parser.add_argument_group("cluster (pip install 'brdffit[cluster]')").add_mutually_exclusive_group()
+    spread.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="spread the fits over the Dask cluster whose scheduler is at ADDRESS (tcp://host:8786); its workers"
+        " read the samples files, at the same paths",
+    )
+    spread.add_argument(
+        "--workers", type=int, metavar="N", help="spread the fits over a local Dask cluster of N worker processes"
+    )
     errors = parser.add_argument_group("uncertainty")
     errors.add_argument(
         "--uncertainty",
@@ -86,8 +105,17 @@ def run(args: argparse.Namespace) -> int:
     inputs = [*args.samples, *([args.start] if args.start and not args.start.lstrip().startswith("{") else [])]
     outputs = output_paths(args.samples, args.output, model, inputs)
     start = _start(args.start)
-    samples = [load(path, args) for path in args.samples]  # every input read and checked before any fit
-    results = _fit(args, model, samples, start, mcmc)
+    if args.workers is not None and args.workers < 1:
+        raise BrdfInputError(f"--workers must be 1 or more, got {args.workers}")
+    if args.scheduler:  # a cluster's workers read the files, at the same paths (a worker's folder may be another)
+        samples = [str(Path(path).resolve()) for path in args.samples]
+    else:
+        samples = [load(path, args) for path in args.samples]  # every input read and checked before any fit
+    if args.scheduler or args.workers:
+        with cluster_client(args.scheduler, args.workers) as client:
+            results = _fit(args, model, samples, start, mcmc, client=client)
+    else:
+        results = _fit(args, model, samples, start, mcmc)
     if outputs is None:  # -o -: the result file on standard output, everything else on standard error
         sys.stdout.write(results[0].to_json())
     else:
@@ -102,10 +130,17 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK if all(result.converged for result in results) else EXIT_NOT_CONVERGED
 
 
-def _fit(args: argparse.Namespace, model, samples: list, start, mcmc) -> list:
-    """Every fit, with its uncertainty when asked; their warnings are the results' own (``_report`` prints them)."""
+def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, client=None) -> list:
+    """Every fit, with its uncertainty when asked; their warnings are the results' own (``_report`` prints them).
+    With a Dask ``client``, spread over its workers; paths in ``samples`` are read there."""
     from .. import api
 
+    if client is not None:
+        options = dict(start=start, uncertainty=args.uncertainty, mcmc=mcmc, n_starts=args.starts, seed=args.seed)
+        options |= dict(max_theta=args.max_theta, max_steps=args.max_steps, dtype=args.dtype)
+        return api.fit_batch(
+            samples, model, args.loss, client=client, read_options=read_options(args), progress=None, **options
+        )
     options = dict(
         max_theta=args.max_theta,
         start=start,

@@ -16,6 +16,7 @@ ASTM's). After reading, the values are turned into BRDF values (``quantities.py`
 channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 """
 
+import inspect
 import os
 import warnings
 from collections.abc import Callable
@@ -132,9 +133,19 @@ def load_samples(
     return spectral.spectral_to(samples, spectral_to, illuminant=illuminant, observer=observer)
 
 
-def as_samples(samples: "Samples | str | os.PathLike") -> Samples:
-    """Samples as they are, or the samples a file holds (read with :func:`load_samples`'s defaults)."""
-    return load_samples(samples) if isinstance(samples, str | os.PathLike) else samples
+def as_samples(samples: "Samples | str | os.PathLike", **read_options) -> Samples:
+    """Samples as they are, or the samples a file holds (read by :func:`load_samples` with ``read_options``)."""
+    return load_samples(samples, **read_options) if isinstance(samples, str | os.PathLike) else samples
+
+
+def check_read_options(read_options: dict) -> None:
+    """One line naming an option :func:`load_samples` does not take, before any file is read."""
+    allowed = [name for name in inspect.signature(load_samples).parameters if name != "path"]
+    unknown = sorted(set(read_options) - set(allowed))
+    if unknown:
+        raise BrdfInputError(
+            Argument("read_options"), f" has {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}"
+        )
 
 
 def save_samples(samples: Samples, path: str | os.PathLike) -> None:

@@ -1,39 +1,36 @@
 """Fit one model to many datasets: a scanned material library, the texels of a spatially varying BRDF.
 
-Two strategies, chosen by the backend unless asked:
+The datasets are grouped into buckets whose problems stack (``buckets.bucket_key``: one padded size, channel
+count and set of columns) and each bucket is fitted in a few compiled programs (``buckets.solve_bucket``): the
+start search of all its datasets in one, every Levenberg-Marquardt run in another. ``strategy`` says how a
+program goes through the datasets of a bucket:
 
-* ``loop`` (CPU): one fit after another. Sizes are bucketed
-  (``problem.padded_size``), so every dataset of a bucket reuses one compiled
-  solver; a vmapped while-loop would instead run every fit in lockstep until
-  the slowest one ends, which on a CPU costs more than it saves.
-* ``vmap`` (GPU): datasets of one bucket are stacked and solved together, one
-  start search per dataset, then every Levenberg-Marquardt run of the bucket
-  at once.
+* ``loop`` (the default on a CPU): one after another inside the program, each solve ending when it converges;
+  a vectorised while-loop would run every fit until the slowest one ends, which on a CPU costs more than it
+  saves;
+* ``vmap`` (the default on a GPU): all at once, which fills the device.
+
+Models with several lobes (Lafortune) are fitted lobe by lobe, one dataset after another (``fit.py``), unless
+every dataset has its start.
 """
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from .._jax import float64
+from .._lazy import jax
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import BrdfInputError
+from ..physics.models import Model
+from .buckets import batches, bucket_key, default_strategy, solve_bucket
 from .defaults import MAX_STEPS, N_STARTS
-from .fit import checked, compiled_solver, fit_one, result_of, search_problem, start_vector
-from .problem import build_problem, padded_size
+from .fit import checked, fit_one, result_of, start_vector
 from .results import FitResult
-from .starts import starting_points
 
 STRATEGIES = ("auto", "loop", "vmap")
-
-
-def default_strategy() -> str:
-    """``vmap`` on a GPU, ``loop`` elsewhere."""
-    return "vmap" if jax.default_backend() in ("gpu", "cuda", "rocm") else "loop"
 
 
 @float64
@@ -60,79 +57,65 @@ def fit_many(
     starts = list(start) if isinstance(start, Sequence) else [start] * len(samples)
     if len(starts) != len(samples):
         raise BrdfInputError(f"{len(starts)} starts for {len(samples)} datasets; give one per dataset or one for all")
-    options = dict(max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
+    kept_by_check = [checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
+    built, built_loss = kept_by_check[0][0], kept_by_check[0][1]
+    kept = [one for _, _, one in kept_by_check]
+    n_starts = whole_number("n_starts", n_starts)
+    max_steps = whole_number("max_steps", max_steps)
+    vectors = [
+        None if one is None else start_vector(built, one, data.n_channels)
+        for one, data in zip(starts, kept, strict=True)
+    ]
     strategy = default_strategy() if strategy == "auto" else strategy
-    bar = _progress_bar(len(samples), progress)
+    options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=strategy)
+    results: list[FitResult | None] = [None] * len(kept)
+    bar = progress_bar(len(samples), progress)
     try:
-        if strategy == "loop":
-            results = []
-            for one, one_start in zip(samples, starts, strict=True):
-                results.append(fit_one(one, model, loss, start=one_start, **options, **model_options))
-                bar.update(1)
-            return results
-        return _fit_vmapped(samples, model, loss, bar, starts=starts, **options, **model_options)
+        for unit in work_units(built, kept, [vector is not None for vector in vectors]):
+            if built.n_lobes > 1 and not unit.given:  # lobe by lobe
+                (index,) = unit.indices
+                one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
+                results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, **one)
+            else:
+                thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
+                solved = solve_bucket(built, built_loss, [kept[i] for i in unit.indices], thetas, **options)
+                for position, index in enumerate(unit.indices):
+                    one = jax.tree.map(lambda leaf, p=position: leaf[p], solved)
+                    results[index] = result_of(
+                        built, built_loss, kept[index], one, max_steps, dtype, max_theta=max_theta
+                    )
+            bar.update(len(unit.indices))
     finally:
         bar.close()
+    return results
 
 
-def _progress_bar(total: int, enabled: bool | None):
+class WorkUnit(NamedTuple):
+    """Datasets fitted together: one batch of one bucket (``buckets.py``), or one dataset fitted lobe by lobe."""
+
+    indices: list[int]
+    given: bool  # every one has its start: no search
+
+
+def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) -> list[WorkUnit]:
+    """How :func:`fit_many` cuts ``samples`` (as kept for the fit) into units: by bucket and by whether the start
+    is given (a given start replaces the search), each bucket in batches of at most ``buckets.BATCH_SAMPLES``
+    samples; a model with several lobes and no start, one dataset per unit."""
+    groups: dict[tuple, list[int]] = {}
+    for index, (one, has_start) in enumerate(zip(samples, given, strict=True)):
+        groups.setdefault((bucket_key(one), has_start), []).append(index)
+    units = []
+    for (key, has_start), indices in groups.items():
+        if model.n_lobes > 1 and not has_start:
+            units += [WorkUnit([index], False) for index in indices]
+        else:
+            units += [WorkUnit(batch, has_start) for batch in batches(indices, key.padded_size)]
+    return units
+
+
+def progress_bar(total: int, enabled: bool | None):
+    """A bar of ``total`` fits on stderr."""
     from tqdm.auto import tqdm
 
     # disable=None: tqdm shows the bar only when its stream (stderr) is a terminal.
     return tqdm(total=total, unit="fit", disable=None if enabled is None else not enabled, leave=False)
-
-
-def _fit_vmapped(samples, model, loss, bar, *, starts, max_theta, n_starts, max_steps, dtype, seed, **model_options):
-    """Every dataset of a bucket (same padded size and channel count) solved at once, each start in parallel."""
-    kept_by_check = [checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
-    model, loss = kept_by_check[0][0], kept_by_check[0][1]
-    kept = [one for _, _, one in kept_by_check]
-    n_starts = whole_number("n_starts", n_starts)
-    max_steps = whole_number("max_steps", max_steps)
-    solve = jax.vmap(compiled_solver(model, loss, max_steps, dtype))
-    results: list[FitResult | None] = [None] * len(kept)
-    # One bucket per padded size, channel count and optional columns: its problems stack into one pytree.
-    buckets: dict[tuple[int, int, bool, bool], list[int]] = {}
-    for index, one in enumerate(kept):
-        key = (padded_size(one.n_samples), one.n_channels, one.sigma is None, one.weight is None)
-        buckets.setdefault(key, []).append(index)
-    for indices in buckets.values():
-        problems = [build_problem(kept[i], dtype) for i in indices]
-        if any(starts[i] is None for i in indices):
-            thetas = _best_starts(model, loss, [kept[i] for i in indices], problems, n_starts, solve, dtype, seed)
-        else:
-            thetas = np.zeros((len(indices), model.unconstrained.size(kept[indices[0]].n_channels)))
-        for position, index in enumerate(indices):
-            if starts[index] is not None:  # a given start replaces the searched one
-                thetas[position] = start_vector(model, starts[index], kept[index].n_channels)
-        solved = solve(jnp.asarray(thetas), _stacked(problems))
-        if dtype == "float32":
-            stacked = _stacked([build_problem(kept[i]) for i in indices])
-            refined = jax.vmap(compiled_solver(model, loss, max_steps))(solved.theta, stacked)
-            solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
-        for position, index in enumerate(indices):
-            one = jax.tree.map(lambda leaf, p=position: leaf[p], solved)
-            results[index] = result_of(model, loss, kept[index], one, max_steps, dtype, max_theta=max_theta)
-        bar.update(len(indices))
-    return results
-
-
-def _best_starts(model, loss, samples, problems, n_starts, solve, dtype, seed):
-    """For each dataset, the best of its ``n_starts`` grid starts after a solve on its search subsample."""
-    searches = [search_problem(one, problem, dtype, seed) for one, problem in zip(samples, problems, strict=True)]
-    starts = [starting_points(model, loss, search, n_starts) for search in searches]
-    if all(len(s) == 1 for s in starts):
-        return np.stack([s[0] for s in starts])
-    # Every start of every dataset in one vmapped solve (datasets repeated once per start).
-    width = max(len(s) for s in starts)
-    padded = [s + [s[0]] * (width - len(s)) for s in starts]
-    thetas = jnp.asarray(np.stack([theta for s in padded for theta in s]))
-    repeated = jax.tree.map(lambda leaf: jnp.repeat(leaf, width, axis=0), _stacked(searches))
-    solved = solve(thetas, repeated)
-    best = np.argmin(np.asarray(solved.cost).reshape(len(starts), width), axis=1)
-    return np.asarray(solved.theta).reshape(len(starts), width, -1)[np.arange(len(starts)), best]
-
-
-def _stacked(problems):
-    """Problems of one bucket as one problem with a leading batch axis."""
-    return jax.tree.map(lambda *leaves: jnp.stack(leaves), *problems)

@@ -40,11 +40,12 @@ from ..physics.fresnel import FRESNEL
 from ..physics.models import Model
 from ..physics.models.specs import model_of_spec, spec_of
 from .defaults import MAX_STEPS, N_STARTS
-from .fit import compiled_solver, fit_one
+from .fit import fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
 from .problem import Problem, build_problem, cost, residuals
 from .results import FitResult, json_text, read_json_object
+from .solve import compiled_solver
 
 #: The criterion models are ranked by.
 CRITERION = "cv_loss"

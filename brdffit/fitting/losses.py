@@ -20,7 +20,7 @@ with a ``sigma`` column every loss is a χ² to first order in ``f - y`` (see
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .._lazy import jax, jnp
 from ..errors import BrdfInputError
@@ -35,7 +35,9 @@ class Loss:
 
     name: str
     summary: str
-    transform: Callable  # (values, measured, cos_i) -> transformed values
+    #: (values, measured, cos_i) -> transformed values. Left out of the repr, which is then the loss's identity
+    #: (``_programs.py`` stores compiled programs under it; a function's repr is its address in this process).
+    transform: Callable = field(repr=False)
 
     def value_and_slope(self, values, measured, cos_i):
         """``T(values)`` and ``dT/dv`` at ``values``, elementwise (forward mode)."""

@@ -13,6 +13,7 @@ over which :func:`normal_equations` accumulates ``JᵀJ``, ``Jᵀr`` and ``rᵀr
 without ever holding the (N·C × k) Jacobian or the residual vector.
 """
 
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import jax
@@ -76,16 +77,42 @@ def build_problem(samples: Samples, dtype: str = "float64") -> Problem:
     replaced ~0.25 s of compiling and running an XLA padding program by ~50 ms
     of copying (2-core Xeon).
     """
-    size = padded_size(samples.n_samples)
-    return jax.device_put(
-        Problem(
-            _padded(samples.wi, size, dtype, NORMAL),
-            _padded(samples.wo, size, dtype, NORMAL),
-            _padded(samples.values, size, dtype),
-            None if samples.sigma is None else _padded(samples.sigma, size, dtype, 1.0),
-            None if samples.weight is None else _padded(samples.weight, size, dtype),
-            _padded(np.ones(samples.n_samples, bool), size, bool, False),
-        )
+    return jax.device_put(jax.tree.map(lambda leaf: leaf[0], host_problems([samples], dtype)))
+
+
+@float64
+def build_problems(samples: Sequence[Samples], dtype: str = "float64", count: int | None = None) -> Problem:
+    """The problems of datasets of one bucket (``padded_size`` and channels alike), stacked: arrays (D, N, …).
+
+    ``count`` ≥ D rows of datasets, the rows after the last a copy of the first (so that a batch's size can
+    come from a few values and reuse its compiled program); one transfer for them all.
+    """
+    return jax.device_put(host_problems(samples, dtype, count))
+
+
+def host_problems(samples: Sequence[Samples], dtype: str = "float64", count: int | None = None) -> Problem:
+    """:func:`build_problems` on the host: numpy arrays (count, N, …), each written once into aligned buffers."""
+    size = padded_size(samples[0].n_samples)
+    count = len(samples) if count is None else count
+    copies = [*samples, *[samples[0]] * (count - len(samples))]
+
+    def stacked(field, dtype, fill=0.0):
+        arrays = [field(one) for one in copies]
+        if arrays[0] is None:
+            return None
+        out = _aligned((count, size, *np.shape(arrays[0])[1:]), dtype)
+        for row, array in zip(out, arrays, strict=True):
+            row[: len(array)] = array
+            row[len(array) :] = fill
+        return out
+
+    return Problem(
+        stacked(lambda one: one.wi, dtype, NORMAL),
+        stacked(lambda one: one.wo, dtype, NORMAL),
+        stacked(lambda one: one.values, dtype),
+        stacked(lambda one: one.sigma, dtype, 1.0),
+        stacked(lambda one: one.weight, dtype),
+        stacked(lambda one: np.ones(one.n_samples, bool), bool, False),
     )
 
 
@@ -93,18 +120,13 @@ def build_problem(samples: Samples, dtype: str = "float64") -> Problem:
 ALIGNMENT = 64
 
 
-def _padded(array, size: int, dtype, fill=0.0) -> np.ndarray:
-    """``array`` (N, …) copied into a new :data:`ALIGNMENT`-aligned buffer of ``size`` rows, the rest ``fill``."""
-    array = np.asarray(array)
-    shape = (size, *array.shape[1:])
+def _aligned(shape: tuple[int, ...], dtype) -> np.ndarray:
+    """A new uninitialised array whose data start on an :data:`ALIGNMENT`-byte boundary."""
     dtype = np.dtype(dtype)
     n_bytes = int(np.prod(shape)) * dtype.itemsize
     raw = np.empty(n_bytes + ALIGNMENT, np.uint8)
     offset = -raw.ctypes.data % ALIGNMENT
-    out = raw[offset : offset + n_bytes].view(dtype).reshape(shape)
-    out[: len(array)] = array
-    out[len(array) :] = fill
-    return out
+    return raw[offset : offset + n_bytes].view(dtype).reshape(shape)
 
 
 def prepared(loss: Loss, problem: Problem) -> Problem:

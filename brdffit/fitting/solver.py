@@ -44,10 +44,14 @@ import lineax as lx
 import optimistix as optx
 from optimistix import RESULTS
 
+#: The largest change of any unconstrained coordinate in one step (a log-albedo or log-roughness by a factor e² ≈ 7.4).
+MAX_COORDINATE_STEP = 2.0
+
 
 class _DescentState(eqx.Module):
     live: Any  # (k,) bool: columns of J that can change the residuals
-    scale: Any  # D = sqrt(diag JᵀJ), (k,)
+    scale: Any  # D, (k,): the running scale on live columns, 1 on dead ones
+    largest_norms: Any  # the largest sqrt(diag JᵀJ) of each column so far, (k,)
     eigenvalues: Any  # σ of D⁻¹JᵀJD⁻¹, (k,)
     eigenvectors: Any  # V, (k, k)
     projected: Any  # c = Vᵀ D⁻¹ Jᵀr, (k,)
@@ -71,13 +75,30 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
     0 in log space) cannot change the residuals at float precision; it is left
     out of the step, whose length would otherwise be all its own and leave the
     other parameters a vanishing radius.
+
+    Two guards against a fit that runs off into a flat region, both on by default:
+
+    * ``running_scale``: MINPACK's scale (``lmder``, mode 1), each column's largest norm so far rather than its
+      norm now, so that a column that shrinks on the way (an albedo heading to 0) keeps a step of the size it
+      had instead of a step that grows as it shrinks;
+    * ``max_coordinate_step``: no unconstrained coordinate moves by more than this in one step (the whole step
+      is shortened along its direction). A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one
+      step, where its column vanishes and the step test freezes it, goes by a factor e² at most.
+
+    Without them, brdffit's grid starts ended in a false optimum on 2 of 300 small Ward fits and 3 of 200
+    Cook-Torrance ones (an albedo collapsed to 3e-10, a Fresnel f0 saturated at 1) that MINPACK from the same
+    starts did not; with them, none. The glTF fit (``export/gltf.py``), whose logistic coordinates must
+    travel far to saturate a colour at 0 or 1, turns both off.
     """
+
+    max_coordinate_step: float | None = MAX_COORDINATE_STEP
+    running_scale: bool = True
 
     def init(self, y, f_info_struct):
         k = y.size
         zeros = jnp.zeros(k, y.dtype)
         live = jnp.ones(k, bool)
-        return _DescentState(live, zeros, zeros, jnp.zeros((k, k), y.dtype), zeros, jnp.zeros((), y.dtype))
+        return _DescentState(live, zeros, zeros, zeros, jnp.zeros((k, k), y.dtype), zeros, jnp.zeros((), y.dtype))
 
     def query(self, y, f_info, state):
         gram, gradient = f_info.hessian.as_matrix(), f_info.grad
@@ -85,7 +106,9 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         eps = jnp.finfo(gram.dtype).eps
         diagonal = jnp.diag(gram)
         live = diagonal > eps * jnp.max(diagonal)
-        scale = jnp.where(live, jnp.sqrt(jnp.where(live, diagonal, 1.0)), 1.0)
+        norms = jnp.sqrt(diagonal)
+        running = jnp.maximum(state.largest_norms, norms) if self.running_scale else norms
+        scale = jnp.where(live, running, 1.0)
         # Dead columns become an identity block with no gradient: no step and no length there.
         live_pair = live[:, None] & live[None, :]
         scaled = jnp.where(live_pair, gram / scale[:, None] / scale[None, :], jnp.eye(gram.shape[0], dtype=gram.dtype))
@@ -94,7 +117,7 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         eigenvalues = jnp.maximum(eigenvalues, eps * jnp.max(eigenvalues) + tiny)
         projected = eigenvectors.T @ jnp.where(live, gradient / scale, 0.0)
         newton_norm = jnp.sqrt(jnp.sum((projected / eigenvalues) ** 2))
-        return _DescentState(live, scale, eigenvalues, eigenvectors, projected, newton_norm)
+        return _DescentState(live, scale, running, eigenvalues, eigenvectors, projected, newton_norm)
 
     def step(self, step_size, state):
         sigma, c = state.eigenvalues, state.projected
@@ -117,6 +140,9 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         damping = jnp.where(step_size >= 1.0, 0.0, jnp.exp(log_lambda))
         z = -state.eigenvectors @ (c / (sigma + damping))
         delta = jnp.where(state.live, z / state.scale, 0.0)
+        if self.max_coordinate_step is not None:
+            largest = jnp.max(jnp.abs(delta))
+            delta = delta * jnp.minimum(1.0, self.max_coordinate_step / jnp.where(largest > 0, largest, 1.0))
         finite = jnp.all(jnp.isfinite(delta))
         return jnp.where(finite, delta, 0.0), RESULTS.where(finite, RESULTS.successful, RESULTS.singular)
 

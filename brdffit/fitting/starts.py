@@ -4,23 +4,24 @@ Every model is linear in its albedos (``physics/models/model.py``). For a fixed 
 shape, the albedos that minimise the loss *linearised about the data*,
 ``Σ w (f - y)²`` with ``w = (scale · T'(y))²`` (``losses.linearised_weight``), are
 a small non-negative least-squares problem per channel (Golub & Pereyra 1973,
-variable projection; Lawson & Hanson's NNLS via ``scipy.optimize.nnls``). Every
+variable projection), solved exactly by :func:`nonnegative_least_squares`. Every
 shape of the lobe family's coarse grid gets its best albedos and is scored by
 the true loss, all shapes at once; the best few become the Levenberg-Marquardt
-starts. Models with several lobes (Lafortune) place their lobes one at a time
-(:class:`LobeSearch`; ``lobes.py`` fits them lobe by lobe).
+starts. The whole search is one compiled program, over every dataset of a batch
+at once (:func:`grid_starts`). Models with several lobes (Lafortune) place their
+lobes one at a time (:class:`LobeSearch`; ``lobes.py`` fits them lobe by lobe).
 """
 
-import jax
-import jax.numpy as jnp
+import itertools
+
 import numpy as np
-import scipy.optimize
 
 from .._jax import float64, jit
+from .._lazy import jax, jnp
 from ..data.samples import Samples
 from ..physics.models import Model, Params
 from .losses import Loss, linearised_weight
-from .problem import Problem, prepared, residuals, target_and_scale
+from .problem import Problem, prepared, residuals
 
 #: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
 ALBEDO_FLOOR = 1e-3
@@ -56,14 +57,10 @@ def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
 
 @float64
 def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -> list[np.ndarray]:
-    """Up to ``n_starts`` unconstrained start vectors, best first: lobes placed greedily on the grid."""
-    if not model.n_lobes:
-        weight = _weights(loss, problem)
-        diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
-        diffuse = _albedos(*(np.asarray(x) for x in _gram(diffuse_basis, weight, problem.measured)))[0]
-        return [
-            model.unconstrained.from_params(Params(_floored(diffuse), np.zeros((0, problem.measured.shape[1])), {}))
-        ]
+    """Up to ``n_starts`` unconstrained start vectors of one problem, best first: lobes placed greedily on the grid."""
+    if model.n_lobes <= 1:
+        stacked = jax.tree.map(lambda leaf: leaf[None], problem)
+        return list(np.asarray(grid_starts(model, loss, min(n_starts, len(_grid(model))), stacked))[0])
     search = LobeSearch(model, loss, problem)
     chosen: list[dict[str, float]] = []
     for _ in range(model.n_lobes):
@@ -71,6 +68,23 @@ def starting_points(model: Model, loss: Loss, problem: Problem, n_starts: int) -
         order = np.argsort(costs, kind="stable")
         chosen.append(search.grid[order[0]])
     return [thetas[index] for index in order[:n_starts]]
+
+
+@jit(static_argnums=(0, 1, 2))
+def grid_starts(model: Model, loss: Loss, n_starts: int, problems: Problem):
+    """The ``n_starts`` best grid starts (D, n_starts, k) of each of the stacked problems (D, N, …), best first
+    (ties to the earlier grid shape), for models of at most one lobe: one program for every dataset of a batch.
+
+    The datasets are searched one after another inside the program (``lax.map``): the grid's lobe values are
+    (G, N) per dataset, and all of them at once could outgrow memory where one at a time is small.
+    """
+
+    def best_of_one(problem):
+        costs, thetas = _candidates(model, loss, problem, {})
+        order = jnp.argsort(costs, stable=True)[:n_starts]
+        return thetas[order]
+
+    return jax.lax.map(best_of_one, problems)
 
 
 class LobeSearch:
@@ -82,81 +96,107 @@ class LobeSearch:
     then leaves alone: the fit of fewer lobes runs in the compiled solver of all of them).
     """
 
-    @float64
     def __init__(self, model: Model, loss: Loss, problem: Problem):
         self.model, self.loss, self.problem = model, loss, problem
         self.grid = model.lobe.grid
-        self.weight = _weights(loss, problem)
-        stacked = {name: jnp.asarray([shape[name] for shape in self.grid]) for name in model.lobe.names}
-        self.lobes = _grid_lobes(model.lobe, stacked, problem.wi, problem.wo)  # (G, N)
-        self.diffuse_basis = jnp.full((1, problem.wi.shape[0]), 1.0 / np.pi, problem.wi.dtype)
 
     @float64
     def candidates(self, chosen: list[dict[str, float]]) -> tuple[np.ndarray, list[np.ndarray]]:
         """Costs (G,) and unconstrained vectors of the whole model with lobe ``len(chosen) + 1`` at each grid shape."""
-        model, n_channels = self.model, self.problem.measured.shape[1]
-        fixed = self.diffuse_basis
-        if chosen:
-            shapes = {name: jnp.asarray([shape[name] for shape in chosen]) for name in model.lobe.names}
-            fixed = jnp.concatenate([fixed, _grid_lobes(model.lobe, shapes, self.problem.wi, self.problem.wo)])
-        grams, rhs = (np.asarray(x) for x in _grid_grams(fixed, self.lobes, self.weight, self.problem.measured))
-        off = [self.grid[0]] * (model.n_lobes - len(chosen) - 1)  # any valid shape: their albedos are 0
-        thetas = []
-        for index, shape in enumerate(self.grid):
-            albedos = _floored(_albedos(grams[index], rhs[index]))
-            specular = np.concatenate([albedos[1:], np.zeros((len(off), n_channels))])
-            every = [*chosen, shape, *off]
-            shape_arrays = {name: np.array([s[name] for s in every]) for name in model.lobe.names}
-            thetas.append(model.unconstrained.from_params(Params(albedos[0], specular, shape_arrays)))
-        costs = np.asarray(_grid_costs(model, self.loss, jnp.asarray(np.stack(thetas)), self.problem))
-        return costs, thetas
+        shapes = {name: np.array([shape[name] for shape in chosen], float) for name in self.model.lobe.names}
+        costs, thetas = _lobe_candidates(self.model, self.loss, self.problem, shapes if chosen else {})
+        return np.asarray(costs), list(np.asarray(thetas))
 
 
-def _albedos(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Non-negative albedos (B, C) from per-channel normal equations ``gram`` (C, B, B) and ``rhs`` (C, B).
+def _grid(model: Model) -> tuple[dict[str, float], ...]:
+    """The lobe family's grid of shapes; one empty shape for a model without lobes (its one start)."""
+    return model.lobe.grid if model.n_lobes else ({},)
 
-    NNLS on the B×B system through its Cholesky factor ``R``: ``|R x - R⁻ᵀ rhs|²``
-    equals the weighted sum of squares up to a constant.
+
+@jit(static_argnums=(0, 1))
+def _lobe_candidates(model: Model, loss: Loss, problem: Problem, chosen: dict):
+    return _candidates(model, loss, problem, chosen)
+
+
+def _candidates(model: Model, loss: Loss, problem: Problem, chosen: dict):
+    """Costs (G,) and unconstrained vectors (G, k) of the model with its next lobe at each grid shape (JAX).
+
+    ``chosen``: the shapes (K₀,) of the lobes already placed, {} for none. Each candidate's albedos are the
+    non-negative least-squares ones of the linearised loss, floored at :data:`ALBEDO_FLOOR` of their largest
+    (the fit moves log-albedos); the lobes after the new one are off (albedo 0, any shape: the grid's first).
     """
-    n_channels, n_basis = rhs.shape
-    albedos = np.zeros((n_basis, n_channels))
-    for channel in range(n_channels):
-        # A lobe that no sample sees has a zero row; a relative ridge keeps the factor defined.
-        matrix = gram[channel]
-        matrix = matrix + (1e-12 * np.trace(matrix) + np.finfo(float).tiny) * np.eye(n_basis)
-        upper = np.linalg.cholesky(matrix).T
-        albedos[:, channel], _ = scipy.optimize.nnls(upper, np.linalg.solve(upper.T, rhs[channel]))
-    return albedos
+    problem = prepared(loss, problem)
+    n, n_channels = problem.measured.shape
+    weight = linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
+    grid = _grid(model)
+    fixed = jnp.full((1, n), 1.0 / np.pi, problem.wi.dtype)
+    if chosen:
+        fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
+    if model.n_lobes:
+        stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
+        lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
+        bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
+    else:
+        bases = fixed[None]
+    grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
+    albedos = jnp.swapaxes(nonnegative_least_squares(grams, rhs), 1, 2)  # (G, B, C)
+    largest = jnp.maximum(jnp.max(albedos, axis=(1, 2), keepdims=True), 1e-6)
+    albedos = jnp.maximum(albedos, ALBEDO_FLOOR * largest)
+    n_off = model.n_lobes - len(next(iter(chosen.values()), ())) - 1 if model.n_lobes else 0
+
+    def theta_of(index, albedo):
+        specular = jnp.concatenate([albedo[1:], jnp.zeros((n_off, n_channels))])
+        shape = (
+            {
+                name: jnp.concatenate(
+                    [
+                        jnp.asarray(chosen.get(name, jnp.zeros(0))),
+                        stacked[name][index][None],
+                        jnp.full(n_off, grid[0][name]),
+                    ]
+                )
+                for name in model.lobe.names
+            }
+            if model.n_lobes
+            else {}
+        )
+        return model.unconstrained.from_params(Params(albedo[0], specular, shape))
+
+    thetas = jax.vmap(theta_of)(jnp.arange(len(grid)), albedos)
+    costs = jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
+    return costs, thetas
 
 
-def _floored(albedos: np.ndarray) -> np.ndarray:
-    return np.maximum(albedos, ALBEDO_FLOOR * max(float(np.max(albedos)), 1e-6))
-
-
-@jit(static_argnums=0)
-def _weights(loss: Loss, problem: Problem):
-    return linearised_weight(loss, problem.measured, problem.wi[:, 2:3], target_and_scale(loss, problem)[1])
-
-
-@jit
-def _gram(basis, weight, measured):
+def _normal_equations(basis, weight, measured):
     """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
     weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
     return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
 
 
-@jit
-def _grid_grams(fixed, lobes, weight, measured):
-    """:func:`_gram` for the basis ``fixed`` plus each grid lobe: (G, C, B, B), (G, C, B)."""
-    return jax.vmap(lambda lobe: _gram(jnp.concatenate([fixed, lobe[None]]), weight, measured))(lobes)
+def nonnegative_least_squares(gram, rhs):
+    """``argmin_{x ≥ 0} xᵀ G x − 2 bᵀ x`` for small systems (B ≤ 9), batched over leading axes (JAX).
 
+    The minimiser is the unconstrained one on its support (the KKT conditions), so it is found by trying
+    every support: each of the ``2^B`` subsets solves its own equations, and the best of the feasible
+    solutions (x = 0 always is one) wins. Exact, branch-free and cheap for the few albedos of a model, where
+    Lawson & Hanson's active-set NNLS would loop on the host. A relative ridge ``1e-12·trace`` keeps the
+    system of a lobe no sample sees (a zero row) solvable.
+    """
+    n_basis = rhs.shape[-1]
+    eye = jnp.eye(n_basis, dtype=gram.dtype)
+    trace = jnp.trace(gram, axis1=-2, axis2=-1)[..., None, None]
+    gram = gram + (1e-12 * trace + jnp.finfo(gram.dtype).tiny) * eye
+    supports = jnp.asarray(list(itertools.product((0.0, 1.0), repeat=n_basis))[1:], gram.dtype)  # (S, B)
 
-@jit(static_argnums=0)
-def _grid_lobes(lobe, shapes, wi, wo):
-    return jax.vmap(lambda shape: lobe(shape, wi, wo))(shapes)
+    def on_support(mask):
+        pair = mask[:, None] * mask[None, :]
+        restricted = gram * pair + eye * (1.0 - mask)  # the support's equations, identity off it
+        x = jnp.linalg.solve(restricted, (rhs * mask)[..., None])[..., 0]
+        objective = jnp.einsum("...i,...ij,...j->...", x, gram, x) - 2.0 * jnp.sum(rhs * x, axis=-1)
+        feasible = jnp.all(x >= 0.0, axis=-1)
+        return x, jnp.where(feasible, objective, jnp.inf)
 
-
-@jit(static_argnums=(0, 1))
-def _grid_costs(model: Model, loss: Loss, thetas, problem: Problem):
-    problem = prepared(loss, problem)
-    return jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
+    solutions, objectives = jax.vmap(on_support)(supports)  # (S, …, B), (S, …)
+    best = jnp.argmin(objectives, axis=0)  # (…)
+    chosen = jnp.take_along_axis(solutions, best[None, ..., None], axis=0)[0]
+    return jnp.where(jnp.min(objectives, axis=0)[..., None] < 0.0, chosen, 0.0)

@@ -25,6 +25,7 @@ from typing import final
 
 import numpy as np
 
+from .._arrays import namespace
 from .._lazy import jax, jnp
 
 #: Boundary values are moved this far inside the domain before inverting.
@@ -80,7 +81,7 @@ class MappedDomain(Domain):
 
     @abstractmethod
     def to_unconstrained(self, x) -> np.ndarray:
-        """The unconstrained coordinate of ``x`` (numpy), finite on the boundary."""
+        """The unconstrained coordinate of ``x``, finite on the boundary (numpy for numpy ``x``, else JAX)."""
 
 
 @final
@@ -115,7 +116,8 @@ class Positive(MappedDomain):
         return jnp.exp(u)
 
     def to_unconstrained(self, x) -> np.ndarray:
-        return np.log(np.maximum(np.asarray(x, dtype=float), BOUNDARY_OFFSET))
+        xp = namespace(x)
+        return xp.log(xp.maximum(xp.asarray(x, dtype=float), BOUNDARY_OFFSET))
 
     def log_prior(self, x):
         """Flat on ``x ≥ 0`` (an amplitude, ``allow_zero``); log-uniform ``1/x`` on ``x > 0`` (a scale)."""
@@ -152,7 +154,8 @@ class GreaterThan(MappedDomain):
         return self.lower + jnp.exp(u)
 
     def to_unconstrained(self, x) -> np.ndarray:
-        return np.log(np.maximum(np.asarray(x, dtype=float) - self.lower, BOUNDARY_OFFSET))
+        xp = namespace(x)
+        return xp.log(xp.maximum(xp.asarray(x, dtype=float) - self.lower, BOUNDARY_OFFSET))
 
     def log_prior(self, x):
         """Log-uniform on ``x - lower`` (a scale above its bound)."""
@@ -181,8 +184,9 @@ class UnitInterval(MappedDomain):
         return jax.nn.sigmoid(u)
 
     def to_unconstrained(self, x) -> np.ndarray:
-        x = np.clip(np.asarray(x, dtype=float), BOUNDARY_OFFSET, 1 - BOUNDARY_OFFSET)
-        return np.log(x) - np.log1p(-x)
+        xp = namespace(x)
+        x = xp.clip(xp.asarray(x, dtype=float), BOUNDARY_OFFSET, 1 - BOUNDARY_OFFSET)
+        return xp.log(x) - xp.log1p(-x)
 
     def log_prior(self, x):
         """Uniform on [0, 1]."""

@@ -9,7 +9,7 @@ from reference_materials import flat_parameters
 import data_synth
 from brdffit import BrdfInputError, fit, fit_batch, save_samples
 from brdffit.cli import main
-from brdffit.fitting.batch import default_strategy
+from brdffit.fitting.buckets import default_strategy
 
 WARD = [{"rho_d": [0.1, 0.2], "rho_s": [0.02 * k, 0.03], "alpha": 0.05 + 0.04 * k} for k in range(1, 5)]
 

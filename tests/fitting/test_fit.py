@@ -206,7 +206,7 @@ def test_starts_that_reach_one_optimum_tie_and_the_first_wins():
     wins, so the reported step count does not depend on how a sum was rounded; a real improvement still wins."""
     from types import SimpleNamespace
 
-    from brdffit.fitting.fit import best
+    from brdffit.fitting.solve import best
 
     runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.2728725253445340e-03, 3.2728725253445335e-03])]
     assert best(runs).name == 0

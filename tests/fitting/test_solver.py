@@ -12,15 +12,17 @@ import data_synth
 from brdffit import fit, get_model
 from brdffit.fitting.losses import get_loss
 from brdffit.fitting.problem import build_problem, residuals
-from brdffit.fitting.solver import ScaledTrustRegionDescent
+from brdffit.fitting.solver import MAX_COORDINATE_STEP, ScaledTrustRegionDescent
 from brdffit.fitting.starts import starting_points
 
 LOG = get_loss("log")
 
 
-def descent_state(rng, k=6):
-    jacobian = rng.standard_normal((200, k)) * np.logspace(-3, 2, k)  # columns of very different scales
-    residual = rng.standard_normal(200)
+def descent_state(rng, k=6, residual_scale=1e-3):
+    """A random problem whose columns have very different scales. The residual is small enough that the
+    Gauss-Newton step moves no coordinate by more than MAX_COORDINATE_STEP (checked in the tests)."""
+    jacobian = rng.standard_normal((200, k)) * np.logspace(-3, 2, k)
+    residual = residual_scale * rng.standard_normal(200)
     gram, gradient = jacobian.T @ jacobian, jacobian.T @ residual
     info = optx.FunctionInfo.EvalGradHessian(
         0.5 * residual @ residual, jnp.asarray(gradient), lx.MatrixLinearOperator(jnp.asarray(gram))
@@ -31,9 +33,23 @@ def descent_state(rng, k=6):
 
 def test_full_step_is_gauss_newton(rng):
     descent, state, gram, gradient = descent_state(rng)
+    newton = -np.linalg.solve(gram, gradient)
+    assert np.max(np.abs(newton)) < MAX_COORDINATE_STEP
     delta, result = descent.step(jnp.asarray(1.0), state)
     assert result == optx.RESULTS.successful
-    np.testing.assert_allclose(delta, -np.linalg.solve(gram, gradient), rtol=1e-8)
+    np.testing.assert_allclose(delta, newton, rtol=1e-8)
+
+
+def test_long_steps_are_shortened_along_their_direction(rng):
+    """A Gauss-Newton step that would move a coordinate by more than MAX_COORDINATE_STEP is scaled down as a
+    whole: same direction, largest coordinate change exactly the cap."""
+    descent, state, gram, gradient = descent_state(rng, residual_scale=1.0)
+    newton = -np.linalg.solve(gram, gradient)
+    assert np.max(np.abs(newton)) > 10 * MAX_COORDINATE_STEP
+    delta, result = descent.step(jnp.asarray(1.0), state)
+    assert result == optx.RESULTS.successful
+    assert np.max(np.abs(delta)) == pytest.approx(MAX_COORDINATE_STEP, rel=1e-12)
+    np.testing.assert_allclose(delta, newton * MAX_COORDINATE_STEP / np.max(np.abs(newton)), rtol=1e-8)
 
 
 @pytest.mark.parametrize("fraction", [0.5, 0.1, 1e-3])

@@ -8,6 +8,7 @@ does the same with one-line errors for unknown names and options. The parts ever
 """
 
 import inspect
+from functools import cache
 from typing import Any
 
 from ...errors import Argument, BrdfInputError
@@ -33,8 +34,9 @@ MODELS = {
 }
 
 
+@cache
 def model_option_names(name: str) -> tuple[str, ...]:
-    """The options (``fresnel``, ``lobes``) that model ``name`` takes."""
+    """The options (``fresnel``, ``lobes``) that model ``name`` takes (asked once per fit: kept)."""
     return tuple(inspect.signature(MODELS[name]).parameters)
 
 

@@ -48,7 +48,8 @@ def direction_from_angle(psi):
 
 def angle_of_direction(cxy, cz):
     """``ψ = atan2(√2 cxy, cz)``, the inverse of :func:`direction_from_angle` on ``2 cxy² + cz² = 1``."""
-    return np.arctan2(np.sqrt(2.0) * np.asarray(cxy, dtype=float), np.asarray(cz, dtype=float))
+    xp = namespace(cxy, cz)
+    return xp.arctan2(np.sqrt(2.0) * xp.asarray(cxy, dtype=float), xp.asarray(cz, dtype=float))
 
 
 @final
@@ -61,7 +62,8 @@ class AngleAndLogExponent(ShapeCoordinates):
         return ("psi", "n")
 
     def to_vector(self, shape) -> np.ndarray:
-        return np.stack([angle_of_direction(shape["cxy"], shape["cz"]), EXPONENT.to_unconstrained(shape["n"])])
+        xp = namespace(shape["cxy"], shape["cz"], shape["n"])
+        return xp.stack([angle_of_direction(shape["cxy"], shape["cz"]), EXPONENT.to_unconstrained(shape["n"])])
 
     def from_vector(self, u):
         cxy, cz = direction_from_angle(u[0])

@@ -97,7 +97,8 @@ class UnconstrainedShape(ShapeCoordinates):
         return tuple(name for name, _ in self.parameters)
 
     def to_vector(self, shape: Shape) -> np.ndarray:
-        return np.stack([domain.to_unconstrained(shape[name]) for name, domain in self.parameters])
+        xp = namespace(*(shape[name] for name, _ in self.parameters))
+        return xp.stack([domain.to_unconstrained(shape[name]) for name, domain in self.parameters])
 
     def from_vector(self, u) -> dict[str, Any]:
         return {name: domain.to_physical(u[i]) for i, (name, domain) in enumerate(self.parameters)}

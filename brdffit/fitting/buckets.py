@@ -1,0 +1,155 @@
+"""Many datasets of one shape fitted at once: the start search and every solve of a bucket in compiled programs.
+
+A *bucket* is a list of datasets whose problems stack: the same padded size (``problem.padded_size``), channel
+count and optional columns, all searched on a subset or none (:func:`bucket_key`). A bucket goes through the
+fit's steps as arrays (D, …) with one program per step, so a material library or the texels of a capture pay
+no Python per dataset and per solver step:
+
+1. the grid start search of every dataset (``starts.grid_starts``), on its search subset when it has one;
+2. Levenberg-Marquardt from each dataset's ``n_starts`` starts (on the subset: only the winner goes on);
+3. the winner refined on every sample (float32 fits: in float64 after).
+
+Inside a program the datasets are solved one after another (``lax.map``) on a CPU, where a vectorised
+while-loop would run every fit until the slowest ends; on a GPU all at once (``vmap``), which fills the device.
+A single fit is a bucket of one (``fit.py``), so both paths are the same computation.
+"""
+
+import threading
+from collections.abc import Sequence
+from functools import cache, partial
+from typing import NamedTuple
+
+import numpy as np
+
+from .._jax import float64, jit
+from .._lazy import jax
+from ..data.samples import Samples
+from ..physics.models import Model
+from .losses import Loss
+from .problem import Problem, build_problems, padded_size
+from .solve import best_index, solved_from
+from .starts import SEARCH_SAMPLES, grid_starts, search_subset
+
+#: The most samples (datasets × padded size) in one batch of a bucket: its arrays take ~100 bytes a sample.
+BATCH_SAMPLES = 2**21
+
+
+class BucketKey(NamedTuple):
+    """What datasets must share to be stacked into one batch."""
+
+    padded_size: int
+    n_channels: int
+    has_sigma: bool
+    has_weight: bool
+    searched_on_subset: bool
+
+
+def bucket_key(samples: Samples) -> BucketKey:
+    return BucketKey(
+        padded_size(samples.n_samples),
+        samples.n_channels,
+        samples.sigma is not None,
+        samples.weight is not None,
+        samples.n_samples > SEARCH_SAMPLES,
+    )
+
+
+def batches(indices: Sequence[int], size: int) -> list[list[int]]:
+    """``indices`` (one bucket's datasets) cut into batches of at most :data:`BATCH_SAMPLES` samples."""
+    per_batch = max(1, BATCH_SAMPLES // size)
+    return [list(indices[i : i + per_batch]) for i in range(0, len(indices), per_batch)]
+
+
+def default_strategy() -> str:
+    """How a program goes through a bucket's datasets: all at once on a GPU (``vmap``), else one after another
+    (``loop``)."""
+    return "vmap" if jax.default_backend() in ("gpu", "cuda", "rocm") else "loop"
+
+
+@float64
+def solve_bucket(
+    model: Model,
+    loss: Loss,
+    samples: Sequence[Samples],
+    starts: np.ndarray | None,
+    *,
+    n_starts: int,
+    max_steps: int,
+    dtype: str,
+    seed: int,
+    strategy: str,
+):
+    """The best solve (a ``fit.Solved`` of numpy arrays with a leading axis D) of each dataset of one bucket.
+
+    ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them.
+    """
+    count = padded_size(len(samples))  # few distinct batch sizes, few compiled programs
+    full = build_problems(samples, dtype, count)
+    solve = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
+    if starts is not None:
+        thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
+    else:
+        subsets = [search_subset(one, seed) for one in samples]
+        search = None
+        if subsets[0] is not None:
+            chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
+            search = build_problems(chosen, dtype, count)
+        thetas = grid_starts(model, loss, n_starts, full if search is None else search)
+        if search is not None and thetas.shape[1] > 1:  # the starts race on the subset; the winner goes on
+            one_start = jax.ShapeDtypeStruct((count, 1, thetas.shape[2]), np.float64)
+            compiling = compile_in_background(solve, one_start, full)
+            thetas = _best(solve(thetas, search)).theta[:, None]
+            compiling.join()
+    solved = _best(solve(thetas, full))
+    if dtype == "float32":
+        refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
+            solved.theta[:, None], build_problems(samples, "float64", count)
+        )
+        solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
+    return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
+
+
+def _best(solved):
+    """The best run (``solve.best_index``) of each dataset: Solved (D, S, …) → (D, …), on the host."""
+    solved = jax.tree.map(np.asarray, solved)
+    chosen = best_index(solved.cost)
+    rows = np.arange(len(chosen))
+    return jax.tree.map(lambda leaf: leaf[rows, chosen], solved)
+
+
+def compile_in_background(solve, *arguments) -> threading.Thread:
+    """Compile ``solve`` for ``arguments`` (``jax.ShapeDtypeStruct``s, or problems whose shapes are taken) in a
+    thread while the starts are solved on the search subsets: XLA compiles with the GIL released, so on two or more
+    cores the full-size program's compilation (~1 s for a MERL-size Cook-Torrance problem) overlaps the search
+    instead of following it. A failure there is left for the real call to report."""
+    shapes = jax.tree.map(lambda leaf: jax.ShapeDtypeStruct(leaf.shape, leaf.dtype), arguments)
+
+    def compile_quietly():
+        try:
+            solve.precompile(*shapes)
+        except Exception:  # the call that follows raises it properly
+            pass
+
+    thread = threading.Thread(target=compile_quietly, name="brdffit-compile", daemon=True)
+    thread.start()
+    return thread
+
+
+@cache
+def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
+    """``solve(thetas (D, S, k), problems (D, N, …)) -> Solved (D, S, …)``: every start of every dataset."""
+    one = partial(solved_from, model, loss, max_steps, dtype)
+
+    def solve(thetas, problems: Problem):
+        if vectorise:
+            return jax.vmap(lambda starts, problem: jax.vmap(lambda theta: one(theta, problem))(starts))(
+                thetas, problems
+            )
+
+        def each_dataset(pair):
+            starts, problem = pair
+            return jax.lax.map(lambda theta: one(theta, problem), starts)
+
+        return jax.lax.map(each_dataset, (thetas, problems))
+
+    return jit(solve, name=f"fitting.buckets.solve[{model!r}, {loss!r}, {max_steps}, {dtype!r}, {vectorise}]")

@@ -1,0 +1,138 @@
+"""fit_batch over a Dask cluster (``brdffit/cluster.py``): a LocalCluster of two worker processes gives the local
+results, reads paths on its workers, and loses no result when a worker dies mid-run."""
+
+import os
+import signal
+import threading
+import time
+import warnings
+
+import jax
+import numpy as np
+import pytest
+
+import data_synth
+from brdffit import BrdfInputError, fit_batch, save_samples
+
+distributed = pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
+
+#: Results of the same programs on the same machine agree to rounding; a program for another number of stacked
+#: datasets may fuse differently, which moves a float64 optimum by far less than this.
+SAME = 1e-12
+
+
+@pytest.fixture(scope="module")
+def client():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # distributed's own start-up notices
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+        with cluster, distributed.Client(cluster) as client:
+            yield client
+
+
+@pytest.fixture(scope="module")
+def materials():
+    """40 seeded Ward materials on one 500-sample geometry (the per-texel case), and two with more samples."""
+    rng = np.random.default_rng(3)
+    wi, wo = data_synth.uniform_random(500, seed=7)
+    datasets = []
+    for index in range(40):
+        params = {
+            "rho_d": rng.uniform(0.05, 0.5, 3).tolist(),
+            "rho_s": rng.uniform(0.02, 0.3, 3).tolist(),
+            "alpha": float(rng.uniform(0.05, 0.4)),
+        }
+        datasets.append(data_synth.synthesize("ward", params, wi, wo, noise=0.01, seed=index))
+    return datasets
+
+
+def flat(params) -> np.ndarray:
+    return np.array(jax.tree.leaves(params), dtype=float)
+
+
+def assert_same(ours, theirs):
+    assert len(ours) == len(theirs)
+    for one, other in zip(ours, theirs, strict=True):
+        assert (one.model, one.channels, one.n_samples) == (other.model, other.channels, other.n_samples)
+        np.testing.assert_allclose(flat(one.params), flat(other.params), rtol=SAME, atol=0)
+        assert one.cost == pytest.approx(other.cost, rel=SAME)
+        assert (one.converged, one.warnings) == (other.converged, other.warnings)
+
+
+def test_the_cluster_gives_the_local_results_in_input_order(client, materials):
+    local = fit_batch(materials, "ward", progress=False)
+    spread = fit_batch(materials, "ward", progress=False, client=client)
+    assert_same(spread, local)
+    workers = client.run(lambda dask_worker: len(dask_worker.data) + dask_worker.state.executed_count)
+    assert all(count > 0 for count in workers.values()), "both workers fitted"
+
+
+def test_paths_are_read_on_the_workers_with_the_read_options(client, materials, tmp_path):
+    paths = []
+    for index, samples in enumerate(materials[:6]):
+        paths.append(tmp_path / f"material-{index}.csv")
+        save_samples(samples, paths[-1])
+    options = {"quantity": "reflectance-factor"}
+    local = fit_batch(paths, "ward", progress=False, read_options=options)
+    spread = fit_batch([str(path) for path in paths], "ward", progress=False, client=client, read_options=options)
+    assert_same(spread, local)
+    assert all(result.quantity == "reflectance-factor" for result in spread)
+    assert spread[0].params != fit_batch(paths[:1], "ward", progress=False)[0].params
+    with pytest.raises(BrdfInputError, match=r"read_options has 'quantiy'; allowed: format, angles, quantity"):
+        fit_batch(paths, "ward", client=client, read_options={"quantiy": "brdf"})
+    with pytest.raises(BrdfInputError, match=r"missing\.csv"):
+        fit_batch([tmp_path / "missing.csv"], "ward", client=client)
+
+
+def test_a_worker_killed_mid_run_loses_no_result(client, materials):
+    local = fit_batch(materials, "ward", progress=False)
+    found = {}
+
+    def spread():
+        found["results"] = fit_batch(materials, "ward", progress=False, client=client)
+
+    thread = threading.Thread(target=spread)
+    thread.start()
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # wait until a worker holds a task, then kill that worker
+        busy = [worker for worker, keys in client.processing().items() if keys]
+        if busy:
+            break
+        time.sleep(0.02)
+    assert busy, "no task reached a worker"
+    pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
+    os.kill(pid, signal.SIGKILL)
+    thread.join(timeout=300)
+    assert not thread.is_alive()
+    assert_same(found["results"], local)
+    client.wait_for_workers(2, timeout=60)  # the nanny restarts the worker for the tests after this one
+
+
+def test_the_command_line_spreads_a_library_over_local_workers(materials, tmp_path, capsys):
+    """``brdffit fit lib/* -o fits/ --workers 2`` writes the results the local run writes; a file that cannot be
+    read stops it with one line before any fit, and nothing is written."""
+    from brdffit import load_result
+    from brdffit.cli import main
+
+    library = tmp_path / "lib"
+    library.mkdir()
+    paths = []
+    for index, samples in enumerate(materials[:4]):
+        paths.append(library / f"m{index}.csv")
+        save_samples(samples, paths[-1])
+    assert main(["fit", *map(str, paths), "-o", str(tmp_path / "here") + "/"]) == 0
+    assert main(["fit", *map(str, paths), "-o", str(tmp_path / "spread") + "/", "--workers", "2"]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    for path in paths:
+        here, spread = (load_result(tmp_path / folder / f"{path.stem}.ward.json") for folder in ("here", "spread"))
+        assert_same([spread], [here])
+    status = main(
+        ["fit", str(paths[0]), str(library / "missing.csv"), "-o", str(tmp_path / "none") + "/", "--workers", "2"]
+    )
+    err = capsys.readouterr().err
+    assert status == 2 and err.strip().splitlines() == [f"brdffit: error: {library / 'missing.csv'}: no such file"]
+    assert not (tmp_path / "none").exists()
+    assert main(["fit", str(paths[0]), "--workers", "0", "-o", str(tmp_path / "zero.json")]) == 2
+    assert capsys.readouterr().err.strip() == "brdffit: error: --workers must be 1 or more, got 0"
+    status = main(["fit", str(paths[0]), "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "nowhere.json")])
+    assert status == 2 and "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there" in capsys.readouterr().err
