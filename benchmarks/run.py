@@ -23,6 +23,12 @@ Sections (issue 3):
     ``brdffit fit`` runs of the same models, each a fresh process without a compilation cache, in turns.
 (i) A 256² lit sphere (``brdffit.plots.sphere``'s renderer) of Ward, Cook-Torrance and 2-lobe Lafortune, in a
     fresh process: the first render (compilation included) and later ones, under 1 and 4 lights.
+(j) Many fits (issue 14): 20 Ward materials × 100,000 samples (a material library) and 1,000 × 500 (the
+    per-texel case): fit_batch from given starts, on its default path, and on its default path over a Dask
+    LocalCluster of 1 and 2 workers (cluster start-up outside the clock, each worker compiling), against a
+    loop of least_squares ``lm`` (exact Jacobian, compiled once) from the same starts; compile included.
+(k) Start-up: commands that compute nothing (``--help``, ``--version``, ``models``, ``info``, ``convert``, an
+    exact ``export``) and a ``fit`` of the example with a filled compilation cache, process start to exit.
 
 ``--sections`` runs some of them; the others keep their results from the last
 run in ``latest.json`` (each section records its date).
@@ -72,6 +78,9 @@ SECTION_LETTERS = {
     "merl_load": "g",
     "compare": "h",
     "render": "i",
+    "many_large": "j",
+    "many_small": "j",
+    "startup": "k",
 }
 
 
@@ -156,6 +165,62 @@ def batch_section(materials: int, size: int, repeats: int) -> dict:
         solver: ((*arguments, "--solver", solver), "") for solver in ("brdffit", "brdffit-default", "scipy-lm-exact")
     }
     return section | interleaved(repeats, variants, f"(b) {materials} × {size}")
+
+
+#: (j) many fits (issue 14): (materials, samples each) of Ward, the material library and the per-texel case.
+MANY = {"many_large": (20, 100_000), "many_small": (1000, 500)}
+MANY_SOLVERS = ("brdffit", "brdffit-default", "brdffit-dask-1", "brdffit-dask-2", "scipy-lm-exact")
+
+
+def many_section(materials: int, size: int, repeats: int) -> dict:
+    """(j): Ward fit_batch (given starts, default path, and the default path on a Dask LocalCluster of 1 and 2
+    workers) against a loop of scipy least_squares lm from the same starts, compile included, in turns."""
+    arguments = ("batch", "--model", "ward", "--materials", str(materials), "--size", str(size))
+    variants = {solver: ((*arguments, "--solver", solver), "") for solver in MANY_SOLVERS}
+    return {"materials": materials, "n_samples": size} | interleaved(repeats, variants, f"(j) {materials} × {size}")
+
+
+#: (k) commands that compute nothing, and a warm fit: process start to exit.
+STARTUP = {
+    "--help": ["--help"],
+    "--version": ["--version"],
+    "models": ["models"],
+    "info": ["info", "{example}"],
+    "convert": ["convert", "{example}", "{folder}/converted.dat"],
+    "export (exact)": ["export", "{result}", "--to", "mitsuba", "-o", "{folder}/exported.xml"],
+    "fit (warm cache)": ["fit", "{example}", "-o", "{folder}/warm.json"],
+}
+
+
+def startup_section(repeats: int, folder: Path) -> dict:
+    """(k): wall time of each command of :data:`STARTUP`, median of ``max(repeats, 5)`` runs after one that fills
+    the compilation cache."""
+    import time
+
+    script = str(Path(sys.executable).with_name("brdffit"))
+    cache = str(folder / "startup-cache")
+    example = ROOT / "examples" / "ward-pickled-oak.csv"
+    result = folder / "startup-result.json"
+    environment = {**os.environ, "BRDFFIT_CACHE_DIR": cache}
+    # a Lambert fit, which Mitsuba's diffuse BSDF is exactly: the export maps parameters and computes nothing
+    lambert = [script, "fit", str(example), "--model", "lambert", "-o", str(result)]
+    subprocess.run(lambert, env=environment, capture_output=True, check=True)
+    warm = [script, "fit", str(example), "-o", str(folder / "warm.json")]
+    subprocess.run(warm, env=environment, capture_output=True, check=True)  # fills the cache of the warm fit
+    names = {"example": example, "folder": folder, "result": result}
+    seconds = {}
+    for name, arguments in STARTUP.items():
+        command = [script, *(argument.format(**names) for argument in arguments)]
+        log(f"(k) brdffit {name}")
+        runs = []
+        for _ in range(max(repeats, 5)):
+            for leftover in [*folder.glob("converted.dat"), *folder.glob("exported.xml"), *folder.glob("warm.json")]:
+                leftover.unlink()
+            clock = time.perf_counter()
+            subprocess.run(command, env=environment, capture_output=True, check=True)
+            runs.append(time.perf_counter() - clock)
+        seconds[name] = {"seconds": statistics.median(runs), "all_seconds": runs}
+    return seconds
 
 
 def cli_section(repeats: int, folder: Path) -> dict:
@@ -340,6 +405,35 @@ def table(results: dict) -> str:
             lines.append(
                 f"| {label} | {run['seconds']:.1f} s | {run['converged']}/{batch['materials']} | {ratio:.1f}× |"
             )
+    for key in MANY:
+        many = results.get(key)
+        if not many:
+            continue
+        scipy_run = many["scipy-lm-exact"]
+        lines += [
+            "",
+            f"| (j) {many['materials']:,} Ward materials × {many['n_samples']:,} samples | time | per fit | converged"
+            " | speed-up over scipy |",
+            "|---|---|---|---|---|",
+        ]
+        for label, name in (
+            ("brdffit fit_batch, same starts as scipy", "brdffit"),
+            ("brdffit fit_batch, default path (own start search)", "brdffit-default"),
+            ("the default path on a Dask LocalCluster, 1 worker", "brdffit-dask-1"),
+            ("the default path on a Dask LocalCluster, 2 workers", "brdffit-dask-2"),
+            ("scipy least_squares lm (exact Jacobian) loop", "scipy-lm-exact"),
+        ):
+            run = many[name]
+            lines.append(
+                f"| {label} | {run['seconds']:.2f} s | {1000 * run['seconds'] / many['materials']:.2f} ms"
+                f" | {run['converged']}/{many['materials']} | {scipy_run['seconds'] / run['seconds']:.1f}× |"
+            )
+        ratio = many["brdffit-default"]["seconds"] / many["brdffit"]["seconds"]
+        lines.append(f"| default path / given starts | {ratio:.2f}× | | | |")
+    startup = results.get("startup")
+    if startup:
+        cells = ", ".join(f"`{name}` {run['seconds']:.2f} s" for name, run in startup.items() if isinstance(run, dict))
+        lines += ["", f"(k) Process start to exit, medians: {cells}."]
     cli = results.get("cli")
     if cli:
         lines += [
@@ -404,8 +498,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcfghi",
-        help="which to run: a (with d, e), b, c, f, g, h, i; default abcfghi (the README's table needs all)",
+        default="abcfghijk",
+        help="which to run: a (with d, e), b, c, f, g, h, i, j, k; default all (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -434,6 +528,12 @@ def main() -> None:
             results["compare"] = compare_section(args.repeats, folder) | stamp
         if "i" in args.sections:
             results["render"] = render_section(args.repeats) | stamp
+        if "j" in args.sections:
+            for key, (count, size) in MANY.items():
+                count, size = (20, 500) if args.quick else (count, size)
+                results[key] = many_section(count, size, args.repeats) | stamp
+        if "k" in args.sections:
+            results["startup"] = startup_section(args.repeats, folder) | stamp
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

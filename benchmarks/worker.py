@@ -7,7 +7,7 @@ samples in memory to the result (parameters and cost) in hand.
 
     python benchmarks/worker.py merl --model cook-torrance --solver brdffit --data D.npz --start S.json
     python benchmarks/worker.py steps --model cook-torrance --data D.npz --start S.json
-    python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000
+    python benchmarks/worker.py batch --solver scipy-lm-exact --materials 100 --size 100000 [--model ward]
     python benchmarks/worker.py mcmc --walkers 32 --steps 2000
     python benchmarks/worker.py merl-load --data FILE.binary
     python benchmarks/worker.py render --model ward
@@ -148,47 +148,67 @@ def steps(args) -> dict:
     return {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps}
 
 
-def batch_data(materials: int, size: int):
-    """``materials`` Cook-Torrance materials (seeded, realistic ranges) on one random geometry of ``size`` pairs."""
+#: Seeded realistic parameter ranges of the batch benchmarks' materials.
+BATCH_MATERIALS = {
+    "cook-torrance": lambda rng: {
+        "kd": rng.uniform(0.01, 0.4, 3).tolist(),
+        "ks": rng.uniform(0.05, 0.6, 3).tolist(),
+        "m": float(np.exp(rng.uniform(np.log(0.05), np.log(0.5)))),
+        "f0": float(rng.uniform(0.02, 0.9)),
+    },
+    "ward": lambda rng: {
+        "rho_d": rng.uniform(0.02, 0.5, 3).tolist(),
+        "rho_s": rng.uniform(0.02, 0.3, 3).tolist(),
+        "alpha": float(np.exp(rng.uniform(np.log(0.05), np.log(0.4)))),
+    },
+}
+
+
+def batch_data(model_name: str, materials: int, size: int):
+    """``materials`` materials of ``model_name`` (seeded, realistic ranges) on one random geometry of ``size``
+    pairs, 1% noise."""
     rng = np.random.default_rng(2024)
     wi, wo = data_synth.uniform_random(size, seed=7)
-    datasets = []
-    for index in range(materials):
-        params = {
-            "kd": rng.uniform(0.01, 0.4, 3).tolist(),
-            "ks": rng.uniform(0.05, 0.6, 3).tolist(),
-            "m": float(np.exp(rng.uniform(np.log(0.05), np.log(0.5)))),
-            "f0": float(rng.uniform(0.02, 0.9)),
-        }
-        datasets.append(data_synth.synthesize("cook-torrance", params, wi, wo, noise=0.01, seed=100 + index))
-    return datasets
+    return [
+        data_synth.synthesize(model_name, BATCH_MATERIALS[model_name](rng), wi, wo, noise=0.01, seed=100 + index)
+        for index in range(materials)
+    ]
 
 
-def batch_starts(datasets) -> list[dict]:
+def batch_starts(model_name: str, datasets) -> list[dict]:
     """brdffit's data-driven start of each dataset, given to both solvers (computed before the clock)."""
-    from brdffit.fitting.fit import search_problem
-    from brdffit.fitting.problem import build_problem
-    from brdffit.fitting.starts import starting_points
+    from brdffit.fitting.problem import build_problems
+    from brdffit.fitting.starts import grid_starts, search_subset
 
-    model, loss = get_model("cook-torrance"), get_loss(LOSS)
+    model, loss = get_model(model_name), get_loss(LOSS)
     starts = []
     for samples in datasets:
-        search = search_problem(samples, build_problem(samples), "float64", seed=0)
-        theta = starting_points(model, loss, search, 1)[0]
+        subset = search_subset(samples, 0)
+        searched = samples if subset is None else samples.select(subset)
+        theta = grid_starts(model, loss, 1, build_problems([searched], "float64", 1))[0, 0]
         starts.append(model.dictionary.from_params(model.unconstrained.to_params(theta, samples.n_channels)))
     return starts
 
 
 def batch(args) -> dict:
+    """(b), (j): ``fit_batch`` of many materials (given starts, or its default path; on a Dask LocalCluster of
+    ``brdffit-dask-N`` workers), or a loop of scipy least_squares from the same starts; compile included."""
     import jax
 
-    datasets = batch_data(args.materials, args.size)
-    starts = batch_starts(datasets) if args.solver != "brdffit-default" else None
-    model = get_model("cook-torrance")
+    datasets = batch_data(args.model, args.materials, args.size)
+    starts = batch_starts(args.model, datasets) if args.solver in ("brdffit", *SCIPY) else None
+    model = get_model(args.model)
     jax.clear_caches()  # the start search above compiled things the clock must not get for free
+    cluster = client = None
+    if args.solver.startswith("brdffit-dask-"):
+        from distributed import Client, LocalCluster
+
+        workers = int(args.solver.rsplit("-", 1)[1])
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+        client = Client(cluster)
     clock = time.perf_counter()
     if args.solver.startswith("brdffit"):
-        results = fit_batch(datasets, "cook-torrance", start=starts, progress=False)
+        results = fit_batch(datasets, args.model, start=starts, progress=False, client=client)
         costs = [r.cost for r in results]
         converged = sum(r.converged for r in results)
         steps = [r.n_steps for r in results]
@@ -196,7 +216,7 @@ def batch(args) -> dict:
         method, exact = SCIPY[args.solver]
         outs = [
             scipy_fit(
-                "cook-torrance",
+                args.model,
                 samples,
                 model.unconstrained.from_params(model.dictionary.to_params(start)),
                 method,
@@ -208,6 +228,9 @@ def batch(args) -> dict:
         converged = sum(o["converged"] for o in outs)
         steps = [o["nfev"] for o in outs]
     seconds = time.perf_counter() - clock
+    if cluster is not None:
+        client.close()
+        cluster.close()
     return {"seconds": seconds, "converged": converged, "costs": costs, "steps": steps, "peak_rss_mb": peak_rss_mb()}
 
 
@@ -291,7 +314,10 @@ def main() -> None:
     per_step.add_argument("--data", required=True)
     per_step.add_argument("--start", required=True)
     many = commands.add_parser("batch")
-    many.add_argument("--solver", required=True, choices=["brdffit", "brdffit-default", *SCIPY])
+    many.add_argument(
+        "--solver", required=True, choices=["brdffit", "brdffit-default", "brdffit-dask-1", "brdffit-dask-2", *SCIPY]
+    )
+    many.add_argument("--model", default="cook-torrance", choices=list(BATCH_MATERIALS))
     many.add_argument("--materials", type=int, default=100)
     many.add_argument("--size", type=int, default=100_000)
     posterior = commands.add_parser("mcmc")

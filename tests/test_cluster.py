@@ -25,7 +25,7 @@ SAME = 1e-12
 def client():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # distributed's own start-up notices
-        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
         with cluster, distributed.Client(cluster) as client:
             yield client
 

@@ -142,7 +142,7 @@ def _screen_bound(model: Model, params: Params):
     a lobe of these models peaks) times one cell's ``d cos θo dφo`` (a lobe narrower than a cell, between the grid's
     points, adds at most that). For models whose lobes peak at the mirror direction; Lafortune's are checked on the
     fine grid always."""
-    fine, coarse = albedo_quadrature(model.brdf(params, *albedo_directions(SCREEN_GRID, jnp)), SCREEN_GRID)
+    fine, coarse = _model_quadrature(model, params, SCREEN_GRID)
     wi = spherical_to_direction(jnp.asarray(np.radians(ALBEDO_INCIDENCE)), jnp.zeros(len(ALBEDO_INCIDENCE)))
     wo = mirror_direction(wi)
     peak = model.brdf(params, wi, wo) * wo[:, 2:3]
@@ -153,15 +153,22 @@ def _screen_bound(model: Model, params: Params):
 def _albedo_estimates(model: Model, params: Params, n: int):
     """:func:`albedo_quadrature` of ``model`` with ``params`` on the n × 2n grid, in one program (the directions
     are made inside it, so no array of 2n² directions crosses from the host)."""
-    return albedo_quadrature(model.brdf(params, *albedo_directions(n, jnp)), n)
+    return _model_quadrature(model, params, n)
 
 
-def albedo_directions(n: int, xp=np):
+def _model_quadrature(model: Model, params: Params, n: int):
+    """:func:`albedo_quadrature` of ``model`` (traced). An isotropic model, lit at azimuth 0, is symmetric in
+    ``φo → −φo``: it is evaluated on the half grid ``φo < π`` alone, which gives the same sums for half the work."""
+    half = model.isotropic
+    return albedo_quadrature(model.brdf(params, *albedo_directions(n, jnp, half=half)), n, half=half)
+
+
+def albedo_directions(n: int, xp=np, *, half: bool = False):
     """The pairs ``wi``, ``wo`` (incidences · 2n², 3) the albedo quadrature evaluates a BRDF at: each incidence of
-    :data:`ALBEDO_INCIDENCE` (azimuth 0) with the viewer at the midpoints of an n × 2n grid in ``(cos θo, φo)``.
-    ``xp``: numpy, or ``jax.numpy`` inside a program."""
+    :data:`ALBEDO_INCIDENCE` (azimuth 0) with the viewer at the midpoints of an n × 2n grid in ``(cos θo, φo)``;
+    ``half``: the n × n midpoints with ``φo < π`` alone. ``xp``: numpy, or ``jax.numpy`` inside a program."""
     cos_o = (xp.arange(n) + 0.5) / n
-    phi_o = (xp.arange(2 * n) + 0.5) * np.pi / n
+    phi_o = (xp.arange(n if half else 2 * n) + 0.5) * np.pi / n
     cos_grid, phi_grid = xp.meshgrid(cos_o, phi_o, indexing="ij")
     wo = spherical_to_direction(xp.arccos(cos_grid.ravel()), phi_grid.ravel())
     incidences = len(ALBEDO_INCIDENCE)
@@ -169,12 +176,14 @@ def albedo_directions(n: int, xp=np):
     return xp.repeat(wi, wo.shape[0], axis=0), xp.tile(wo, (incidences, 1))
 
 
-def albedo_quadrature(values, n: int):
+def albedo_quadrature(values, n: int, *, half: bool = False):
     """The directional albedos (incidences, C) of BRDF ``values`` at :func:`albedo_directions`, by the midpoint rule
     in ``(cos θo, φo)`` (``dω cos θo = d cos θo dφo``), on the whole grid and on its even rows and columns alone.
-    ``values``: a numpy or a JAX array."""
+    ``values``: a numpy or a JAX array. ``half``: values on the half grid of a BRDF symmetric in ``φo → −φo``
+    (n even): column ``j`` stands for ``2n − 1 − j`` as well, which is odd where ``j`` is even, so the whole
+    grid's sum is twice the half's and its even columns sum to all the half's columns."""
     cos_grid = ((np.arange(n) + 0.5) / n)[:, None]
-    weighted = values.reshape(len(ALBEDO_INCIDENCE), n, 2 * n, -1) * cos_grid[None, :, :, None]
-    fine = weighted.sum(axis=(1, 2)) / n * (np.pi / n)
-    coarse = weighted[:, ::2, ::2].sum(axis=(1, 2)) * 4 / n * (np.pi / n)
+    weighted = values.reshape(len(ALBEDO_INCIDENCE), n, n if half else 2 * n, -1) * cos_grid[None, :, :, None]
+    fine = weighted.sum(axis=(1, 2)) * (2 if half else 1) / n * (np.pi / n)
+    coarse = weighted[:, ::2, :: 1 if half else 2].sum(axis=(1, 2)) * 4 / n * (np.pi / n)
     return fine, coarse

@@ -1,0 +1,129 @@
+"""Stored programs (``brdffit/_programs.py``): a jitted function's program is kept on disk under a signature
+computed without tracing, read back by a later call (or process) instead of tracing, and never trusted when it
+is stale, unreadable or cannot be named."""
+
+import json
+import subprocess
+import sys
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from paths import EXAMPLE, ROOT
+
+from brdffit import _programs, cache
+from brdffit._jax import jit
+
+
+def _scaled_sum(scale, x):
+    return scale * jnp.sum(jnp.sin(x))
+
+
+class Unnamed:
+    """A static argument whose repr is its address: it names no program."""
+
+    def __hash__(self):
+        return 0
+
+    def __eq__(self, other):
+        return isinstance(other, Unnamed)
+
+
+def _with_static(kind, x):
+    return jnp.sum(x) * 2.0
+
+
+scaled_sum = jit(_scaled_sum)
+with_static = jit(_with_static, static_argnums=0)
+
+
+@pytest.fixture
+def programs(tmp_path, monkeypatch):
+    """A cache of its own and an empty table of loaded programs; the folder of stored programs."""
+    monkeypatch.setattr(cache, "_enabled", tmp_path)
+    monkeypatch.setattr(_programs, "_loaded", {})
+    return tmp_path / "programs"
+
+
+def stored_files(folder):
+    return sorted(folder.glob(f"*{_programs.SUFFIX}"))
+
+
+def test_a_program_is_stored_once_and_read_back_without_exporting(programs, monkeypatch):
+    x = np.linspace(0.0, 1.0, 7)
+    expected = 3.0 * np.sum(np.sin(x))
+    assert float(scaled_sum(np.asarray(3.0), x)) == pytest.approx(expected, rel=1e-15)
+    (stored,) = stored_files(programs)
+    header = json.loads(stored.read_bytes().partition(b"\n")[0])
+    assert header == {"named_tuples": []}
+
+    monkeypatch.setattr(_programs, "_loaded", {})  # a later process: nothing loaded yet
+
+    def no_export(*args, **kwargs):
+        raise AssertionError("a stored program was exported again")
+
+    monkeypatch.setattr(jax.export, "export", no_export)
+    assert float(scaled_sum(np.asarray(3.0), x)) == pytest.approx(expected, rel=1e-15)
+    assert stored_files(programs) == [stored]
+    # another shape is another program
+    monkeypatch.undo()
+    monkeypatch.setattr(cache, "_enabled", programs.parent)
+    scaled_sum(np.asarray(3.0), np.ones(5))
+    assert len(stored_files(programs)) == 2
+
+
+def test_a_stale_or_broken_program_is_never_read(programs, monkeypatch):
+    x = np.arange(4.0)
+    scaled_sum(np.asarray(2.0), x)
+    (stored,) = stored_files(programs)
+    # another brdffit source or JAX: another signature, another file
+    monkeypatch.setattr(_programs, "_loaded", {})
+    monkeypatch.setattr(_programs, "_environment", lambda: ["another source", "another jax"])
+    assert float(scaled_sum(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
+    assert len(stored_files(programs)) == 2
+    # a file cut short (a crash while writing elsewhere): exported again, the answer still right
+    monkeypatch.undo()
+    monkeypatch.setattr(cache, "_enabled", programs.parent)
+    monkeypatch.setattr(_programs, "_loaded", {})
+    stored.write_bytes(b'{"named_tuples": []}\n\x00\x01')
+    assert float(scaled_sum(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
+    assert stored.stat().st_size > 100
+
+
+def test_a_call_that_cannot_be_named_runs_as_a_plain_jit(programs):
+    assert _programs._signature("m.f", (Unnamed(), np.ones(3)), (0,)) is None
+    assert float(with_static(Unnamed(), np.ones(3))) == 6.0
+    assert _programs._signature("m.f", (1.5, [1, 2]), ()) is None  # not arrays
+    assert stored_files(programs) == []
+
+
+def test_no_program_is_stored_while_the_cache_is_off(tmp_path, monkeypatch):
+    monkeypatch.setattr(cache, "_enabled", None)
+    monkeypatch.setattr(_programs, "_loaded", {})
+    assert float(scaled_sum(np.asarray(1.0), np.zeros(3))) == 0.0
+    assert not (tmp_path / "programs").exists()
+
+
+def test_a_warm_process_fits_without_tracing_the_solver(tmp_path):
+    """The second process fits the example from the stored programs: the same result, and optimistix (which only
+    tracing the solver needs) is never imported."""
+    script = (
+        "import sys, brdffit\n"
+        "brdffit.enable_compilation_cache(sys.argv[1])\n"
+        "result = brdffit.fit(sys.argv[2], 'ward')\n"
+        "print(repr(result.cost), 'optimistix' in sys.modules)\n"
+    )
+    outputs = [
+        subprocess.run(
+            [sys.executable, "-c", script, str(tmp_path / "cache"), str(EXAMPLE)],
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=ROOT,
+        ).stdout.split()
+        for _ in range(2)
+    ]
+    (cold_cost, cold_traced), (warm_cost, warm_traced) = outputs
+    assert cold_traced == "True" and warm_traced == "False"
+    assert float(warm_cost) == float(cold_cost)
