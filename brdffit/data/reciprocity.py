@@ -11,6 +11,9 @@ A pair is two samples whose directions are swapped: ``wi`` and ``wo`` exchanged 
 the same ``|φo − φi|``. Angles match on a 0.01° grid.
 """
 
+import collections
+import hashlib
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,6 +61,12 @@ class Reciprocity:
         return min(self.ratios, key=lambda reading: abs(np.log(self.ratios[reading])))
 
 
+#: How many geometries' pairs :func:`_pairs` keeps.
+KEPT_GEOMETRIES = 8
+_kept: collections.OrderedDict = collections.OrderedDict()
+_kept_lock = threading.Lock()
+
+
 def reciprocity(samples: Samples) -> Reciprocity | None:
     """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs)."""
     in_force = samples.provenance.quantity if samples.provenance is not None else "brdf"
@@ -83,7 +92,31 @@ def _reading(quantity: str) -> str:
 
 
 def _pairs(samples: Samples, general: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``(first, second)`` of reciprocal pairs, ``first`` with ``θi < θo``, each pair once."""
+    """Indices ``(first, second)`` of reciprocal pairs, ``first`` with ``θi < θo``, each pair once.
+
+    They depend on the directions alone, which the texels of a capture or the materials of a gonioreflectometer
+    share: the last :data:`KEPT_GEOMETRIES` are kept, by a digest of the directions' bytes (~10 µs for 500 pairs,
+    against ~0.2 ms to pair them)."""
+    digest = hashlib.blake2b(digest_size=16)
+    digest.update(np.ascontiguousarray(samples.wi).data)
+    digest.update(np.ascontiguousarray(samples.wo).data)
+    key = (digest.digest(), len(samples.wi), general)
+    with _kept_lock:
+        if key in _kept:
+            _kept.move_to_end(key)
+            return _kept[key]
+    found = _paired(samples, general)
+    for indices in found:
+        indices.flags.writeable = False  # shared by every later caller
+    with _kept_lock:
+        _kept[key] = found
+        while len(_kept) > KEPT_GEOMETRIES:
+            _kept.popitem(last=False)
+    return found
+
+
+def _paired(samples: Samples, general: bool) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_pairs`, computed."""
     theta_i, theta_o = (np.rint(zenith_degrees(w) / GRID_DEGREES).astype(np.int64) for w in (samples.wi, samples.wo))
     phi_i, phi_o = (
         np.rint(np.degrees(direction_to_spherical(w)[1]) % 360.0 / GRID_DEGREES).astype(np.int64) % 36000

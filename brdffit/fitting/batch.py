@@ -26,8 +26,9 @@ from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..physics.models import Model
 from .buckets import batches, bucket_key, default_strategy, solve_bucket
+from .caveats import albedo_screens
 from .defaults import MAX_STEPS, N_STARTS
-from .fit import checked, fit_one, result_of, start_vector
+from .fit import checked, final_params, fit_one, result_of, start_vector
 from .results import FitResult
 
 STRATEGIES = ("auto", "loop", "vmap")
@@ -79,10 +80,12 @@ def fit_many(
             else:
                 thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
                 solved = solve_bucket(built, built_loss, [kept[i] for i in unit.indices], thetas, **options)
-                for position, index in enumerate(unit.indices):
-                    one = jax.tree.map(lambda leaf, p=position: leaf[p], solved)
+                each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
+                n_channels = kept[unit.indices[0]].n_channels
+                still_open = albedo_screens(built, [final_params(built, one, n_channels) for one in each])
+                for one, index, incidences in zip(each, unit.indices, still_open, strict=True):
                     results[index] = result_of(
-                        built, built_loss, kept[index], one, max_steps, dtype, max_theta=max_theta
+                        built, built_loss, kept[index], one, max_steps, dtype, max_theta, albedo_open=incidences
                     )
             bar.update(len(unit.indices))
     finally:

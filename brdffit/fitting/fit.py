@@ -16,7 +16,7 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
-from ..physics.models import MODELS, Model, get_model, model_option_names
+from ..physics.models import MODELS, Model, Params, get_model, model_option_names
 from .buckets import compile_in_background, default_strategy, solve_bucket
 from .caveats import caveats
 from .defaults import MAX_STEPS, N_STARTS
@@ -135,6 +135,15 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
     return model.unconstrained.from_params(params)
 
 
+def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
+    """A solve's parameters (numpy), each moved onto its domain where the solver's coordinates reached its edge
+    only in the limit."""
+    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
+    domains = model.physical.domains(n_channels)
+    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
+    return model.physical.to_params(inside, n_channels)
+
+
 def result_of(
     model: Model,
     loss: Loss,
@@ -144,14 +153,13 @@ def result_of(
     dtype: str,
     fewer_lobes_cost: float | None = None,
     max_theta: float | None = None,
+    albedo_open: tuple[float, ...] | None = None,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``); ``samples`` are those fitted, selected
-    by ``max_theta``."""
+    by ``max_theta``. ``albedo_open``: the incidences the albedo screen left open, when the caller screened many fits
+    at once (``caveats.albedo_screens``)."""
     converged = bool(solved.converged)
-    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
-    domains = model.physical.domains(samples.n_channels)
-    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
-    params = model.physical.to_params(inside, samples.n_channels)
+    params = final_params(model, solved, samples.n_channels)
     return FitResult(
         model=model.name,
         model_options=model.model_options,
@@ -165,7 +173,7 @@ def result_of(
         converged=converged,
         message="" if converged else failure_message(int(solved.result), max_steps),
         dtype=dtype,
-        warnings=caveats(model, samples, params, float(solved.cost), fewer_lobes_cost),
+        warnings=caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, albedo_open=albedo_open),
         quantity=samples.provenance.quantity if samples.provenance else None,
         max_theta=max_theta,
     )
