@@ -134,5 +134,9 @@ def test_the_command_line_spreads_a_library_over_local_workers(materials, tmp_pa
     assert not (tmp_path / "none").exists()
     assert main(["fit", str(paths[0]), "--workers", "0", "-o", str(tmp_path / "zero.json")]) == 2
     assert capsys.readouterr().err.strip() == "brdffit: error: --workers must be 1 or more, got 0"
+    chain = ["--uncertainty", "mcmc", "--chain", str(tmp_path / "chain.npz"), "-o", str(tmp_path / "one.json")]
+    assert main(["fit", str(paths[0]), "--workers", "1", *chain]) == 2
+    assert capsys.readouterr().err.strip().startswith("brdffit: error: --chain keeps a chain in this process")
+    assert not (tmp_path / "one.json").exists()
     status = main(["fit", str(paths[0]), "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "nowhere.json")])
     assert status == 2 and "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there" in capsys.readouterr().err

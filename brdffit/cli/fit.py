@@ -107,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
     start = _start(args.start)
     if args.workers is not None and args.workers < 1:
         raise BrdfInputError(f"--workers must be 1 or more, got {args.workers}")
+    if args.chain and (args.scheduler or args.workers):
+        raise BrdfInputError("--chain keeps a chain in this process: give it without --scheduler and --workers")
     if args.scheduler:  # a cluster's workers read the files, at the same paths (a worker's folder may be another)
         samples = [str(Path(path).resolve()) for path in args.samples]
     else:
