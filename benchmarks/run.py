@@ -159,12 +159,18 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
 
 
 def batch_section(materials: int, size: int, repeats: int) -> dict:
-    arguments = ("batch", "--materials", str(materials), "--size", str(size))
-    section: dict = {"materials": materials, "n_samples": size}
-    variants = {
-        solver: ((*arguments, "--solver", solver), "") for solver in ("brdffit", "brdffit-default", "scipy-lm-exact")
-    }
-    return section | interleaved(repeats, variants, f"(b) {materials} × {size}")
+    """(b): 100 Cook-Torrance materials, fit_batch from given starts and on its default path against the scipy loop."""
+    return batch_variants(
+        "cook-torrance", materials, size, ("brdffit", "brdffit-default", "scipy-lm-exact"), repeats, "b"
+    )
+
+
+def batch_variants(model: str, materials: int, size: int, solvers: tuple[str, ...], repeats: int, letter: str) -> dict:
+    """The worker's ``batch`` measurement of each of ``solvers`` on ``materials`` × ``size`` of ``model``, in turns."""
+    arguments = ("batch", "--model", model, "--materials", str(materials), "--size", str(size))
+    variants = {solver: ((*arguments, "--solver", solver), "") for solver in solvers}
+    label = f"({letter}) {materials} × {size}"
+    return {"materials": materials, "n_samples": size} | interleaved(repeats, variants, label)
 
 
 #: (j) many fits (issue 14): (materials, samples each) of Ward, the material library and the per-texel case.
@@ -175,9 +181,7 @@ MANY_SOLVERS = ("brdffit", "brdffit-default", "brdffit-dask-1", "brdffit-dask-2"
 def many_section(materials: int, size: int, repeats: int) -> dict:
     """(j): Ward fit_batch (given starts, default path, and the default path on a Dask LocalCluster of 1 and 2
     workers) against a loop of scipy least_squares lm from the same starts, compile included, in turns."""
-    arguments = ("batch", "--model", "ward", "--materials", str(materials), "--size", str(size))
-    variants = {solver: ((*arguments, "--solver", solver), "") for solver in MANY_SOLVERS}
-    return {"materials": materials, "n_samples": size} | interleaved(repeats, variants, f"(j) {materials} × {size}")
+    return batch_variants("ward", materials, size, MANY_SOLVERS, repeats, "j")
 
 
 #: (k) commands that compute nothing, and a warm fit: process start to exit.

@@ -26,7 +26,7 @@ from typing import Any, NamedTuple
 from .data.load import load_samples
 from .data.samples import Samples
 from .errors import BrdfInputError
-from .fitting.batch import fit_many, progress_bar, work_units
+from .fitting.batch import fit_many, progress_bar, starts_per_dataset, work_units
 from .fitting.fit import checked
 from .fitting.results import FitResult
 from .physics.models import Model
@@ -77,9 +77,7 @@ def fit_on_cluster(
     from distributed import as_completed
 
     items = list(items)
-    starts = list(start) if isinstance(start, Sequence) else [start] * len(items)
-    if len(starts) != len(items):
-        raise BrdfInputError(f"{len(starts)} starts for {len(items)} datasets; give one per dataset or one for all")
+    starts = starts_per_dataset(start, len(items))
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
     chunks = _chunks(items, starts, model, loss, options.get("max_theta"), options.get("dtype", "float64"), workers)
     futures = {

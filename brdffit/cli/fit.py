@@ -137,12 +137,6 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, client=Non
     With a Dask ``client``, spread over its workers; paths in ``samples`` are read there."""
     from .. import api
 
-    if client is not None:
-        options = dict(start=start, uncertainty=args.uncertainty, mcmc=mcmc, n_starts=args.starts, seed=args.seed)
-        options |= dict(max_theta=args.max_theta, max_steps=args.max_steps, dtype=args.dtype)
-        return api.fit_batch(
-            samples, model, args.loss, client=client, read_options=read_options(args), progress=None, **options
-        )
     options = dict(
         max_theta=args.max_theta,
         start=start,
@@ -153,6 +147,8 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, client=Non
         uncertainty=args.uncertainty,
         mcmc=mcmc,
     )
+    if client is not None:
+        return api.fit_batch(samples, model, args.loss, client=client, read_options=read_options(args), **options)
     if len(samples) == 1:
         progress = sys.stderr.isatty()
         return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]

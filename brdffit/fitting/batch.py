@@ -55,9 +55,7 @@ def fit_many(
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
-    starts = list(start) if isinstance(start, Sequence) else [start] * len(samples)
-    if len(starts) != len(samples):
-        raise BrdfInputError(f"{len(starts)} starts for {len(samples)} datasets; give one per dataset or one for all")
+    starts = starts_per_dataset(start, len(samples))
     kept_by_check = [checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
     built, built_loss = kept_by_check[0][0], kept_by_check[0][1]
     kept = [one for _, _, one in kept_by_check]
@@ -91,6 +89,14 @@ def fit_many(
     finally:
         bar.close()
     return results
+
+
+def starts_per_dataset(start, count: int) -> list:
+    """``fit_batch``'s ``start`` as one entry (a parameter dictionary or None) per dataset."""
+    starts = list(start) if isinstance(start, Sequence) else [start] * count
+    if len(starts) != count:
+        raise BrdfInputError(f"{len(starts)} starts for {count} datasets; give one per dataset or one for all")
+    return starts
 
 
 class WorkUnit(NamedTuple):

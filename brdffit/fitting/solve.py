@@ -87,7 +87,7 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
     """
     return jit(
         partial(solved_from, model, loss, max_steps, dtype),
-        name=f"fitting.fit.solved_from[{model!r}, {loss!r}, {max_steps}, {dtype!r}]",
+        name=f"fitting.solve.solved_from[{model!r}, {loss!r}, {max_steps}, {dtype!r}]",
     )
 
 
