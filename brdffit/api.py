@@ -134,7 +134,8 @@ def fit_batch(
         first_start = start if isinstance(start, dict) or start is None else next(iter(start), None)
         built = model_for(model, first_start, **model_options) if isinstance(model, str) else model
         get_loss(loss)
-        results = fit_on_cluster(client, samples, built, loss, read_options=read_options, start=start, **options)
+        spread = dict(read_options=read_options, start=start, progress=progress)
+        results = fit_on_cluster(client, samples, built, loss, **spread, **options)
     else:
         samples = [as_samples(one, **read_options) for one in samples]
         if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
