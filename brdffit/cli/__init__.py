@@ -1,7 +1,8 @@
 """The ``brdffit`` command line: the parser, and a module per command that it loads on demand.
 
 Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``report.py``, ``synth.py``, ``models.py``,
-``info.py``, ``convert.py``) has ``configure(parser)``, which adds its arguments, and ``run(args) -> int``.
+``info.py``, ``convert.py``, ``basis.py``) has ``configure(parser)``, which adds its arguments, and
+``run(args) -> int``.
 Only the command being run is imported and configured, so ``brdffit --help`` and ``--version`` import no JAX
 and no solver.
 
@@ -32,7 +33,8 @@ COMMANDS = {
     "synth": "write synthetic samples of a model",
     "models": "list the models, their parameters and domains",
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",
-    "info": "what a samples file holds: count, channels, angular coverage",
+    "info": "what a samples file holds: count, channels, angular coverage (or what a basis file holds)",
+    "basis": "learn a data-driven basis from a library of MERL tables, and choose the directions to measure",
 }
 
 

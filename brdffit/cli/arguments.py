@@ -37,11 +37,12 @@ def spell(argument: Argument) -> str:
 
 
 #: The model options as flags: each model takes some (``brdffit models`` lists them).
-MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "lobes")
+MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "lobes", "basis", "ridge")
 
 
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
-    """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--lobes``)."""
+    """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--lobes``, ``--basis``,
+    ``--ridge``)."""
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models import MODELS
@@ -59,6 +60,10 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
             help=f"cook-torrance's {what}: {', '.join(kinds)} (default {next(iter(kinds))})",
         )
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
+    command.add_argument("--basis", metavar="FILE", help="pca: the basis file (from brdffit basis build)")
+    command.add_argument(
+        "--ridge", type=float, metavar="W", help="pca: weight of the library prior, Σr² + W·Σc² (default 1e-3)"
+    )
 
 
 def model_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -80,6 +85,8 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
         " shorthand lafortune:2); default: every model, Lafortune with 1–3 lobes, Cook-Torrance with each Fresnel",
     )
     command.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
+    command.add_argument("--basis", metavar="FILE", help="the basis of pca in --models (from brdffit basis build)")
+    command.add_argument("--ridge", type=float, metavar="W", help="pca's ridge in --models (default 1e-3)")
     command.add_argument(
         "--folds", type=int, default=5, metavar="K", help="cross-validation folds (default 5, at least 2)"
     )
@@ -101,8 +108,11 @@ def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
     from ..physics.models.specs import model_of_spec, split_specs
 
     get_loss(args.loss)
+    given = {"basis": args.basis, "ridge": args.ridge}
     return {
-        "models": None if args.models is None else [model_of_spec(spec) for spec in split_specs(args.models)],
+        "models": None
+        if args.models is None
+        else [model_of_spec(spec) for spec in split_specs(args.models, completed=lambda spec: _with(spec, given))],
         "loss": args.loss,
         "folds": args.folds,
         "seed": args.seed,
@@ -110,6 +120,16 @@ def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
         "n_starts": args.starts,
         "max_steps": args.max_steps,
     }
+
+
+def _with(spec: str, options: dict[str, Any]) -> str:
+    """A pca spec completed with ``--basis`` and ``--ridge`` where it does not name them (other specs as they are)."""
+    name, _, written = spec.partition(":")
+    if name.strip() != "pca":
+        return spec
+    named = {item.partition("=")[0].strip() for item in written.split(",")}
+    added = [f"{key}={value}" for key, value in options.items() if value is not None and key not in named]
+    return spec if not added else f"{spec}{',' if written else ':'}{','.join(added)}"
 
 
 def add_loading_options(command: argparse.ArgumentParser) -> None:

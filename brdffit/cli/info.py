@@ -7,7 +7,7 @@ from .arguments import add_loading_options, load
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("input", metavar="FILE", help="samples file (any format)")
+    parser.add_argument("input", metavar="FILE", help="samples file (any format), or a basis file (.npz)")
     add_loading_options(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
@@ -15,5 +15,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..data.summary import describe
 
+    if args.input.endswith(".npz"):
+        from ..physics.pca.basis import load_basis
+        from .basis import describe_basis
+
+        basis = load_basis(args.input)
+        print(f"{args.input}: basis, {describe_basis(basis)}")
+        print(f"  library: {', '.join(basis.materials[:6])}{', …' if len(basis.materials) > 6 else ''}")
+        print(f"  bins holding a value: {int(basis.filled.sum()):,} of {basis.filled.size:,}; sha256 {basis.digest}")
+        return EXIT_OK
     print(describe(load(args.input, args)))
     return EXIT_OK

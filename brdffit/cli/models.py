@@ -16,6 +16,11 @@ def run(args: argparse.Namespace) -> int:
     from ..physics.models import MODELS, get_model, model_option_names
 
     for name in MODELS:
+        if name == "pca":  # its model needs a basis file: described, not built
+            print(f"{name}\n  data-driven: principal components of a library of measured tables (brdffit basis build)")
+            print(f"  options: {', '.join(flag(option) for option in ('basis', 'ridge'))}")
+            print("  parameters: coefficients: [K][C] real, in library standard deviations (K: the basis's components)")
+            continue
         model = get_model(name)
         summary = model.summary + (f": {model.lobe.summary}" if model.lobe else "")
         print(f"{name}\n  {summary}")

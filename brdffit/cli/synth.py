@@ -19,6 +19,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "--geometry", default="hemisphere", metavar="NAME", help=f"{', '.join(GEOMETRIES)} (default hemisphere)"
     )
     parser.add_argument(
+        "--directions",
+        metavar="CSV",
+        help="the pairs of a directions file (theta_i,phi_i,theta_o,phi_o in degrees; brdffit basis directions writes"
+        " one) instead of --geometry",
+    )
+    parser.add_argument(
         "--n-incident",
         type=int,
         metavar="N",
@@ -72,8 +78,17 @@ def run(args: argparse.Namespace) -> int:
             raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {args.geometry}")
     if "seed" in accepted:
         given["seed"] = args.seed
-    output = output_file(args.output, "-o", [args.params] if not args.params.lstrip().startswith("{") else [])
-    wi, wo = make_geometry(**given)
+    inputs = [args.params] if not args.params.lstrip().startswith("{") else []
+    if args.directions is not None:
+        from ..physics.pca.directions import read_directions
+
+        if given:
+            raise BrdfInputError(f"--{next(iter(given)).replace('_', '-')} does not apply to --directions")
+        output = output_file(args.output, "-o", [*inputs, args.directions])
+        wi, wo = read_directions(args.directions)
+    else:
+        output = output_file(args.output, "-o", inputs)
+        wi, wo = make_geometry(**given)
     samples = synthesize(
         model.name,
         params,

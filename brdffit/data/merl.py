@@ -27,7 +27,6 @@ half vector ``d' = (-d_x, -d_y, d_z)`` are rotated about the binormal ``y`` by
 ``h = R_y(θh) z = (sin θh, 0, cos θh)``.
 """
 
-import math
 import os
 from dataclasses import replace
 from pathlib import Path
@@ -39,39 +38,15 @@ from .._files import atomic_path, reading
 from ..checks import choice, whole_number
 from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
-from ..physics.geometry import from_half_difference
+from ..physics.table import HORIZON, N_BINS, SHAPE, bin_directions
 from .samples import Provenance, Samples
 
-#: Table dimensions (θh, θd, φd bins), as in the header.
-SHAPE = (90, 90, 180)
-N_BINS = SHAPE[0] * SHAPE[1] * SHAPE[2]
 HEADER_BYTES = 12
 FILE_BYTES = HEADER_BYTES + 3 * N_BINS * 8
 #: Stored number × scale = BRDF in 1/sr, for r, g, b (Matusik et al. 2003, ``BRDFRead.cpp``).
 SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
 CHANNELS = ("r", "g", "b")
 SUBSAMPLE_METHODS = ("random", "stratified")
-#: Directions with ``z`` at most this are below the horizon; it keeps bins that lie exactly on the horizon
-#: (``θh + θd = 90°`` at ``φd = 0``), which rounding puts at ``z = ±1e-17``, out on every platform.
-HORIZON = 1e-12
-
-
-def bin_angles() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(θh, θd, φd)`` in radians of every bin, each of shape (90, 90, 180) (``BRDFRead.cpp``'s lookup)."""
-    i, j, k = (np.arange(n, dtype=float) for n in SHAPE)
-    theta_h = (i / SHAPE[0]) ** 2 * (math.pi / 2)
-    theta_d = j / SHAPE[1] * (math.pi / 2)
-    phi_d = k / SHAPE[2] * math.pi
-    return tuple(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"))
-
-
-def bin_directions() -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors ``wi``, ``wo`` (1,458,000, 3) of every bin in file order (Rusinkiewicz 1998, ``φh = 0``).
-
-    Some point below the horizon (``z ≤ 0``); MERL never looks those bins up.
-    """
-    theta_h, theta_d, phi_d = (a.reshape(-1) for a in bin_angles())
-    return from_half_difference(theta_h, np.zeros_like(theta_h), theta_d, phi_d)
 
 
 # ---------------------------------------------------------------------- reading
@@ -136,6 +111,13 @@ def read_merl(
 
 def _read_table(path: Path) -> np.ndarray:
     """The stored numbers (3, 1,458,000) of a MERL file, after checking its header and size."""
+    return np.array(stored_planes(path), dtype=np.float64)
+
+
+def stored_planes(path: str | os.PathLike) -> np.ndarray:
+    """The stored numbers of a MERL file as a read-only memory map (3, 1,458,000), after checking its header and
+    size: a library of many tables is read bin block by bin block, never whole (``brdffit/pca/build.py``)."""
+    path = Path(path)
     with reading(path, "a MERL file"), path.open("rb") as handle:
         size = os.fstat(handle.fileno()).st_size
         if size < HEADER_BYTES:
@@ -148,10 +130,7 @@ def _read_table(path: Path) -> np.ndarray:
             raise BrdfInputError(f"{path}: dimensions {dims}, expected {SHAPE}; not a MERL BRDF file")
         if size != FILE_BYTES:
             raise BrdfInputError(f"{path}: holds {size:,} bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
-        table = np.fromfile(handle, dtype="<f8", count=3 * N_BINS)
-    if table.size != 3 * N_BINS:  # the file shrank while it was read
-        raise BrdfInputError(f"{path}: holds too few bytes; a MERL file of 90×90×180 needs {FILE_BYTES:,}")
-    return table.reshape(3, N_BINS).astype(np.float64, copy=False)
+        return np.memmap(handle, dtype="<f8", mode="r", offset=HEADER_BYTES, shape=(3, N_BINS))
 
 
 def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: str) -> np.ndarray:

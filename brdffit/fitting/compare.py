@@ -302,6 +302,10 @@ def _cross_validated(
 ) -> tuple[list[float], list[bool]]:
     """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples, and
     whether each refit converged."""
+    if model.on_host:  # the data-driven model refits by its own solve
+        from .pca import cross_validated
+
+        return cross_validated(model, loss, result, samples, split, max_steps)
     solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
     held_out_cost = _held_out_cost(model, loss)
     theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))

@@ -46,6 +46,10 @@ def fit_one(
     model, loss, samples = checked(samples, model, loss, max_theta, dtype, **model_options)
     n_starts = whole_number("n_starts", n_starts)
     max_steps = whole_number("max_steps", max_steps)
+    if model.on_host:  # the data-driven model: a ridge start and its own solve (``pca/fit.py``)
+        from .pca import fit_pca
+
+        return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
     if start is None and model.n_lobes > 1:
         solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed)
         return result_of(model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta)
@@ -92,7 +96,7 @@ def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Mo
     choice("dtype", dtype, DTYPES)
     samples = samples.within(max_theta)
     n_parameters = model.unconstrained.size(samples.n_channels)
-    if samples.values.size < n_parameters:
+    if samples.values.size < n_parameters and model.prior_residuals(np.zeros(n_parameters)) is None:
         raise BrdfInputError(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
             f" the {n_parameters} parameters of {model.name}; give at least {n_parameters} values"

@@ -60,8 +60,10 @@ LOSSES = {
 }
 
 
-def get_loss(name: str) -> Loss:
-    """The loss called ``name``, or a one-line error listing the choices."""
+def get_loss(name: "str | Loss") -> Loss:
+    """The loss called ``name`` (a :class:`Loss` is returned as it is), or a one-line error listing the choices."""
+    if isinstance(name, Loss):
+        return name
     if name not in LOSSES:
         raise BrdfInputError(f"{name!r} is not a loss; choose one of: {', '.join(LOSSES)}")
     return LOSSES[name]

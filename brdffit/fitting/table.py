@@ -10,7 +10,7 @@ if TYPE_CHECKING:
 def result_table(result: "FitResult", source: str | None = None) -> str:
     """A readable report of ``result``; ``source`` names the samples in its first line."""
     what = f" of {source}" if source else ""
-    options = ", ".join(f"{key} {value}" for key, value in result.model_options.items())
+    options = ", ".join(f"{key} {_shown(key, value)}" for key, value in result.model_options.items())
     options = f" ({options})" if options else ""
     size = f"{result.n_samples} samples × {len(result.channels)} channel(s)"
     lines = [f"{result.model}{options} fit{what}: {size}, loss {result.loss}"]
@@ -40,14 +40,23 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
 
 
 def parameter_rows(params: dict[str, Any]):
-    """(label, value) pairs in file order; Lafortune lobes become ``lobe 1 rho_s`` and so on."""
+    """(label, value) pairs in file order; Lafortune lobes become ``lobe 1 rho_s`` and so on, pca's coefficients
+    ``coefficients[0]`` and so on."""
     for name, value in params.items():
         if name == "lobes":
             for index, lobe in enumerate(value, start=1):
                 for lobe_name, lobe_value in lobe.items():
                     yield f"lobe {index} {lobe_name}", lobe_value
+        elif isinstance(value, list) and value and isinstance(value[0], list):  # pca's coefficients, one row each
+            for index, row in enumerate(value):
+                yield f"{name}[{index}]", row
         else:
             yield name, value
+
+
+def _shown(key: str, value) -> str:
+    """A model option as the table's first line shows it: a file's digest by its first 12 digits."""
+    return f"{value[:12]}…" if key.endswith("_sha256") and isinstance(value, str) else str(value)
 
 
 def _as_list(value) -> list:

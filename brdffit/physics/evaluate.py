@@ -25,6 +25,8 @@ def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any)
     wo = _directions(wo, "wo")
     if wi.shape != wo.shape:
         raise BrdfInputError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
+    if model.on_host:
+        return model.host_brdf(checked, wi, wo)
     return np.asarray(_brdf(model, checked, wi, wo))
 
 

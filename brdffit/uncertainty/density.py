@@ -86,9 +86,12 @@ def _count_weighted(loss: Loss, problem: Problem):
 
 
 def chi_squared(model: Model, loss: Loss, v, problem: Problem):
-    """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk (JAX)."""
+    """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk, with the model's prior residuals where it has
+    them (JAX)."""
     c = problem.measured.shape[1]
-    return cost(lambda w, chunk: residuals_at(model, loss, model.sampling.to_params(w, c), chunk), v, problem)
+    data = cost(lambda w, chunk: residuals_at(model, loss, model.sampling.to_params(w, c), chunk), v, problem)
+    prior = model.prior_residuals(v)  # a prior that is part of the fit's cost (the data-driven model's ridge)
+    return data if prior is None else data + jnp.sum(prior.astype(jnp.float64) ** 2)
 
 
 @cache

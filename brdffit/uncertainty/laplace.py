@@ -90,6 +90,11 @@ def compiled_gauss_newton(model: Model, loss: Loss):
 
         zeros = jnp.zeros((v.shape[0], v.shape[0]), jnp.float64)
         totals, _ = jax.lax.scan(accumulate, (zeros, zeros), chunks(problem))
+        prior = model.prior_residuals(v)
+        if prior is not None:  # residuals of a prior in the fit's cost (the data-driven model's ridge)
+            jacobian = jax.jacfwd(model.prior_residuals)(v).astype(jnp.float64)
+            weighted = jacobian * prior[:, None]
+            totals = (totals[0] + jacobian.T @ jacobian, totals[1] + weighted.T @ weighted)
         return totals
 
     return gauss_newton

@@ -30,6 +30,14 @@ def test_loop_equals_one_fit_at_a_time():
     assert batch == [fit(one, "ward") for one in samples]
 
 
+def test_several_lobes_fit_one_at_a_time():
+    """Lafortune with two lobes goes lobe by lobe, one dataset at a time, as fit does (this once failed: the batch
+    handed fit its loss as an object, which it did not take)."""
+    samples = datasets()[:2]
+    batch = fit_batch(samples, "lafortune", lobes=2, strategy="loop")
+    assert batch == [fit(one, "lafortune", lobes=2) for one in samples]
+
+
 def test_vmap_equals_loop():
     """The GPU strategy, run here on the CPU: the same optima (parameters to 1e-8, well inside the tolerances
     the solver stops at; vmapped arithmetic may be ordered differently)."""

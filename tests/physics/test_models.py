@@ -431,6 +431,7 @@ def test_registry_names_models_and_options():
         "blinn-phong",
         "phong",
         "lafortune",
+        "pca",
     ]
     with pytest.raises(BrdfInputError, match=r"^'lafortun' is not a model; choose one of: lambert, ward, ward-aniso"):
         get_model("lafortun")

@@ -18,6 +18,7 @@ from .lambert import lambert
 from .lobe import Lobe as Lobe
 from .model import Model as Model
 from .params import Params as Params
+from .pca import pca
 from .phong import blinn_phong, phong
 from .ward import ward, ward_aniso, ward_duer
 
@@ -31,6 +32,7 @@ MODELS = {
     "blinn-phong": blinn_phong,
     "phong": phong,
     "lafortune": lafortune,
+    "pca": pca,
 }
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations  # jaxtyping's Array imports JAX: the annotat
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from ..._lazy import jax, jnp
 from ..geometry import above_horizon
@@ -52,6 +52,8 @@ class Model:
     isotropic: bool = True
     #: Lafortune writes its lobes as a list, ``"lobes": [{...}, ...]``.
     lobes_as_list: bool = False
+    #: Whether :func:`brdffit.evaluate` computes it on the host (``host_brdf``) rather than in a JAX program.
+    on_host: ClassVar[bool] = False
 
     @property
     def model_options(self) -> dict[str, Any]:
@@ -72,6 +74,11 @@ class Model:
             lobes = self.lobe_values(params.shape, wi, wo)
             values = values + lobes.T @ jnp.asarray(params.specular)
         return jnp.where(visible[:, None], values, 0.0)
+
+    def prior_residuals(self, v):
+        """Residuals a prior adds to the fit's cost at the sampling vector ``v`` (JAX), or None: only the data
+        (the data-driven model's ridge adds some, ``pca.py``)."""
+        return None
 
     def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"]:
         """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions."""

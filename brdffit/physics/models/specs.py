@@ -11,11 +11,18 @@ from typing import Any
 from ...errors import BrdfInputError
 from . import MODELS, Model, get_model, model_option_defaults, model_option_names
 
+#: Options a result records that never tell one model from another in a spec (a basis file's digest).
+RECORDED_ONLY = "_sha256"
+
 
 def spec_of(name: str, options: dict[str, Any]) -> str:
     """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
     defaults = model_option_defaults(name) if name in MODELS else {}
-    written = ",".join(f"{key}={value}" for key, value in options.items() if defaults.get(key) != value)
+    written = ",".join(
+        f"{key}={value}"
+        for key, value in options.items()
+        if defaults.get(key) != value and not key.endswith(RECORDED_ONLY)
+    )
     return f"{name}:{written}" if written else name
 
 
@@ -61,17 +68,19 @@ def _option_accepting(name: str, value: Any) -> str:
     return accepting[0]
 
 
-def split_specs(text: str) -> list[str]:
+def split_specs(text: str, completed=None) -> list[str]:
     """Specs written as one comma-separated list (``ward,cook-torrance:fresnel=conductor,lafortune:lobes=2``), split
     between specs, not inside one: a ``key=value`` piece (no ``:``) continues the spec before it, if that spec has
-    options; anything else starts a spec (so a misspelt model is named as it was written). A spec given twice is an
-    error."""
+    options; anything else starts a spec (so a misspelt model is named as it was written). ``completed`` (a
+    function of a spec) adds options given elsewhere. A spec given twice is an error."""
     specs: list[str] = []
     for piece in filter(None, (part.strip() for part in text.split(","))):
         if specs and ":" in specs[-1] and ":" not in piece and "=" in piece:
             specs[-1] += "," + piece
         else:
             specs.append(piece)
+    if completed is not None:  # options the command line gives apart (``--basis`` for pca)
+        specs = [completed(spec) for spec in specs]
     canonical = [spec_of(model.name, model.model_options) for model in map(model_of_spec, specs)]
     repeated = next((spec for spec in canonical if canonical.count(spec) > 1), None)
     if repeated is not None:

@@ -1,0 +1,126 @@
+"""``brdffit basis``: a data-driven basis learned from a library of MERL tables, and the directions to measure.
+
+``basis build LIB… -o basis.npz``: the principal components of the library's mapped tables (``pca/build.py``).
+``basis directions basis.npz -n 20 -o directions.csv``: the pairs that best condition a fit of a new material's
+coefficients (``pca/directions.py``). ``brdffit fit SAMPLES --model pca --basis basis.npz`` fits them.
+"""
+
+import argparse
+import time
+from pathlib import Path
+
+from ..errors import BrdfInputError
+from . import EXIT_OK
+from .arguments import output_file
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    from ..data.library import DEFAULT_COMPONENTS
+    from ..physics.pca.directions import CANDIDATES, MAX_THETA
+    from ..physics.pca.mapping import MAPPINGS
+
+    actions = parser.add_subparsers(title="actions", metavar="ACTION", required=True)
+    build = actions.add_parser("build", help="learn a basis from a library of MERL tables", allow_abbrev=False)
+    build.add_argument("library", nargs="+", metavar="LIB", help="MERL .binary files, or folders of them")
+    build.add_argument("-o", "--output", required=True, metavar="FILE", help="basis file to write (.npz)")
+    build.add_argument(
+        "--components",
+        type=int,
+        default=DEFAULT_COMPONENTS,
+        metavar="K",
+        help=f"principal components to keep (default {DEFAULT_COMPONENTS})",
+    )
+    build.add_argument(
+        "--mapping",
+        default=MAPPINGS[0],
+        metavar="M",
+        help=f"{', '.join(MAPPINGS)} (default {MAPPINGS[0]}: ln((ρ·cos θi cos θo + ε)/(ρ_median·… + ε)))",
+    )
+    build.set_defaults(action=_build)
+    directions = actions.add_parser(
+        "directions", help="the direction pairs that best condition a coefficient fit", allow_abbrev=False
+    )
+    directions.add_argument("basis", metavar="BASIS", help="basis file (from brdffit basis build)")
+    directions.add_argument("-n", type=int, default=20, metavar="N", help="how many pairs (default 20)")
+    directions.add_argument("-o", "--output", required=True, metavar="FILE", help="directions CSV to write")
+    directions.add_argument(
+        "--max-theta",
+        type=float,
+        default=MAX_THETA,
+        metavar="DEG",
+        help=f"largest zenith angle of a pair (default {MAX_THETA:g})",
+    )
+    directions.add_argument(
+        "--candidates", type=int, default=CANDIDATES, metavar="N", help=f"bins scored (default {CANDIDATES})"
+    )
+    directions.add_argument("--seed", type=int, default=0, help="seed of the candidates' subset (default 0)")
+    directions.set_defaults(action=_directions)
+
+
+def run(args: argparse.Namespace) -> int:
+    return args.action(args)
+
+
+def library_files(entries: list[str]) -> list[Path]:
+    """The MERL files of ``LIB…``: files as given, folders as their ``*.binary`` files, sorted."""
+    files: list[Path] = []
+    for entry in entries:
+        path = Path(entry)
+        if path.is_dir():
+            found = sorted(path.glob("*.binary"))
+            if not found:
+                raise BrdfInputError(f"{entry}: folder holds no .binary (MERL) file")
+            files += found
+        else:
+            files.append(path)
+    return files
+
+
+def _build(args: argparse.Namespace) -> int:
+    from tqdm.auto import tqdm
+
+    from ..data.library import build_basis
+    from ..data.merl import N_BINS
+    from ..physics.pca.basis import save_basis
+
+    files = library_files(args.library)
+    output = output_file(args.output, "-o", files)
+    started = time.perf_counter()
+    with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=None, leave=False) as bar:
+        basis = build_basis(files, components=args.components, mapping=args.mapping, progress=bar.update)
+    save_basis(basis, output)
+    print(f"wrote {output}: {describe_basis(basis)} ({time.perf_counter() - started:.1f} s)")
+    return EXIT_OK
+
+
+def _directions(args: argparse.Namespace) -> int:
+    from ..checks import whole_number
+    from ..physics.pca.basis import load_basis
+    from ..physics.pca.directions import bin_angles_degrees, condition_number, select_bins, write_directions
+
+    count = whole_number("n", args.n)
+    whole_number("candidates", args.candidates)
+    whole_number("seed", args.seed, minimum=0)
+    if not 0 < args.max_theta <= 90:
+        raise BrdfInputError(f"--max-theta {args.max_theta:g}: must lie in (0, 90] degrees")
+    output = output_file(args.output, "-o", [args.basis])
+    basis = load_basis(args.basis)
+    bins = select_bins(basis, count, max_theta=args.max_theta, candidates=args.candidates, seed=args.seed)
+    write_directions(bin_angles_degrees(bins), output)
+    print(
+        f"wrote {output}: {count} direction pairs; condition number of the {basis.n_components} components'"
+        f" rows there {condition_number(basis, bins):.3g}"
+    )
+    return EXIT_OK
+
+
+def describe_basis(basis) -> str:
+    """One line: components, library, mapping, explained variance."""
+    import numpy as np
+
+    cumulative = np.cumsum(basis.explained)
+    shares = ", ".join(f"{100 * share:.1f}%" for share in basis.explained)
+    return (
+        f"{basis.n_components} components of {len(basis.materials)} tables ({basis.mapping} mapping);"
+        f" variance explained {shares} (together {100 * cumulative[-1]:.2f}%)"
+    )

@@ -1,0 +1,187 @@
+"""A material's coefficients fitted to samples: a ridge start in the mapped space, then Levenberg-Marquardt.
+
+In the space the basis is linear in (``mapping.py``), the material is ``m = mean + Φ c``: fitting the coefficients
+there is ridge regression, solved exactly in one step (``(ΦᵀΦ + ridge·I) c = Φᵀ(m(y) − mean)``, per channel).
+That is what the linearity buys: no search over starts, a unique optimum of the mapped problem, and a start that
+is already at the optimum when the measurements lie on the basis. The fit itself minimises the chosen loss on the
+BRDF values, ``Σ r² + ridge · Σ c²``, with Optimistix's Levenberg-Marquardt from that start: the loss and the map
+differ (a log loss on ``ln(1 + f cos θi)``, a map on ``ln(f cos θi cos θo + ε)``), and the BRDF between bins is a
+blend of its neighbours' (``basis.py``), so a few steps remain. Channels have their own coefficients and are
+solved one after another by one compiled program.
+"""
+
+from functools import partial
+
+import numpy as np
+
+from .._jax import float64, jit
+from .._lazy import jax, jnp
+from ..data.samples import Samples
+from ..errors import Argument, BrdfInputError
+from ..physics.models.params import Params
+from ..physics.models.pca import PcaModel, pca
+from ..physics.pca.basis import Corners
+from ..physics.pca.mapping import EPSILON, cosine_weight, mapped
+from .losses import Loss
+from .problem import build_problem, target_and_scale
+from .results import FitResult
+from .solve import OUTCOMES, TOLERANCES, failure_message
+
+#: A fitted coefficient this many library standard deviations from the library's mean gets a warning: the
+#: material lies outside the library, where the basis extrapolates.
+OUTSIDE_LIBRARY = 4.0
+
+
+@float64
+def fit_pca(
+    samples: Samples, model: PcaModel, loss: Loss, *, start: dict | None, max_steps: int, max_theta: float | None
+) -> FitResult:
+    """The fit of ``model``'s coefficients to ``samples`` (already selected by ``max_theta``)."""
+    problem = build_problem(samples)
+    wi, wo = np.asarray(problem.wi), np.asarray(problem.wo)
+    corners = model.basis.corners(wi, wo)
+    visible = (wi[:, 2] > 0) & (wo[:, 2] > 0) & np.asarray(problem.real)
+    empty = int(np.sum(visible & (corners.weight.sum(axis=1) == 0)))
+    corners = corners._replace(weight=corners.weight * visible[:, None])
+    target, scale = (np.broadcast_to(np.asarray(a), problem.measured.shape) for a in target_and_scale(loss, problem))
+    if "ridge_scale" not in model.model_options:  # measured on these samples, then recorded with the result
+        measured_scale = ridge_scale(model.basis.mapping, loss, problem, scale, corners)
+        model = pca(**{**model.model_options, "ridge_scale": measured_scale})
+    if start is None:
+        coefficients = ridge_start(model, corners, np.asarray(problem.measured), scale, wi, wo)
+    else:
+        coefficients = model.dictionary.to_params(start).specular
+        if coefficients.shape[1] != samples.n_channels:
+            raise BrdfInputError(
+                Argument("start"),
+                f" coefficients have {coefficients.shape[1]} channel(s) but the samples have {samples.n_channels}",
+            )
+    solve = partial(_solve_channel, loss, model.basis.mapping, max_steps)
+    device_corners = jax.device_put(corners)
+    cos_i = problem.wi[:, 2]
+    solved, outcomes, steps = [], [], []
+    for c in range(samples.n_channels):
+        value, outcome, n_steps = solve(
+            jnp.asarray(coefficients[:, c]),
+            device_corners,
+            problem.measured[:, c],
+            jnp.asarray(target[:, c]),
+            jnp.asarray(scale[:, c]),
+            cos_i,
+            jnp.asarray(np.sqrt(model.prior_weight)),
+        )
+        solved.append(np.asarray(value))
+        outcomes.append(int(outcome))
+        steps.append(int(n_steps))
+    coefficients = np.stack(solved, axis=1)
+    predicted = Corners(*(np.asarray(part) for part in corners)).brdf(model.basis.mapping, coefficients)
+    real = np.asarray(problem.real)
+    residuals = (np.asarray(loss.transform(predicted, problem.measured, problem.wi[:, 2:3])) - target) * scale
+    worst = next((outcome for outcome in outcomes if outcome != 0), 0)
+    params = Params(np.zeros(samples.n_channels), coefficients, {})
+    return FitResult(
+        model=model.name,
+        model_options=model.model_options,
+        channels=samples.channels,
+        params=model.dictionary.from_params(params),
+        loss=loss.name,
+        cost=float(np.sum(residuals[real] ** 2)),
+        rmse=float(np.sqrt(np.mean((predicted[real] - np.asarray(problem.measured)[real]) ** 2))),
+        n_samples=samples.n_samples,
+        n_steps=max(steps),
+        converged=worst == 0,
+        message="" if worst == 0 else failure_message(worst, max_steps),
+        dtype="float64",
+        warnings=pca_caveats(samples, coefficients, empty),
+        quantity=samples.provenance.quantity if samples.provenance else None,
+        max_theta=max_theta,
+    )
+
+
+def ridge_scale(mapping: str, loss: Loss, problem, scale: np.ndarray, corners: Corners) -> float:
+    """The median over the samples of ``(scale · dT/dρ · dρ/dm)²`` at the measurements: what a residual of 1 in the
+    mapped space is, squared, in the loss's units. The ridge is given in the mapped space, where the library's
+    statistics live; the fit weighs it by this against the loss's residuals."""
+    measured = np.maximum(np.asarray(problem.measured), 0.0)
+    cos_i = np.asarray(problem.wi[:, 2:3])
+    _, slope = loss.value_and_slope(jnp.asarray(measured), problem.measured, problem.wi[:, 2:3])
+    cosine = np.maximum(cosine_weight(np.asarray(problem.wi), np.asarray(problem.wo)), 1e-12)[:, None]
+    per_mapped = 1.0 if mapping == "none" else measured + EPSILON / cosine  # dρ/dm = (ρw + ε)/w
+    counted = (scale > 0) & (corners.weight.sum(axis=1) > 0)[:, None] & (cos_i > 0)
+    values = (scale * np.asarray(slope) * per_mapped)[counted] ** 2
+    return float(np.median(values)) if values.size and np.median(values) > 0 else 1.0
+
+
+def ridge_start(model: PcaModel, corners: Corners, measured, scale, wi, wo) -> np.ndarray:
+    """Coefficients (K, C) of the ridge regression in the mapped space: ``(ΦᵀWΦ + ridge·I) c = ΦᵀW(m(y) − mean)``
+    with ``Φ``, ``mean`` and the reference blended at each sample and ``W`` 1 on the samples that count."""
+    weight = corners.weight
+    features = np.einsum("nj,njk->nk", weight, corners.components)
+    mean = np.einsum("nj,nj->n", weight, corners.mean)
+    reference = np.einsum("nj,nj->n", weight, corners.reference)
+    cosine = np.maximum(cosine_weight(wi, wo), 1e-12)
+    k = features.shape[1]
+    out = np.zeros((k, measured.shape[1]))
+    for c in range(measured.shape[1]):
+        y = mapped(model.basis.mapping, measured[:, c], reference, cosine) - mean
+        w = (weight.sum(axis=1) > 0) * (scale[:, c] > 0)
+        matrix = features.T @ (w[:, None] * features) + max(model.ridge, 1e-12) * np.eye(k)  # mapped units
+        out[:, c] = np.linalg.solve(matrix, features.T @ (w * y))
+    return out
+
+
+@jit(static_argnums=(0, 1, 2))
+def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, corners, measured, target, scale, cos_i, ridge_root):
+    """Levenberg-Marquardt (Optimistix) on one channel's coefficients: residuals ``scale·(T(f) − T(y))`` and
+    ``sqrt(ridge)·c``. Returns the coefficients, the outcome's index into ``OUTCOMES`` and the steps taken."""
+    import optimistix as optx
+
+    def residuals(c, _):
+        f = corners.brdf(mapping, c[:, None])[:, 0]
+        data = (loss.transform(f, measured, cos_i) - target) * scale
+        return data, ridge_root * c
+
+    ftol, _, atol = TOLERANCES["float64"]
+    solver = optx.LevenbergMarquardt(rtol=ftol, atol=atol)
+    solution = optx.least_squares(residuals, solver, c0, max_steps=max_steps, throw=False)
+    ended = [solution.result == getattr(optx.RESULTS, name) for name in OUTCOMES]
+    outcome = jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
+    return solution.value, outcome, solution.stats["num_steps"]
+
+
+def pca_caveats(samples: Samples, coefficients: np.ndarray, empty: int) -> list[str]:
+    """What a user must know about a data-driven fit: coefficients far outside the library, samples that fall
+    where the basis holds nothing."""
+    warnings = []
+    far = np.abs(coefficients) >= OUTSIDE_LIBRARY
+    if far.any():
+        k, c = np.unravel_index(int(np.argmax(np.abs(coefficients))), coefficients.shape)
+        warnings.append(
+            f"coefficients[{k}][{samples.channels[c]}] = {coefficients[k, c]:+.2f} library standard deviations"
+            f" ({int(far.sum())} coefficient(s) beyond ±{OUTSIDE_LIBRARY:g}): the material lies outside the library,"
+            " where the basis extrapolates; raise --ridge or build the basis from a library that holds such materials"
+        )
+    if empty:
+        warnings.append(
+            f"{empty} sample(s) fall where the basis holds no value (bins no library table has): the model is 0 there"
+        )
+    return warnings
+
+
+def cross_validated(model: PcaModel, loss: Loss, result: FitResult, samples: Samples, split, max_steps: int):
+    """``compare``'s held-out loss per residual of each fold (``split``: its folds) and whether each refit converged:
+    each fold refitted from the coefficients fitted on all the samples."""
+    from ..fitting.problem import sample_residuals
+
+    losses, converged = [], []
+    for k in range(split.count):
+        held = split.held_out(k)
+        refit = fit_pca(samples.select(~held), model, loss, start=result.params, max_steps=max_steps, max_theta=None)
+        kept = samples.select(held)
+        params = model.dictionary.to_params(refit.params)
+        residuals = sample_residuals(model, loss, params, kept)
+        counted = np.ones(kept.n_samples, bool) if kept.weight is None else kept.weight > 0
+        n_held = int(counted.sum()) * kept.n_channels
+        losses.append(float(np.sum(residuals[counted] ** 2)) / n_held if n_held else float("nan"))
+        converged.append(refit.converged)
+    return losses, converged
