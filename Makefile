@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench lint format examples clean
+.PHONY: demo test test-heavy bench bench-pca lint format examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +27,13 @@ test-heavy: $(STAMP)
 # The benchmarks of issues 3 and 4 (not tests): ~30 minutes, prints a table, writes benchmarks/results/latest.{json,md}.
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+
+# The data-driven model's benchmark (issue 15): a library of 100 MERL tables (~3.5 GB, ~3 minutes, written once),
+# the basis build's time and memory, and held-out materials fitted from 20 pairs; writes benchmarks/results/pca.{json,md}.
+LIBRARY ?= $(HOME)/.cache/brdffit-library
+bench-pca: $(STAMP)
+	$(BIN)/python -m data_synth.library $(LIBRARY) --analytic 60 --mitsuba 40
+	$(BIN)/python benchmarks/pca.py $(LIBRARY)
 
 lint: $(STAMP)
 	$(BIN)/ruff format --check .

@@ -15,6 +15,9 @@ The public API::
     brdffit.corner_plot(sampled, "corner.png")
     brdffit.plots.slices([result, other], samples, path="slices.png")  # also polar, residuals, sphere
     brdffit.report(samples, path="report.html")                 # compare, fit, plot: one HTML file
+    brdffit.save_basis(brdffit.build_basis(merl_files), "basis.npz")  # a data-driven basis (docs/data-driven.md)
+    brdffit.write_directions(brdffit.choose_directions("basis.npz", 20).angles, "directions.csv")
+    result = brdffit.fit("sparse.csv", model="pca", basis="basis.npz")
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
 below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
@@ -53,12 +56,19 @@ _EXPORTS = {
     "corner_plot": ".views.corner",
     "report": ".views.report",
     "enable_compilation_cache": ".cache",
+    "build_basis": ".data.library",
+    "load_basis": ".physics.pca.basis",
+    "save_basis": ".physics.pca.basis",
+    "choose_directions": ".physics.pca.directions",
+    "read_directions": ".physics.pca.directions",
+    "write_directions": ".physics.pca.directions",
 }
 
 if TYPE_CHECKING:
     from .api import fit as fit
     from .api import fit_batch as fit_batch
     from .cache import enable_compilation_cache as enable_compilation_cache
+    from .data.library import build_basis as build_basis
     from .data.load import load_samples as load_samples
     from .data.load import save_samples as save_samples
     from .data.samples import Samples as Samples
@@ -77,6 +87,11 @@ if TYPE_CHECKING:
     from .physics.models import MODELS as MODELS
     from .physics.models import Model as Model
     from .physics.models import get_model as get_model
+    from .physics.pca.basis import load_basis as load_basis
+    from .physics.pca.basis import save_basis as save_basis
+    from .physics.pca.directions import choose_directions as choose_directions
+    from .physics.pca.directions import read_directions as read_directions
+    from .physics.pca.directions import write_directions as write_directions
     from .uncertainty.laplace import laplace_uncertainty as laplace_uncertainty
     from .uncertainty.mcmc import MCMC as MCMC
     from .uncertainty.mcmc import sample_posterior as sample_posterior

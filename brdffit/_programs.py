@@ -12,8 +12,8 @@ the compilation cache answers.
 A stored program belongs to this brdffit source (every ``.py`` file of the package is hashed), this JAX and
 jaxlib, this backend and device kind: a change of any of them gives new signatures, and stale files are never
 read. Programs are stored only while the compilation cache is on, in its folder's ``programs/``. A call that
-cannot be stored (a static argument whose repr is an address, an argument that is not an array, keyword
-arguments, a program ``jax.export`` refuses) is compiled by ``jax.jit`` as before.
+cannot be stored (a static argument whose repr is an address or that says ``storable = False``, an argument that
+is not an array, keyword arguments, a program ``jax.export`` refuses) is compiled by ``jax.jit`` as before.
 """
 
 import hashlib
@@ -72,7 +72,10 @@ def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
 
 def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str | None:
     """The hex digest that names the program of ``name`` called with ``args``; None if the call cannot be stored."""
-    statics = [repr(args[index]) for index in static_argnums if index < len(args)]
+    static_args = [args[index] for index in static_argnums if index < len(args)]
+    if any(getattr(arg, "storable", True) is False for arg in static_args):  # its programs call back into Python
+        return None
+    statics = [repr(arg) for arg in static_args]
     if any(" at 0x" in text for text in [name, *statics]):  # an object whose repr is its address: no identity
         return None
     leaves, tree = jax.tree.flatten(dynamic_arguments(args, static_argnums))

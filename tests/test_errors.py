@@ -36,7 +36,7 @@ def samples():
         (
             dict(max_step=3),
             "max_step is not an argument of the fit, nor an option of any model"
-            " (distribution, fresnel, lobes, shadowing)",
+            " (basis, basis_sha256, distribution, fresnel, lobes, ridge, ridge_scale, shadowing)",
         ),
         (
             dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)),

@@ -17,6 +17,7 @@ from ..errors import Argument, BrdfInputError
 #: Flags whose name is not the argument's with ``_`` as ``-`` (``max_theta`` → ``--max-theta``).
 FLAGS = {
     "n_starts": "--starts",
+    "n": "-n",  # brdffit basis directions
     # brdffit plot's positional files and its -o
     "results": "RESULT",
     "result": "RESULT",

@@ -94,22 +94,16 @@ def _build(args: argparse.Namespace) -> int:
 
 
 def _directions(args: argparse.Namespace) -> int:
-    from ..checks import whole_number
     from ..physics.pca.basis import load_basis
-    from ..physics.pca.directions import bin_angles_degrees, condition_number, select_bins, write_directions
+    from ..physics.pca.directions import choose_directions, write_directions
 
-    count = whole_number("n", args.n)
-    whole_number("candidates", args.candidates)
-    whole_number("seed", args.seed, minimum=0)
-    if not 0 < args.max_theta <= 90:
-        raise BrdfInputError(f"--max-theta {args.max_theta:g}: must lie in (0, 90] degrees")
     output = output_file(args.output, "-o", [args.basis])
     basis = load_basis(args.basis)
-    bins = select_bins(basis, count, max_theta=args.max_theta, candidates=args.candidates, seed=args.seed)
-    write_directions(bin_angles_degrees(bins), output)
+    chosen = choose_directions(basis, args.n, max_theta=args.max_theta, candidates=args.candidates, seed=args.seed)
+    write_directions(chosen.angles, output)
     print(
-        f"wrote {output}: {count} direction pairs; condition number of the {basis.n_components} components'"
-        f" rows there {condition_number(basis, bins):.3g}"
+        f"wrote {output}: {args.n} direction pairs; condition number of the {basis.n_components} components'"
+        f" rows there {chosen.condition:.3g}"
     )
     return EXIT_OK
 

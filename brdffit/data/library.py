@@ -10,7 +10,7 @@ principal direction is ``Xᵀ v_k / sqrt(λ_k)``. Two passes over the files, bin
    variance.
 
 It is exact (no randomised truncation) and its memory is ``M`` vectors of one block plus the output, whatever the
-library's size: 100 MERL tables are 3.5 GB of files, read through memory maps. A bin that a table lacks
+library's size: 100 MERL tables are 3.5 GB of files, read one block of bins at a time. A bin that a table lacks
 (stored value < 0) takes the library's median there; a bin that every table lacks, or that lies below the
 horizon, is *empty* and takes no weight when the basis is interpolated.
 """
@@ -23,11 +23,11 @@ import numpy as np
 from ..errors import Argument, BrdfInputError
 from ..physics.pca.basis import Basis, bin_cosine_weights, horizon_filled
 from ..physics.pca.mapping import MAPPINGS, mapped
-from .merl import N_BINS, SCALES, stored_planes
+from .merl import N_BINS, SCALES, stored_block, stored_planes
 
 #: Bins per block: 2¹⁴ bins × 300 library vectors × 8 bytes is 39 MB per array.
 BLOCK = 2**14
-DEFAULT_COMPONENTS = 8
+DEFAULT_COMPONENTS = 16
 
 
 def build_basis(
@@ -43,21 +43,22 @@ def build_basis(
     or option."""
     if mapping not in MAPPINGS:
         raise BrdfInputError(Argument("mapping", mapping), f" is not a mapping; choose one of: {', '.join(MAPPINGS)}")
-    planes = [stored_planes(path) for path in paths]  # checks every file before any work
-    n_vectors = 3 * len(planes)
+    for path in paths:  # every file checked before any work
+        stored_planes(path)
+    n_vectors = 3 * len(paths)
     if isinstance(components, bool) or not isinstance(components, int | np.integer) or components < 1:
         raise BrdfInputError(Argument("components", components), " must be a whole number ≥ 1")
     if n_vectors < 2 or components > n_vectors - 1:
         raise BrdfInputError(
             Argument("components", components),
-            f": {len(planes)} table(s) give {n_vectors} library vectors, which have at most {max(n_vectors - 1, 0)}"
+            f": {len(paths)} table(s) give {n_vectors} library vectors, which have at most {max(n_vectors - 1, 0)}"
             " principal components; give fewer components or more tables",
         )
     progress = progress or (lambda done: None)
     reference, mean, filled = np.zeros(N_BINS), np.zeros(N_BINS), horizon_filled().copy()
     gram = np.zeros((n_vectors, n_vectors))
     for block in _blocks():
-        rho = _library_block(planes, block)
+        rho = _library_block(paths, block)
         present = ~np.isnan(rho)
         filled[block] &= present.any(axis=0)
         reference[block] = _median(rho, present)
@@ -69,7 +70,7 @@ def build_basis(
     eigenvalues, vectors = np.maximum(eigenvalues[order], 0.0), vectors[:, order[:components]]
     kept = np.zeros((components, N_BINS), np.float32)
     for block in _blocks():
-        rho = _library_block(planes, block)
+        rho = _library_block(paths, block)
         centred = _centred(mapping, rho, reference[block], block, filled[block], mean, known_mean=True)
         kept[:, block] = (vectors.T @ centred) / np.sqrt(n_vectors - 1)
         progress(block.stop - block.start)
@@ -89,9 +90,9 @@ def _blocks():
     return (slice(start, min(start + BLOCK, N_BINS)) for start in range(0, N_BINS, BLOCK))
 
 
-def _library_block(planes: list[np.ndarray], block: slice) -> np.ndarray:
+def _library_block(paths, block: slice) -> np.ndarray:
     """BRDF values (M, bins of the block) in 1/sr of every table's channels; NaN where a table lacks the bin."""
-    rho = np.concatenate([np.asarray(plane[:, block], dtype=np.float64) * SCALES[:, None] for plane in planes])
+    rho = np.concatenate([stored_block(path, block.start, block.stop) * SCALES[:, None] for path in paths])
     rho[~(rho >= 0) | ~np.isfinite(rho)] = np.nan
     return rho
 

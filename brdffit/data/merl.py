@@ -133,6 +133,18 @@ def stored_planes(path: str | os.PathLike) -> np.ndarray:
         return np.memmap(handle, dtype="<f8", mode="r", offset=HEADER_BYTES, shape=(3, N_BINS))
 
 
+def stored_block(path: str | os.PathLike, start: int, stop: int) -> np.ndarray:
+    """The stored numbers (3, stop − start) of bins ``start:stop`` of a MERL file checked by :func:`stored_planes`,
+    read, not mapped: a library of many tables read block by block keeps only the block in memory."""
+    count = stop - start
+    block = np.empty((3, count))
+    with reading(path, "a MERL file"), open(path, "rb") as handle:
+        for plane in range(3):
+            handle.seek(HEADER_BYTES + (plane * N_BINS + start) * 8)
+            block[plane] = np.fromfile(handle, dtype="<f8", count=count)
+    return block
+
+
 def _subsample(index: np.ndarray, count: int, method: str, seed: int, source: str) -> np.ndarray:
     """Positions in ``index`` (the valid bins, sorted, file order) of ``count`` of them, drawn with
     ``default_rng(seed)``, in file order."""

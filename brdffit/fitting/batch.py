@@ -28,7 +28,8 @@ from ..physics.models import Model
 from .buckets import batches, bucket_key, default_strategy, solve_bucket
 from .caveats import albedo_screens
 from .defaults import MAX_STEPS, N_STARTS
-from .fit import checked, final_params, fit_one, result_of, start_vector
+from .fit import checked, fit_one, start_vector
+from .outcome import final_params, result_of
 from .results import FitResult
 
 STRATEGIES = ("auto", "loop", "vmap")

@@ -16,15 +16,15 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
-from ..physics.models import MODELS, Model, Params, get_model, model_option_names
+from ..physics.models import MODELS, Model, get_model, model_option_names
 from .buckets import compile_in_background, default_strategy, solve_bucket
-from .caveats import caveats
 from .defaults import MAX_STEPS, N_STARTS
 from .lobes import lobe_by_lobe
 from .losses import Loss, get_loss
+from .outcome import result_of
 from .problem import DTYPES, Problem, build_problem
 from .results import FitResult
-from .solve import Solved, best, compiled_solver, failure_message
+from .solve import best, compiled_solver
 from .starts import search_subset
 
 
@@ -137,47 +137,3 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
                         f" (≤ {domain.plausible[1]:g}), where a fit cannot move; give at most {limit:g}",
                     )
     return model.unconstrained.from_params(params)
-
-
-def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
-    """A solve's parameters (numpy), each moved onto its domain where the solver's coordinates reached its edge
-    only in the limit."""
-    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
-    domains = model.physical.domains(n_channels)
-    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
-    return model.physical.to_params(inside, n_channels)
-
-
-def result_of(
-    model: Model,
-    loss: Loss,
-    samples: Samples,
-    solved: Solved,
-    max_steps: int,
-    dtype: str,
-    fewer_lobes_cost: float | None = None,
-    max_theta: float | None = None,
-    albedo_open: tuple[float, ...] | None = None,
-) -> FitResult:
-    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``); ``samples`` are those fitted, selected
-    by ``max_theta``. ``albedo_open``: the incidences the albedo screen left open, when the caller screened many fits
-    at once (``caveats.albedo_screens``)."""
-    converged = bool(solved.converged)
-    params = final_params(model, solved, samples.n_channels)
-    return FitResult(
-        model=model.name,
-        model_options=model.model_options,
-        channels=samples.channels,
-        params=model.dictionary.from_params(params),
-        loss=loss.name,
-        cost=float(solved.cost),
-        rmse=float(solved.rmse),
-        n_samples=samples.n_samples,
-        n_steps=int(solved.n_steps),
-        converged=converged,
-        message="" if converged else failure_message(int(solved.result), max_steps),
-        dtype=dtype,
-        warnings=caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, albedo_open=albedo_open),
-        quantity=samples.provenance.quantity if samples.provenance else None,
-        max_theta=max_theta,
-    )

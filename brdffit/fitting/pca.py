@@ -23,9 +23,10 @@ from ..physics.models.pca import PcaModel, pca
 from ..physics.pca.basis import Corners
 from ..physics.pca.mapping import EPSILON, cosine_weight, mapped
 from .losses import Loss
+from .outcome import result_of
 from .problem import build_problem, target_and_scale
 from .results import FitResult
-from .solve import OUTCOMES, TOLERANCES, failure_message
+from .solve import OUTCOMES, TOLERANCES, Solved
 
 #: A fitted coefficient this many library standard deviations from the library's mean gets a warning: the
 #: material lies outside the library, where the basis extrapolates.
@@ -79,23 +80,17 @@ def fit_pca(
     residuals = (np.asarray(loss.transform(predicted, problem.measured, problem.wi[:, 2:3])) - target) * scale
     worst = next((outcome for outcome in outcomes if outcome != 0), 0)
     params = Params(np.zeros(samples.n_channels), coefficients, {})
-    return FitResult(
-        model=model.name,
-        model_options=model.model_options,
-        channels=samples.channels,
-        params=model.dictionary.from_params(params),
-        loss=loss.name,
+    solved = Solved(
+        theta=model.unconstrained.from_params(params),
         cost=float(np.sum(residuals[real] ** 2)),
-        rmse=float(np.sqrt(np.mean((predicted[real] - np.asarray(problem.measured)[real]) ** 2))),
-        n_samples=samples.n_samples,
         n_steps=max(steps),
+        result=worst,
         converged=worst == 0,
-        message="" if worst == 0 else failure_message(worst, max_steps),
-        dtype="float64",
-        warnings=pca_caveats(samples, coefficients, empty),
-        quantity=samples.provenance.quantity if samples.provenance else None,
-        max_theta=max_theta,
+        params=params,
+        rmse=float(np.sqrt(np.mean((predicted[real] - np.asarray(problem.measured)[real]) ** 2))),
     )
+    more = pca_caveats(samples, coefficients, empty)
+    return result_of(model, loss, samples, solved, max_steps, "float64", max_theta=max_theta, more_caveats=more)
 
 
 def ridge_scale(mapping: str, loss: Loss, problem, scale: np.ndarray, corners: Corners) -> float:
@@ -134,6 +129,7 @@ def ridge_start(model: PcaModel, corners: Corners, measured, scale, wi, wo) -> n
 def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, corners, measured, target, scale, cos_i, ridge_root):
     """Levenberg-Marquardt (Optimistix) on one channel's coefficients: residuals ``scale·(T(f) − T(y))`` and
     ``sqrt(ridge)·c``. Returns the coefficients, the outcome's index into ``OUTCOMES`` and the steps taken."""
+    import lineax as lx
     import optimistix as optx
 
     def residuals(c, _):
@@ -141,8 +137,12 @@ def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, corners, measur
         data = (loss.transform(f, measured, cos_i) - target) * scale
         return data, ridge_root * c
 
-    ftol, _, atol = TOLERANCES["float64"]
-    solver = optx.LevenbergMarquardt(rtol=ftol, atol=atol)
+    # Coefficients are in library standard deviations: 1e-8 of one is far below any fit's error, and tighter
+    # (the other models' 1e-10 on the cost) cost a MERL-size fit 30 creeping steps of a residual that is not small.
+    _, rtol, atol = TOLERANCES["float64"]
+    # K coefficients, N samples: the normal equations (K × K, Cholesky) cost a pass over the Jacobian, where a QR
+    # of the (N + K) × K augmented matrix cost several (a MERL-size fit: ~3× slower).
+    solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol, linear_solver=lx.Normal(lx.Cholesky()))
     solution = optx.least_squares(residuals, solver, c0, max_steps=max_steps, throw=False)
     ended = [solution.result == getattr(optx.RESULTS, name) for name in OUTCOMES]
     outcome = jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))

@@ -87,6 +87,9 @@ class PcaModel(Model):
     #: Evaluated on the host by :func:`brdffit.evaluate` (block by block: a table's interpolation does not fit
     #: in one program's memory).
     on_host: ClassVar[bool] = True
+    #: Its programs call the host for the basis (a callback), which a program stored on disk (``_programs.py``)
+    #: cannot carry to another process, nor run outside float64: they are compiled in each process instead.
+    storable: ClassVar[bool] = False
 
     @property
     def ridge(self) -> float:
@@ -99,19 +102,24 @@ class PcaModel(Model):
     # ------------------------------------------------------------------ evaluation
     def brdf(self, params: Params, wi, wo):
         """BRDF values (N, C) in 1/sr (JAX); the basis is interpolated on the host (a callback) and combined with
-        the coefficients in JAX, so derivatives with respect to the coefficients are exact."""
+        the coefficients in JAX, so derivatives with respect to the coefficients are exact.
+
+        The callback hands its float64 arrays over as pairs of float32 (``x = hi + lo`` to ~1e-14): XLA may run a
+        callback on a thread of its own, where JAX's float64 switch is off and a float64 result would be refused."""
         from ..pca.basis import Corners
 
         wi, wo = jnp.asarray(wi), jnp.asarray(wo)
         visible, wi, wo = above_horizon(wi, wo)
         n, k = wi.shape[0], self.n_components
-        shapes = Corners(*(jax.ShapeDtypeStruct(shape, wi.dtype) for shape in _corner_shapes(n, k)))
+        shapes = [jax.ShapeDtypeStruct(shape, jnp.float32) for shape in _split_shapes(n, k)]
 
         def on_host(wi, wo):
             corners = self.basis.corners(np.asarray(wi, np.float64), np.asarray(wo, np.float64))
-            return Corners(*(np.asarray(part, dtype=wi.dtype) for part in corners))
+            return [*(half for part in corners[:4] for half in _split(part)), corners.components.astype(np.float32)]
 
-        corners = jax.pure_callback(on_host, shapes, wi, wo, vmap_method="sequential")
+        parts = jax.pure_callback(on_host, shapes, wi, wo, vmap_method="sequential")
+        joined = [parts[2 * i].astype(wi.dtype) + parts[2 * i + 1].astype(wi.dtype) for i in range(4)]
+        corners = Corners(*joined, parts[8].astype(wi.dtype))
         values = corners.brdf(self.basis.mapping, jnp.asarray(params.specular, wi.dtype))
         return jnp.where(visible[:, None], values, 0.0)
 
@@ -146,8 +154,15 @@ class PcaModel(Model):
         return CoefficientVector(self)
 
 
-def _corner_shapes(n: int, k: int) -> list[tuple[int, ...]]:
-    return [(n, 8), (n, 8), (n, 8), (n, 8), (n, 8, k)]
+def _split_shapes(n: int, k: int) -> list[tuple[int, ...]]:
+    """The callback's results: weight, mean, reference and cosine, each as two halves (n, 8); components (n, 8, k)."""
+    return [(n, 8)] * 8 + [(n, 8, k)]
+
+
+def _split(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """float64 ``x`` as float32 ``hi``, ``lo`` with ``hi + lo = x`` to float64's precision (~1e-14 relative)."""
+    hi = x.astype(np.float32)
+    return hi, (x - hi.astype(np.float64)).astype(np.float32)
 
 
 @dataclass(frozen=True)

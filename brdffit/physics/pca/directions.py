@@ -17,6 +17,7 @@ import csv
 import io
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -70,6 +71,38 @@ def select_bins(
         chosen.append(best)
         available[best] = False
     return pool[chosen]
+
+
+def choose_directions(
+    basis: "Basis | str | os.PathLike",
+    n: int = 20,
+    *,
+    max_theta: float = MAX_THETA,
+    candidates: int = CANDIDATES,
+    seed: int = 0,
+) -> "Chosen":
+    """The ``n`` pairs that best condition a coefficient fit (:func:`select_bins`): their angles (n, 4) in degrees,
+    ``theta_i, phi_i, theta_o, phi_o`` (what :func:`write_directions` writes), and the condition number there;
+    ``basis`` a :class:`Basis` or its file."""
+    from ...checks import whole_number
+    from .basis import load_basis
+
+    if not isinstance(basis, Basis):
+        basis = load_basis(basis)
+    whole_number("n", n)
+    whole_number("candidates", candidates)
+    whole_number("seed", seed, minimum=0)
+    if not 0 < max_theta <= 90:
+        raise BrdfInputError(Argument("max_theta", f"{max_theta:g}"), ": must lie in (0, 90] degrees")
+    bins = select_bins(basis, n, max_theta=max_theta, candidates=candidates, seed=seed)
+    return Chosen(bin_angles_degrees(bins), condition_number(basis, bins))
+
+
+class Chosen(NamedTuple):
+    """Pairs chosen to measure: ``angles`` (n, 4) in degrees and the ``condition`` number of the fit there."""
+
+    angles: np.ndarray
+    condition: float
 
 
 def condition_number(basis: Basis, bins: np.ndarray) -> float:

@@ -1,0 +1,65 @@
+"""A solve as a :class:`FitResult`: its parameters moved onto their domains, its caveats, how it ended.
+
+Every fit ends here, whichever way it was solved: one dataset (``fit.py``), a bucket of many (``batch.py``), the
+data-driven model's own solve (``pca.py``).
+"""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._lazy import jax
+from ..data.samples import Samples
+from ..physics.models import Model, Params
+from .caveats import caveats
+from .losses import Loss
+from .results import FitResult
+from .solve import Solved, failure_message
+
+
+def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
+    """A solve's parameters (numpy), each moved onto its domain where the solver's coordinates reached its edge
+    only in the limit."""
+    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
+    domains = model.physical.domains(n_channels)
+    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
+    return model.physical.to_params(inside, n_channels)
+
+
+def result_of(
+    model: Model,
+    loss: Loss,
+    samples: Samples,
+    solved: Solved,
+    max_steps: int,
+    dtype: str,
+    fewer_lobes_cost: float | None = None,
+    max_theta: float | None = None,
+    albedo_open: tuple[float, ...] | None = None,
+    more_caveats: Sequence[str] = (),
+) -> FitResult:
+    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
+    ``samples`` are those fitted, selected by ``max_theta``. ``albedo_open``: the incidences the albedo screen left
+    open, when the caller screened many fits at once (``caveats.albedo_screens``)."""
+    converged = bool(solved.converged)
+    params = final_params(model, solved, samples.n_channels)
+    return FitResult(
+        model=model.name,
+        model_options=model.model_options,
+        channels=samples.channels,
+        params=model.dictionary.from_params(params),
+        loss=loss.name,
+        cost=float(solved.cost),
+        rmse=float(solved.rmse),
+        n_samples=samples.n_samples,
+        n_steps=int(solved.n_steps),
+        converged=converged,
+        message="" if converged else failure_message(int(solved.result), max_steps),
+        dtype=dtype,
+        warnings=[
+            *caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, albedo_open=albedo_open),
+            *more_caveats,
+        ],
+        quantity=samples.provenance.quantity if samples.provenance else None,
+        max_theta=max_theta,
+    )
