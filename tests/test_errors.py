@@ -36,7 +36,7 @@ def samples():
         (
             dict(max_step=3),
             "max_step is not an argument of the fit, nor an option of any model"
-            " (basis, basis_sha256, distribution, fresnel, lobes, ridge, ridge_scale, shadowing)",
+            " (basis, distribution, fresnel, lobes, ridge, shadowing)",
         ),
         (
             dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)),

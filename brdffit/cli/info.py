@@ -15,7 +15,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..data.summary import describe
 
-    if args.input.endswith(".npz"):
+    if is_basis_file(args.input):
         from ..physics.pca.basis import load_basis
         from .basis import describe_basis
 
@@ -26,3 +26,14 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_OK
     print(describe(load(args.input, args)))
     return EXIT_OK
+
+
+def is_basis_file(path: str) -> bool:
+    """Whether ``path`` is a zip archive (an ``.npz``) holding a basis's ``kind``: sniffed, whatever its name."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "kind.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False

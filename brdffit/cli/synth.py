@@ -15,9 +15,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON"
     )
-    parser.add_argument(
-        "--geometry", default="hemisphere", metavar="NAME", help=f"{', '.join(GEOMETRIES)} (default hemisphere)"
-    )
+    parser.add_argument("--geometry", metavar="NAME", help=f"{', '.join(GEOMETRIES)} (default hemisphere)")
     parser.add_argument(
         "--directions",
         metavar="CSV",
@@ -64,29 +62,31 @@ def run(args: argparse.Namespace) -> int:
 
     enable_compilation_cache()
     model, params, channels = _model_and_params(args)
-    if args.geometry not in GEOMETRIES:
-        raise BrdfInputError(f"--geometry {args.geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
-    make_geometry = GEOMETRIES[args.geometry]
-    accepted = inspect.signature(make_geometry).parameters
+    inputs = [args.params] if not args.params.lstrip().startswith("{") else []
     given = {
         name: getattr(args, name)
         for name in ("n_incident", "n_theta", "n_phi", "n_samples", "spread")
         if getattr(args, name) is not None
     }
-    for name in given:
-        if name not in accepted:
-            raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {args.geometry}")
-    if "seed" in accepted:
-        given["seed"] = args.seed
-    inputs = [args.params] if not args.params.lstrip().startswith("{") else []
-    if args.directions is not None:
+    if args.directions is not None:  # the file gives the pairs; --seed still draws the noise
         from ..physics.pca.directions import read_directions
 
-        if given:
-            raise BrdfInputError(f"--{next(iter(given)).replace('_', '-')} does not apply to --directions")
+        if given or args.geometry is not None:
+            what = "geometry" if args.geometry is not None else next(iter(given)).replace("_", "-")
+            raise BrdfInputError(f"--{what} does not apply to --directions (the file gives the pairs)")
         output = output_file(args.output, "-o", [*inputs, args.directions])
         wi, wo = read_directions(args.directions)
     else:
+        geometry = "hemisphere" if args.geometry is None else args.geometry
+        if geometry not in GEOMETRIES:
+            raise BrdfInputError(f"--geometry {geometry!r} is not known; choose one of: {', '.join(GEOMETRIES)}")
+        make_geometry = GEOMETRIES[geometry]
+        accepted = inspect.signature(make_geometry).parameters
+        for name in given:
+            if name not in accepted:
+                raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {geometry}")
+        if "seed" in accepted:
+            given["seed"] = args.seed
         output = output_file(args.output, "-o", inputs)
         wi, wo = make_geometry(**given)
     samples = synthesize(

@@ -28,6 +28,9 @@ from .merl import N_BINS, SCALES, stored_block, stored_planes
 #: Bins per block: 2¹⁴ bins × 300 library vectors × 8 bytes is 39 MB per array.
 BLOCK = 2**14
 DEFAULT_COMPONENTS = 16
+#: A component whose variance is below this fraction of the first's carries rounding only (float64's ~1e-16,
+#: squared by the Gram matrix to ~1e-12 of the largest eigenvalue's scale).
+RANK_TOLERANCE = 1e-10
 
 
 def build_basis(
@@ -68,6 +71,13 @@ def build_basis(
     eigenvalues, vectors = np.linalg.eigh(gram)
     order = np.argsort(eigenvalues)[::-1]
     eigenvalues, vectors = np.maximum(eigenvalues[order], 0.0), vectors[:, order[:components]]
+    rank = int(np.sum(eigenvalues > RANK_TOLERANCE * eigenvalues[0]))
+    if components > rank:  # a component of no variance is noise of rounding: it would mislead the directions
+        raise BrdfInputError(
+            Argument("components", components),
+            f": the library's tables span only {rank} direction(s) (grey tables, or tables repeated);"
+            f" keep at most {rank} components, or add other tables",
+        )
     kept = np.zeros((components, N_BINS), np.float32)
     for block in _blocks():
         rho = _library_block(paths, block)

@@ -72,10 +72,10 @@ def fit_many(
     bar = progress_bar(len(samples), progress)
     try:
         for unit in work_units(built, kept, [vector is not None for vector in vectors]):
-            if built.on_host or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
+            if built.own_fit or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
                 (index,) = unit.indices
                 one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
-                given = starts[index] if built.on_host else None
+                given = starts[index] if built.own_fit else None
                 results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **one)
             else:
                 thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
@@ -117,7 +117,7 @@ def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) 
         groups.setdefault((bucket_key(one), has_start), []).append(index)
     units = []
     for (key, has_start), indices in groups.items():
-        if model.on_host or (model.n_lobes > 1 and not has_start):
+        if model.own_fit or (model.n_lobes > 1 and not has_start):
             units += [WorkUnit([index], False) for index in indices]
         else:
             units += [WorkUnit(batch, has_start) for batch in batches(indices, key.padded_size)]

@@ -37,13 +37,13 @@ from ..data.load import as_samples
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.fresnel import FRESNEL
-from ..physics.models import Model
+from ..physics.models import Model, get_model
 from ..physics.models.specs import model_of_spec, spec_of
 from .defaults import MAX_STEPS, N_STARTS
 from .fit import fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
-from .problem import Problem, build_problem, cost, residuals
+from .problem import Problem, build_problem, cost, residuals, sample_residuals
 from .results import FitResult, json_text, read_json_object
 from .solve import compiled_solver
 
@@ -302,22 +302,29 @@ def _cross_validated(
 ) -> tuple[list[float], list[bool]]:
     """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples, and
     whether each refit converged."""
-    if model.on_host:  # the data-driven model refits by its own solve
-        from .pca import cross_validated
-
-        return cross_validated(model, loss, result, samples, split, max_steps)
-    solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
-    held_out_cost = _held_out_cost(model, loss)
-    theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
     counted = np.ones(samples.n_samples, bool) if samples.weight is None else samples.weight > 0
+    if model.own_fit:  # the data-driven model refits by its own solve, with the prior of the fit to all samples
+        refit_model = get_model(result.model, **result.model_options)
+        held_out_cost = None
+    else:
+        solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
+        held_out_cost = _held_out_cost(model, loss)
+        theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
     losses, converged = [], []
     for k in range(split.count):
         held = split.held_out(k)
         n_held = int(np.sum(held & counted)) * samples.n_channels
-        fitted = solve(theta0, problem._replace(real=_rows(~held, problem)))
-        total = held_out_cost(fitted.theta, problem._replace(real=_rows(held, problem)))
+        if held_out_cost is None:
+            refit = fit_one(samples.select(~held), refit_model, loss, start=result.params, max_steps=max_steps)
+            params = refit_model.dictionary.to_params(refit.params)
+            total = np.sum(sample_residuals(refit_model, loss, params, samples.select(held))[counted[held]] ** 2)
+            fold_converged = refit.converged
+        else:
+            fitted = solve(theta0, problem._replace(real=_rows(~held, problem)))
+            total = held_out_cost(fitted.theta, problem._replace(real=_rows(held, problem)))
+            fold_converged = bool(fitted.converged)
         losses.append(float(total) / n_held if n_held else math.nan)
-        converged.append(bool(fitted.converged))
+        converged.append(fold_converged)
     return losses, converged
 
 

@@ -17,6 +17,7 @@ from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
 from ..physics.models import MODELS, Model, get_model, model_option_names
+from ..physics.models.specs import RECORDED_ONLY
 from .buckets import compile_in_background, default_strategy, solve_bucket
 from .defaults import MAX_STEPS, N_STARTS
 from .lobes import lobe_by_lobe
@@ -46,9 +47,11 @@ def fit_one(
     model, loss, samples = checked(samples, model, loss, max_theta, dtype, **model_options)
     n_starts = whole_number("n_starts", n_starts)
     max_steps = whole_number("max_steps", max_steps)
-    if model.on_host:  # the data-driven model: a ridge start and its own solve (``pca/fit.py``)
+    if model.own_fit:  # the data-driven model: a ridge start and its own solve (``pca.py``)
         from .pca import fit_pca
 
+        if dtype != "float64":
+            raise BrdfInputError(Argument("dtype", dtype), f" does not apply to model {model.name}; it fits in float64")
         return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
     if start is None and model.n_lobes > 1:
         solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed)
@@ -96,7 +99,7 @@ def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Mo
     choice("dtype", dtype, DTYPES)
     samples = samples.within(max_theta)
     n_parameters = model.unconstrained.size(samples.n_channels)
-    if samples.values.size < n_parameters and model.prior_residuals(np.zeros(n_parameters)) is None:
+    if samples.values.size < n_parameters and not model.prior_weight > 0:  # a prior determines what data cannot
         raise BrdfInputError(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
             f" the {n_parameters} parameters of {model.name}; give at least {n_parameters} values"
@@ -109,9 +112,9 @@ def _check_option_names(options: dict[str, Any]) -> None:
     known = {name for each in MODELS for name in model_option_names(each)}
     for key in options:
         if key not in known:
+            listed = ", ".join(sorted(known - RECORDED_ONLY))  # a result's recorded options are taken, not offered
             raise BrdfInputError(
-                Argument(key),
-                f" is not an argument of the fit, nor an option of any model ({', '.join(sorted(known))})",
+                Argument(key), f" is not an argument of the fit, nor an option of any model ({listed})"
             )
 
 

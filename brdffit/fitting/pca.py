@@ -20,14 +20,17 @@ from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.models.params import Params
 from ..physics.models.pca import PcaModel, pca
-from ..physics.pca.basis import Corners
+from ..physics.pca.basis import Corners, visible_pairs
 from ..physics.pca.mapping import EPSILON, cosine_weight, mapped
 from .losses import Loss
 from .outcome import result_of
 from .problem import build_problem, target_and_scale
 from .results import FitResult
-from .solve import OUTCOMES, TOLERANCES, Solved
+from .solve import OUTCOMES, Solved
 
+#: The solve stops when a step moves the coefficients by less than this (relative and absolute, optimistix's
+#: Cauchy test): coefficients are in library standard deviations, and 1e-8 of one is far below any fit's error.
+COEFFICIENT_TOLERANCE = 1e-8
 #: A fitted coefficient this many library standard deviations from the library's mean gets a warning: the
 #: material lies outside the library, where the basis extrapolates.
 OUTSIDE_LIBRARY = 4.0
@@ -41,7 +44,7 @@ def fit_pca(
     problem = build_problem(samples)
     wi, wo = np.asarray(problem.wi), np.asarray(problem.wo)
     corners = model.basis.corners(wi, wo)
-    visible = (wi[:, 2] > 0) & (wo[:, 2] > 0) & np.asarray(problem.real)
+    visible = visible_pairs(wi, wo) & np.asarray(problem.real)
     empty = int(np.sum(visible & (corners.weight.sum(axis=1) == 0)))
     corners = corners._replace(weight=corners.weight * visible[:, None])
     target, scale = (np.broadcast_to(np.asarray(a), problem.measured.shape) for a in target_and_scale(loss, problem))
@@ -78,14 +81,14 @@ def fit_pca(
     predicted = Corners(*(np.asarray(part) for part in corners)).brdf(model.basis.mapping, coefficients)
     real = np.asarray(problem.real)
     residuals = (np.asarray(loss.transform(predicted, problem.measured, problem.wi[:, 2:3])) - target) * scale
-    worst = next((outcome for outcome in outcomes if outcome != 0), 0)
+    failed = next((outcome for outcome in outcomes if outcome != 0), 0)  # the first channel that did not converge
     params = Params(np.zeros(samples.n_channels), coefficients, {})
     solved = Solved(
         theta=model.unconstrained.from_params(params),
         cost=float(np.sum(residuals[real] ** 2)),
         n_steps=max(steps),
-        result=worst,
-        converged=worst == 0,
+        result=failed,
+        converged=failed == 0,
         params=params,
         rmse=float(np.sqrt(np.mean((predicted[real] - np.asarray(problem.measured)[real]) ** 2))),
     )
@@ -137,9 +140,7 @@ def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, corners, measur
         data = (loss.transform(f, measured, cos_i) - target) * scale
         return data, ridge_root * c
 
-    # Coefficients are in library standard deviations: 1e-8 of one is far below any fit's error, and tighter
-    # (the other models' 1e-10 on the cost) cost a MERL-size fit 30 creeping steps of a residual that is not small.
-    _, rtol, atol = TOLERANCES["float64"]
+    rtol = atol = COEFFICIENT_TOLERANCE
     # K coefficients, N samples: the normal equations (K × K, Cholesky) cost a pass over the Jacobian, where a QR
     # of the (N + K) × K augmented matrix cost several (a MERL-size fit: ~3× slower).
     solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol, linear_solver=lx.Normal(lx.Cholesky()))
@@ -166,22 +167,3 @@ def pca_caveats(samples: Samples, coefficients: np.ndarray, empty: int) -> list[
             f"{empty} sample(s) fall where the basis holds no value (bins no library table has): the model is 0 there"
         )
     return warnings
-
-
-def cross_validated(model: PcaModel, loss: Loss, result: FitResult, samples: Samples, split, max_steps: int):
-    """``compare``'s held-out loss per residual of each fold (``split``: its folds) and whether each refit converged:
-    each fold refitted from the coefficients fitted on all the samples."""
-    from ..fitting.problem import sample_residuals
-
-    losses, converged = [], []
-    for k in range(split.count):
-        held = split.held_out(k)
-        refit = fit_pca(samples.select(~held), model, loss, start=result.params, max_steps=max_steps, max_theta=None)
-        kept = samples.select(held)
-        params = model.dictionary.to_params(refit.params)
-        residuals = sample_residuals(model, loss, params, kept)
-        counted = np.ones(kept.n_samples, bool) if kept.weight is None else kept.weight > 0
-        n_held = int(counted.sum()) * kept.n_channels
-        losses.append(float(np.sum(residuals[counted] ** 2)) / n_held if n_held else float("nan"))
-        converged.append(refit.converged)
-    return losses, converged

@@ -13,6 +13,10 @@ deviation ``s`` (a nuisance parameter)::
 
     ln L = -½ Σ r² / s² - n ln s            (n: fitted values, samples × channels)
 
+A model whose fit includes a prior (the data-driven model's ridge, ``Model.prior_weight = W``) adds
+``W · Σ v²`` to ``Σ r²``: pseudo-observations ``v ≈ 0`` in the residuals' units, which share ``s`` and are
+counted in ``n`` (:func:`counted_values`).
+
 Priors (``physics/domains.py``): flat on albedos and bounded parameters (``f0``,
 ``psi``), log-uniform on scales (roughness, exponents, ``eta - 1``) and on
 ``s``. They are improper where unbounded; the likelihood makes the posterior
@@ -79,24 +83,30 @@ def density_of(result: FitResult, samples: Samples) -> Density:
     return Density(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
 
 
+def counted_values(density: Density) -> int:
+    """The terms of the cost that share the noise ``s``: the fitted values, and the prior's ``Σ v²`` as one term per
+    coordinate when the model has one. A ridge is the data-driven model's pseudo-observations ``v ≈ 0`` in the
+    residuals' units, so it scales with ``s²`` as they do, and counts as they do."""
+    return density.n_values + (density.optimum.size if density.model.prior_weight > 0 else 0)
+
+
 @jit(static_argnums=0)
 def _count_weighted(loss: Loss, problem: Problem):
     """How many residuals carry weight: values of real samples whose residual scale is not 0."""
     return jnp.count_nonzero(jnp.broadcast_to(target_and_scale(loss, problem)[1], problem.measured.shape))
 
 
-def chi_squared(model: Model, loss: Loss, v, problem: Problem):
-    """``Σ r²`` at the sampling vector ``v``, float64, chunk by chunk, with the model's prior residuals where it has
-    them (JAX)."""
+def chi_squared(model: Model, loss: Loss, v, problem: Problem, prior_weight=0.0):
+    """``Σ r² + prior_weight · Σ v²`` at the sampling vector ``v``, float64, chunk by chunk (JAX): the fit's cost,
+    with the prior it includes (``Model.prior_weight``, the data-driven model's ridge; 0 for the others)."""
     c = problem.measured.shape[1]
     data = cost(lambda w, chunk: residuals_at(model, loss, model.sampling.to_params(w, c), chunk), v, problem)
-    prior = model.prior_residuals(v)  # a prior that is part of the fit's cost (the data-driven model's ridge)
-    return data if prior is None else data + jnp.sum(prior.astype(jnp.float64) ** 2)
+    return data + prior_weight * jnp.sum(jnp.square(v.astype(jnp.float64)))
 
 
 @cache
 def compiled_chi_squared(model: Model, loss: Loss):
-    """:func:`chi_squared` compiled: ``(v, problem) -> Σ r²``."""
+    """:func:`chi_squared` compiled: ``(v, problem, prior_weight) -> Σ r² + prior_weight · Σ v²``."""
     return jit(partial(chi_squared, model, loss))
 
 
@@ -107,13 +117,14 @@ def log_prior(model: Model, v, n_channels: int):
 
 @cache
 def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
-    """``(walkers (W, D), problem, n_values) -> (W,)`` log posterior densities, jit-compiled, vmapped over walkers."""
+    """``(walkers (W, D), problem, n_values, prior_weight) -> (W,)`` log posterior densities, jit-compiled, vmapped
+    over walkers; ``n_values`` counts the prior's terms too (:func:`counted_values`)."""
 
-    def one(x, problem, n_values):
+    def one(x, problem, n_values, prior_weight):
         c = problem.measured.shape[1]
         k = len(model.sampling.domains(c))
         v = x[:k]
-        chi2 = chi_squared(model, loss, v, problem)
+        chi2 = chi_squared(model, loss, v, problem, prior_weight)
         if has_sigma:
             likelihood = -0.5 * chi2
         else:  # x[k] = ln s, with a flat prior (log-uniform in s)
@@ -121,8 +132,8 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
         total = log_prior(model, v, c) + likelihood
         return jnp.where(jnp.isfinite(total), total, -jnp.inf)
 
-    walkers = jax.vmap(one, in_axes=(0, None, None))
-    return jit(lambda x, problem, n_values: walkers(x, prepared(loss, problem), n_values))
+    walkers = jax.vmap(one, in_axes=(0, None, None, None))
+    return jit(lambda x, problem, n_values, w: walkers(x, prepared(loss, problem), n_values, w))
 
 
 def log_probability_function(density: Density):
@@ -131,7 +142,8 @@ def log_probability_function(density: Density):
 
     @float64
     def log_prob(walkers):
-        return np.asarray(compiled(jnp.asarray(walkers, dtype=jnp.float64), density.problem, density.n_values))
+        x = jnp.asarray(walkers, dtype=jnp.float64)
+        return np.asarray(compiled(x, density.problem, counted_values(density), density.model.prior_weight))
 
     return log_prob
 

@@ -37,7 +37,7 @@ from ..fitting.problem import Problem, chunks, residuals_at
 from ..fitting.results import FitResult, Uncertainty
 from ..physics.models import Model
 from . import findings as codes
-from .density import Density, compiled_chi_squared, density_of
+from .density import Density, compiled_chi_squared, counted_values, density_of
 from .findings import Finding
 from .layout import QUANTILES, correlation, estimate, stderr_dict, strongest_correlation
 
@@ -66,9 +66,11 @@ def gauss_newton_matrix(density: Density, v) -> np.ndarray:
 
 
 def gauss_newton_and_meat(density: Density, v) -> tuple[np.ndarray, np.ndarray]:
-    """``JᵀJ`` and ``Σ_i r_i² J_iᵀJ_i`` (the "meat" of the sandwich covariance), both (k, k)."""
+    """``JᵀJ`` and ``Σ_i r_i² J_iᵀJ_i`` (the "meat" of the sandwich covariance), both (k, k); ``JᵀJ`` with the
+    model's prior (``Model.prior_weight · I``)."""
     hessian, meat = compiled_gauss_newton(density.model, density.loss)(v, density.problem)
-    return np.asarray(hessian), np.asarray(meat)
+    # The prior's residuals sqrt(W)·v are linear: their JᵀJ is W·I. They are no data, so no meat.
+    return np.asarray(hessian) + density.model.prior_weight * np.eye(np.size(v)), np.asarray(meat)
 
 
 @cache
@@ -90,11 +92,6 @@ def compiled_gauss_newton(model: Model, loss: Loss):
 
         zeros = jnp.zeros((v.shape[0], v.shape[0]), jnp.float64)
         totals, _ = jax.lax.scan(accumulate, (zeros, zeros), chunks(problem))
-        prior = model.prior_residuals(v)
-        if prior is not None:  # residuals of a prior in the fit's cost (the data-driven model's ridge)
-            jacobian = jax.jacfwd(model.prior_residuals)(v).astype(jnp.float64)
-            weighted = jacobian * prior[:, None]
-            totals = (totals[0] + jacobian.T @ jacobian, totals[1] + weighted.T @ weighted)
         return totals
 
     return gauss_newton
@@ -155,7 +152,7 @@ class Curvature(NamedTuple):
 @float64
 def curvature_at_optimum(density: Density) -> Curvature:
     v = np.asarray(density.optimum)
-    chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem))
+    chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem, density.model.prior_weight))
     hessian, meat = gauss_newton_and_meat(density, v)
     inverse, undetermined, condition = inverse_with_null_space(hessian, density.labels)
     return Curvature(chi2, inverse, meat, undetermined, condition)
@@ -178,7 +175,7 @@ def laplace_estimate(
     v = jnp.asarray(density.optimum)
     k = v.shape[0]
     chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(density)
-    dof = density.n_values - k
+    dof = counted_values(density) - k
     reduced = chi2 / dof if dof > 0 else float("nan")
     variance_scale = 1.0 if density.has_sigma else reduced
     covariance_v = variance_scale * inverse

@@ -30,7 +30,7 @@ from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.results import FitResult, Uncertainty
 from . import findings as codes
-from .density import LOG_NOISE, Density, density_of, log_probability_function, physical_draws
+from .density import LOG_NOISE, Density, counted_values, density_of, log_probability_function, physical_draws
 from .findings import Finding
 from .laplace import Curvature, curvature_at_optimum, laplace_estimate
 from .layout import QUANTILES, estimate
@@ -163,7 +163,7 @@ def start_ball(
     halved each time; a walker with density ``-inf`` would never move and would poison the draws.
     """
     v = density.optimum
-    noise2 = 1.0 if density.has_sigma else curvature.chi2 / max(density.n_values - v.size, 1)
+    noise2 = 1.0 if density.has_sigma else curvature.chi2 / max(counted_values(density) - v.size, 1)
     width = BALL * np.sqrt(noise2 * np.diag(curvature.inverse))
     limits = []
     for value, domain in zip(v, density.model.sampling.domains(density.n_channels), strict=True):

@@ -12,12 +12,13 @@ from brdffit.physics.pca.mapping import mapped
 
 
 def test_a_rank_two_library_has_two_components(linear_library):
-    """Mixtures of two tables in the ``none`` mapping: the centred library has rank ≤ 2, so the third component's
-    variance is rounding (1e-12 of the total)."""
+    """Mixtures of two grey tables in the ``none`` mapping: the centred library has rank ≤ 2, so two components
+    explain it all (1e-10: rounding of the Gram matrix), and a third, which would be rounding, is refused."""
     paths, _, _ = linear_library
-    basis = build_basis(paths, components=3, mapping="none")
-    assert basis.explained[:2].sum() == pytest.approx(1.0, abs=1e-10)
-    assert basis.explained[2] < 1e-12
+    basis = build_basis(paths, components=2, mapping="none")
+    assert basis.explained.sum() == pytest.approx(1.0, abs=1e-10)
+    with pytest.raises(BrdfInputError, match="span only 2 direction"):
+        build_basis(paths, components=3, mapping="none")
 
 
 def test_streamed_build_matches_a_direct_svd(library):
@@ -128,3 +129,17 @@ def test_a_file_that_is_not_merl(tmp_path, library):
 def test_library_reads_as_merl(library):
     """The fixture's tables are MERL files the reader takes (the library is made with brdffit's writer)."""
     assert read_merl(library[0][0], subsample=10).n_samples == 10
+
+
+def test_a_malformed_basis_file_is_one_line(tmp_path, basis_file):
+    with np.load(basis_file) as stored:
+        arrays = {name: stored[name] for name in stored.files}
+    for name, value, message in [
+        ("version", np.array("one"), "basis version"),
+        ("explained", np.zeros(2), "explained has shape"),
+        ("reference", -arrays["reference"] - 1, "negative"),
+    ]:
+        path = tmp_path / f"{name}.npz"
+        np.savez(path, **{**arrays, name: value})
+        with pytest.raises(BrdfInputError, match=message):
+            load_basis(path)

@@ -25,17 +25,18 @@ def test_the_whole_loop(tmp_path, library, capsys):
     status, out, _ = run(["info", basis], capsys)
     assert status == 0 and "variance explained" in out and "sha256" in out
     directions = tmp_path / "directions.csv"
-    status, out, _ = run(["basis", "directions", basis, "-n", "20", "-o", directions], capsys)
+    argv = ["basis", "directions", basis, "-n", "20", "--candidates", "3000", "-o", directions]
+    status, out, _ = run(argv, capsys)
     assert status == 0 and "condition number" in out
     assert directions.read_text().splitlines()[0] == "theta_i,phi_i,theta_o,phi_o"
     # A dense fit of a held-out table, then 20 noisy samples of it at the chosen pairs, as an instrument would give.
     dense = tmp_path / "dense.json"
     held_out = folder / "ward-7.binary"
-    argv = ["fit", held_out, "--subsample", "3000", "--model", "pca", "--basis", basis, "-o", dense]
+    argv = ["fit", held_out, "--subsample", "1000", "--model", "pca", "--basis", basis, "-o", dense]
     status, out, _ = run(argv, capsys)
     assert status == 0 and "coefficients[3]" in out
     sparse = tmp_path / "sparse.csv"
-    argv = ["synth", "--params", dense, "--directions", directions, "--noise", "0.01", "-o", sparse]
+    argv = ["synth", "--params", dense, "--directions", directions, "--noise", "0.01", "--seed", "2", "-o", sparse]
     assert run(argv, capsys)[0] == 0
     assert load_samples(sparse).n_samples == 20
     fitted = tmp_path / "sparse.json"
@@ -67,6 +68,40 @@ def test_the_whole_loop(tmp_path, library, capsys):
         (["fit", "{lib0}", "--model", "pca", "--basis", "{basis}", "--ridge", "-1", "-o", "{tmp}/f.json"], "--ridge"),
         (["compare", "{lib0}", "--subsample", "50", "--models", "pca"], "basis FILE"),
         (["info", "{tmp}/absent.npz"], "no such file"),
+        (["basis", "directions", "{basis}", "-n", "8", "--candidates", "3", "-o", "{tmp}/d.csv"], "--candidates 3"),
+        (
+            [
+                "synth",
+                "--model",
+                "ward",
+                "--params",
+                "{{}}",
+                "--directions",
+                "{basis}",
+                "--geometry",
+                "random",
+                "-o",
+                "{tmp}/s.csv",
+            ],
+            "--geometry does not apply to --directions",
+        ),
+        (
+            [
+                "fit",
+                "{lib0}",
+                "--subsample",
+                "50",
+                "--model",
+                "pca",
+                "--basis",
+                "{basis}",
+                "--dtype",
+                "float32",
+                "-o",
+                "{tmp}/f.json",
+            ],
+            "--dtype float32 does not apply to model pca",
+        ),
     ],
 )
 def test_bad_input_is_one_line(tmp_path, library, basis_file, capsys, argv, message):

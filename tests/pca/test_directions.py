@@ -18,8 +18,8 @@ from brdffit.physics.pca.directions import (
 
 def test_selection_is_seeded_distinct_and_within_limits(basis_file):
     basis = load_basis(basis_file)
-    bins = select_bins(basis, 12, max_theta=60, seed=3)
-    assert np.array_equal(bins, select_bins(basis, 12, max_theta=60, seed=3))
+    bins = select_bins(basis, 12, max_theta=60, candidates=2000, seed=3)
+    assert np.array_equal(bins, select_bins(basis, 12, max_theta=60, candidates=2000, seed=3))
     assert len(set(bins.tolist())) == 12 and basis.filled[bins].all()
     wi, wo = bin_directions()
     assert np.all(np.degrees(np.arccos(wi[bins, 2])) <= 60 + 1e-9)
@@ -28,10 +28,10 @@ def test_selection_is_seeded_distinct_and_within_limits(basis_file):
 
 
 def test_greedy_pairs_condition_better_than_random_ones(basis_file):
-    """The greedy pairs' condition number beats the median of 20 seeded random choices from the same candidates
-    (Nielsen et al. 2015, Fig. 4: by an order of magnitude and more)."""
+    """The greedy pairs' condition number beats the median of 20 seeded random choices of as many filled bins (the
+    greedy choice is a heuristic, so only "better than typical" is asserted)."""
     basis = load_basis(basis_file)
-    greedy = condition_number(basis, select_bins(basis, 20))
+    greedy = condition_number(basis, select_bins(basis, 20, candidates=5000))
     rng = np.random.default_rng(0)
     filled = np.flatnonzero(basis.filled)
     random = [condition_number(basis, rng.choice(filled, 20, replace=False)) for _ in range(20)]
@@ -39,7 +39,7 @@ def test_greedy_pairs_condition_better_than_random_ones(basis_file):
 
 
 def test_directions_file_round_trips(tmp_path, basis_file):
-    bins = select_bins(load_basis(basis_file), 8)
+    bins = select_bins(load_basis(basis_file), 8, candidates=2000)
     path = tmp_path / "directions.csv"
     write_directions(bin_angles_degrees(bins), path)
     wi, wo = read_directions(path)
@@ -68,3 +68,9 @@ def test_bad_directions_files(tmp_path, text, message):
 def test_more_pairs_than_bins(basis_file):
     with pytest.raises(BrdfInputError, match="only"):
         select_bins(load_basis(basis_file), 10, max_theta=0.5)
+
+
+def test_fewer_candidates_than_pairs(basis_file):
+    """Asking for more pairs than candidates is refused (it once repeated a pair to fill the count)."""
+    with pytest.raises(BrdfInputError, match="candidates=3"):
+        select_bins(load_basis(basis_file), 8, candidates=3)

@@ -77,23 +77,39 @@ def test_the_ridge_pulls_toward_the_library_mean(basis_file, library):
 
 
 def test_the_curvature_holds_the_ridge(basis_file, library):
-    """Laplace's JᵀJ is the data's plus the ridge's ``prior_weight·I`` (the prior's residuals are linear, so exactly;
-    1e-9 relative for the data part summed in another order), and the ridge is in the cost the sampler sees."""
+    """Laplace's JᵀJ is the data's plus ``prior_weight·I`` (the prior's residuals are linear, so exactly; 1e-9 for
+    the data part summed in another order); the cost the sampler sees holds the prior, and the prior's terms count
+    as values that share the noise."""
     from brdffit.physics.models import get_model
-    from brdffit.uncertainty.density import compiled_chi_squared, density_of
+    from brdffit.uncertainty.density import compiled_chi_squared, counted_values, density_of
     from brdffit.uncertainty.laplace import gauss_newton_matrix
 
     samples = read_merl(library[0][7], subsample=60, seed=5)
     result = brdffit.fit(samples, model="pca", basis=str(basis_file), ridge=0.5)
     density = density_of(result, samples)
-    assert density.model.prior_weight == pytest.approx(0.5 * result.model_options["ridge_scale"])
+    weight = density.model.prior_weight
+    assert weight == pytest.approx(0.5 * result.model_options["ridge_scale"])
     without = get_model("pca", **{**result.model_options, "ridge": 0.0})
+    assert without == density.model  # one compiled program for both: the ridge is data
     v = np.asarray(density.optimum)
     with_ridge = gauss_newton_matrix(density, v)
     data_only = gauss_newton_matrix(density._replace(model=without), v)
-    np.testing.assert_allclose(with_ridge - data_only, density.model.prior_weight * np.eye(v.size), atol=1e-9)
-    chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem))
-    assert chi2 == pytest.approx(result.cost + density.model.prior_weight * np.sum(v**2), rel=1e-9)
+    np.testing.assert_allclose(with_ridge - data_only, weight * np.eye(v.size), atol=1e-9)
+    chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem, weight))
+    assert chi2 == pytest.approx(result.cost + weight * np.sum(v**2), rel=1e-9)
+    assert counted_values(density) == density.n_values + v.size
+    assert counted_values(density._replace(model=without)) == density.n_values
+
+
+@pytest.mark.filterwarnings("ignore::brdffit.errors.UncertaintyWarning")
+def test_fewer_values_than_coefficients(basis_file, library):
+    """4 pairs × 3 channels for 18 coefficients: the prior determines what the data cannot, so the fit runs and
+    Laplace's errors are finite (the prior's terms count as values); without a ridge it is refused."""
+    samples = read_merl(library[0][7], subsample=4, seed=9)
+    result = brdffit.fit(samples, model="pca", basis=str(basis_file), uncertainty="laplace")
+    assert np.all(np.isfinite(np.array(result.uncertainty["stderr"]["coefficients"])))
+    with pytest.raises(BrdfInputError, match="cannot determine"):
+        brdffit.fit(samples, model="pca", basis=str(basis_file), ridge=0.0)
 
 
 @pytest.mark.filterwarnings("ignore::brdffit.errors.UncertaintyWarning")
@@ -121,3 +137,9 @@ def test_a_start_of_other_channels(basis_file, library):
     samples = read_merl(library[0][7], subsample=50, seed=8)
     with pytest.raises(BrdfInputError, match="channel"):
         brdffit.fit(samples, model="pca", basis=str(basis_file), start={"coefficients": [[0.0]] * 6})
+
+
+def test_float32_is_refused(basis_file, library):
+    samples = read_merl(library[0][7], subsample=50, seed=8)
+    with pytest.raises(BrdfInputError, match="dtype=float32 does not apply to model pca"):
+        brdffit.fit(samples, model="pca", basis=str(basis_file), dtype="float32")

@@ -127,3 +127,34 @@ def test_options_and_their_errors(basis_file, tmp_path):
     assert built.model_options["ridge"] == 0.5 and len(built.model_options["basis_sha256"]) == 64
     assert built == get_model("pca", basis=str(basis_file), ridge=0.5)  # hashable, equal by options (JAX static)
     assert "array(" not in repr(built)  # the basis's arrays stay out of the repr (stored programs' names)
+
+
+def test_pickled_it_is_its_options(model):
+    """A Dask worker gets the model as a few bytes and reads the basis itself (checked by its digest)."""
+    import pickle
+
+    data = pickle.dumps(model)
+    assert len(data) < 2_000
+    again = pickle.loads(data)
+    assert again == model and again.model_options == model.model_options
+
+
+def test_evaluated_in_a_float32_process(basis_file):
+    """In a process without float64 (a user's), the JAX path runs on XLA's threads, where a float64 callback
+    result would be refused: the basis crosses as float32 pairs (a regression: the sphere renderer failed)."""
+    import subprocess
+    import sys
+
+    code = f"""
+import jax, jax.numpy as jnp, numpy as np
+from brdffit.physics.models import get_model
+model = get_model("pca", basis={str(basis_file)!r})
+rng = np.random.default_rng(0)
+v = rng.normal(size=(200_000, 3)); v[:, 2] = np.abs(v[:, 2]); v /= np.linalg.norm(v, axis=1, keepdims=True)
+params = model.dictionary.to_params({{"coefficients": np.zeros((model.n_components, 3)).tolist()}})
+values = jax.jit(model.brdf)(params, jnp.asarray(v), jnp.asarray(v[::-1]))
+assert values.dtype == jnp.float32 and bool(jnp.all(jnp.isfinite(values))), values.dtype
+print("ok")
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and "ok" in done.stdout, done.stderr[-2000:]

@@ -54,6 +54,8 @@ class Model:
     lobes_as_list: bool = False
     #: Whether :func:`brdffit.evaluate` computes it on the host (``host_brdf``) rather than in a JAX program.
     on_host: ClassVar[bool] = False
+    #: Whether it is fitted by a solve of its own (the data-driven model: ``fitting/pca.py``), not the lobe models'.
+    own_fit: ClassVar[bool] = False
 
     @property
     def model_options(self) -> dict[str, Any]:
@@ -75,10 +77,12 @@ class Model:
             values = values + lobes.T @ jnp.asarray(params.specular)
         return jnp.where(visible[:, None], values, 0.0)
 
-    def prior_residuals(self, v):
-        """Residuals a prior adds to the fit's cost at the sampling vector ``v`` (JAX), or None: only the data
-        (the data-driven model's ridge adds some, ``pca.py``)."""
-        return None
+    @property
+    def prior_weight(self) -> float:
+        """The weight ``W`` of a Gaussian prior that the fit's cost includes, ``Σ r² + W·Σ v²`` over the sampling
+        vector ``v``: 0 (none) but for the data-driven model's ridge (``pca.py``). Its ``W·Σ v²`` counts as that
+        many more residuals wherever the cost is turned into a likelihood (``uncertainty/density.py``)."""
+        return 0.0
 
     def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"]:
         """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions."""

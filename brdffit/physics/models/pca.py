@@ -1,18 +1,22 @@
-"""The data-driven model: a material as coefficients of a basis learned from a library (``brdffit/pca``).
+"""The data-driven model: a material as coefficients of a basis learned from a library of tables.
+
+The basis is ``physics/pca``'s, learned by ``data/library.py``.
 
 ``f(wi, wo)[c] = ρ(mean + Σ_k coefficients[k][c] · components[k])``, the basis interpolated at the pair
-(``pca/basis.py``) and ``ρ(m)`` its mapping's inverse (``pca/mapping.py``; Matusik et al. 2003, Nielsen et al.
-2015). The parameters are the coefficients, ``K × C`` real numbers in library standard deviations (``K`` the
-basis's components); the result file writes them as ``{"coefficients": [[c_r, c_g, c_b], …]}``, one list per
-component. Options: ``basis`` (the ``.npz`` file), ``ridge`` (the weight of the library prior, :data:`RIDGE`)
-and ``basis_sha256`` (the file's digest, which a result records so that it is never evaluated with another
-basis).
+(``physics/pca/basis.py``) and ``ρ(m)`` its mapping's inverse (``physics/pca/mapping.py``; Matusik et al. 2003,
+Nielsen et al. 2015). The parameters are the coefficients, ``K × C`` real numbers in library standard deviations
+(``K`` the basis's components); the result file writes them as ``{"coefficients": [[c_r, c_g, c_b], …]}``, one list
+per component. Options: ``basis`` (the ``.npz`` file), ``ridge`` (the weight of the library prior, :data:`RIDGE`)
+and ``basis_sha256`` (the file's digest, which a result records so that it is never evaluated with another basis).
 
 The model fits the machinery of every other model through its own parameter forms: one flat vector of the
 coefficients in every coordinate system (they are unbounded, so the solver and the sampler move them as they
 are), ``Params.specular`` (K, C) carrying them. The ridge is a Gaussian prior on the coefficients,
-``Σ r² + ridge · ridge_scale · Σ c²`` (``prior_residuals``), which the fit, Laplace's curvature and the sampler all
-include; ``ridge_scale`` carries a residual of the mapped space into the loss's units (``pca/fit.py``).
+``Σ r² + ridge · ridge_scale · Σ c²`` (``prior_weight``), which the fit, Laplace's curvature and the sampler all
+include; ``ridge_scale`` carries a residual of the mapped space into the loss's units (``fitting/pca.py``).
+
+Two models of one basis are equal whatever their ridge: the ridge reaches every compiled program as data, so a
+program compiled for one fit serves the next.
 """
 
 import math
@@ -46,7 +50,7 @@ def pca(
 ) -> "PcaModel":
     """The ``pca`` model of the basis file ``basis`` (required); ``basis_sha256``, when given, must be the file's
     digest (a result records it). ``ridge_scale``: a mapped residual's square in the loss's units, which the fit
-    measures on its samples (``pca/fit.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
+    measures on its samples (``fitting/pca.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
     from ..pca.basis import load_basis
 
     if basis is None:
@@ -54,13 +58,17 @@ def pca(
             "model pca needs ", Argument("basis"), " FILE: a basis file made by brdffit basis build from a library"
         )
     try:
-        ridge = float(ridge)
+        ridge = float(ridge) if not isinstance(ridge, bool) else math.nan
     except (TypeError, ValueError):
         raise BrdfInputError(Argument("ridge", ridge), " must be a number ≥ 0") from None
     if not (ridge >= 0 and math.isfinite(ridge)):
         raise BrdfInputError(Argument("ridge", ridge), " must be a finite number ≥ 0")
-    if ridge_scale is not None and not (isinstance(ridge_scale, int | float) and ridge_scale > 0):
-        raise BrdfInputError(Argument("ridge_scale", ridge_scale), " must be a number > 0")
+    if ridge_scale is not None and (
+        isinstance(ridge_scale, bool)
+        or not isinstance(ridge_scale, int | float)
+        or not (math.isfinite(ridge_scale) and ridge_scale > 0)
+    ):
+        raise BrdfInputError(Argument("ridge_scale", ridge_scale), " must be a finite number > 0")
     path = os.path.abspath(os.fspath(basis))
     loaded = load_basis(path)
     if basis_sha256 is not None and basis_sha256 != loaded.digest:
@@ -77,16 +85,33 @@ def pca(
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PcaModel(Model):
     """A :class:`Model` whose parameters are a basis's coefficients; ``basis`` (a
-    :class:`~brdffit.physics.pca.basis.Basis`) is left out of comparisons and the repr: the options, with the file's
-    digest, define the model."""
+    :class:`~brdffit.physics.pca.basis.Basis`) is left out of the repr. Its identity (equality, hash: what JAX
+    compiles a program for) is its basis file and that file's digest; pickled, it is its options, and the
+    unpickling process reads the basis again (a Dask worker gets a few bytes, not the basis)."""
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, PcaModel) and self.identity == other.identity
+
+    def __hash__(self) -> int:
+        return hash(self.identity)
+
+    def __reduce__(self):
+        options = self.model_options
+        return pca, (options["basis"], options["ridge"], options["basis_sha256"], options.get("ridge_scale"))
+
+    @property
+    def identity(self) -> tuple[str, str]:
+        return self.model_options["basis"], self.model_options["basis_sha256"]
 
     basis: Any = field(default=None, compare=False, repr=False)
     #: Evaluated on the host by :func:`brdffit.evaluate` (block by block: a table's interpolation does not fit
     #: in one program's memory).
     on_host: ClassVar[bool] = True
+    #: Fitted by its own solve: a ridge start in the mapped space, then Levenberg-Marquardt (``fitting/pca.py``).
+    own_fit: ClassVar[bool] = True
     #: Its programs call the host for the basis (a callback), which a program stored on disk (``_programs.py``)
     #: cannot carry to another process, nor run outside float64: they are compiled in each process instead.
     storable: ClassVar[bool] = False
@@ -129,12 +154,9 @@ class PcaModel(Model):
 
     @property
     def prior_weight(self) -> float:
-        """The ridge in the loss's units, ``ridge · ridge_scale`` (the scale is 1 until a fit has measured it)."""
+        """The ridge in the loss's units, ``ridge · ridge_scale`` (the scale is 1 until a fit has measured it): the
+        prior adds ``prior_weight · Σ c²`` to the cost."""
         return self.ridge * self.model_options.get("ridge_scale", 1.0)
-
-    def prior_residuals(self, v):
-        """``sqrt(prior_weight) · v``: the ridge as residuals, whose squares the fit adds to its cost (JAX)."""
-        return math.sqrt(self.prior_weight) * v
 
     # ------------------------------------------------------------ parameter forms
     @property

@@ -11,17 +11,15 @@ from typing import Any
 from ...errors import BrdfInputError
 from . import MODELS, Model, get_model, model_option_defaults, model_option_names
 
-#: Options a result records that never tell one model from another in a spec (a basis file's digest).
-RECORDED_ONLY = "_sha256"
+#: Options a result records that a user never gives: a basis file's digest, the ridge's scale a fit measured.
+RECORDED_ONLY = frozenset({"basis_sha256", "ridge_scale"})
 
 
 def spec_of(name: str, options: dict[str, Any]) -> str:
     """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
     defaults = model_option_defaults(name) if name in MODELS else {}
     written = ",".join(
-        f"{key}={value}"
-        for key, value in options.items()
-        if defaults.get(key) != value and not key.endswith(RECORDED_ONLY)
+        f"{key}={value}" for key, value in options.items() if defaults.get(key) != value and key not in RECORDED_ONLY
     )
     return f"{name}:{written}" if written else name
 

@@ -3,7 +3,7 @@ basis evaluated at any pair of directions.
 
 A library material ``x`` (one channel of one table, mapped by ``mapping.py``) is, up to what the kept components
 leave out, ``x = mean + Σ_k c_k · components[k]``. The components are scaled so that the library's coefficients
-have unit variance along each (``build.py``): a coefficient is measured in library standard deviations, and a
+have unit variance along each (``data/library.py``): a coefficient is measured in library standard deviations, and a
 coefficient of 3 lies at the library's edge.
 
 At a pair that falls between bins (``tabulation.py``), each of its 8 neighbouring bins gives a BRDF from its own
@@ -41,7 +41,7 @@ BLOCK = 2**15
 class Basis:
     """A learned basis; arrays over MERL's 1,458,000 bins in file order (``data/merl.py``).
 
-    ``mapping``: one of :data:`~brdffit.pca.mapping.MAPPINGS`; ``mean`` (bins,) the library's mean mapped value;
+    ``mapping``: one of :data:`~brdffit.physics.pca.mapping.MAPPINGS`; ``mean`` (bins,) the library's mean mapped value;
     ``reference`` (bins,) the library's median BRDF in 1/sr (log-relative's ``ρ_ref``); ``components`` (K, bins)
     float32, mapped units per library standard deviation; ``filled`` (bins,) the bins that hold a value;
     ``explained`` (K,) the fraction of the library's variance each component explains; ``materials`` the
@@ -69,7 +69,7 @@ class Basis:
             mean=self.mean[index],
             reference=self.reference[index],
             cosine=bin_cosine_weights()[index],
-            components=np.moveaxis(self.components[:, index], 0, -1).astype(np.float64),
+            components=np.moveaxis(self.components[:, index], 0, -1),  # float32 as stored: exact, half the memory
         )
 
     def brdf(self, coefficients: np.ndarray, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
@@ -77,17 +77,22 @@ class Basis:
         memory); 0 where a direction is below the horizon."""
         wi, wo = np.asarray(wi, float), np.asarray(wo, float)
         out = np.zeros((wi.shape[0], coefficients.shape[1]))
-        visible = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
-        rows = np.flatnonzero(visible)
+        rows = np.flatnonzero(visible_pairs(wi, wo))
         for start in range(0, rows.size, BLOCK):
             block = rows[start : start + BLOCK]
             out[block] = self.corners(wi[block], wo[block]).brdf(self.mapping, coefficients)
         return out
 
 
+def visible_pairs(wi, wo) -> np.ndarray:
+    """Which pairs have both directions above the horizon (``z > 0``), as every model decides
+    (``physics/geometry.above_horizon``); the model is 0 at the others."""
+    return (np.asarray(wi)[:, 2] > 0) & (np.asarray(wo)[:, 2] > 0)
+
+
 class Corners(NamedTuple):
     """The basis at the 8 bins around each of N pairs (numpy or JAX arrays): trilinear ``weight`` (N, 8), the
-    bins' ``mean``, ``reference`` and ``cosine`` weight (N, 8) and ``components`` (N, 8, K)."""
+    bins' ``mean``, ``reference`` and ``cosine`` weight (N, 8) and ``components`` (N, 8, K), float32 as stored."""
 
     weight: np.ndarray
     mean: np.ndarray
@@ -97,7 +102,7 @@ class Corners(NamedTuple):
 
     def brdf(self, mapping: str, coefficients):
         """BRDF (N, C) at coefficients (K, C): each corner's BRDF from its mapped value, blended (numpy or JAX)."""
-        mapped = self.mean[..., None] + self.components @ coefficients  # (N, 8, C)
+        mapped = self.mean[..., None] + self.components @ coefficients  # (N, 8, C), float64 with float64 coefficients
         cosine = self.cosine[..., None]
         cosine = cosine + (cosine <= 0)  # an empty corner (weight 0) divides by 1, not 0
         corner = unmapped(mapping, mapped, self.reference[..., None], cosine)
@@ -165,7 +170,11 @@ def _checked(path: Path, arrays: dict, digest: str) -> Basis:
     """The basis of a file's arrays, after checking that they are one."""
     if str(arrays.get("kind", "")) != KIND:
         raise BrdfInputError(f"{path}: not a basis file (an .npz written by brdffit basis build)")
-    if int(arrays.get("version", -1)) != VERSION:
+    try:
+        version = int(arrays.get("version", -1))
+    except (TypeError, ValueError):
+        version = None
+    if version != VERSION:
         raise BrdfInputError(f"{path}: basis version {arrays.get('version')}, this brdffit reads version {VERSION}")
     missing = [
         name for name in ("mapping", "mean", "reference", "components", "filled", "explained") if name not in arrays
@@ -184,12 +193,18 @@ def _checked(path: Path, arrays: dict, digest: str) -> Basis:
         raise BrdfInputError(f"{path}: components have shape {components.shape}, expected (K, {N_BINS})")
     if not all(np.all(np.isfinite(arrays[name])) for name in ("mean", "reference", "components")):
         raise BrdfInputError(f"{path}: basis holds NaN or infinite values")
+    if arrays["explained"].shape != (components.shape[0],):
+        raise BrdfInputError(
+            f"{path}: explained has shape {arrays['explained'].shape}, expected ({components.shape[0]},)"
+        )
+    if np.any(arrays["reference"] < 0):
+        raise BrdfInputError(f"{path}: reference holds negative BRDF values")
     return Basis(
         mapping=mapping,
         mean=arrays["mean"].astype(np.float64),
         reference=arrays["reference"].astype(np.float64),
         components=components.astype(np.float32),
-        filled=arrays["filled"].astype(bool),
+        filled=arrays["filled"].astype(bool) & horizon_filled(),  # a bin below the horizon never holds a value
         explained=arrays["explained"].astype(np.float64).reshape(-1),
         materials=tuple(str(name) for name in arrays.get("materials", np.array([], dtype=str))),
         digest=digest,

@@ -48,6 +48,8 @@ def select_bins(
         raise BrdfInputError(
             Argument("n", count), f" pairs asked for, but only {eligible.size} bins lie within θ ≤ {max_theta:g}°"
         )
+    if candidates < count:
+        raise BrdfInputError(Argument("candidates", candidates), f" is fewer than the {count} pairs asked for")
     rng = np.random.default_rng(seed)
     pool = np.sort(rng.choice(eligible, size=min(candidates, eligible.size), replace=False))
     rows = basis.components[:, pool].T.astype(np.float64)  # (candidates, K)
