@@ -63,7 +63,10 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
     command.add_argument("--basis", metavar="FILE", help="pca: the basis file (from brdffit basis build)")
     command.add_argument(
-        "--ridge", type=float, metavar="W", help="pca: weight of the library prior, Σr² + W·Σc² (default 1e-3)"
+        "--ridge",
+        type=float,
+        metavar="W",
+        help="pca: weight of the library prior in the basis's mapped space (default 1e-3; docs/data-driven.md)",
     )
 
 
