@@ -89,7 +89,9 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
         " shorthand lafortune:2); default: every model, Lafortune with 1–3 lobes, Cook-Torrance with each Fresnel",
     )
     command.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
-    command.add_argument("--basis", metavar="FILE", help="the basis of pca in --models (from brdffit basis build)")
+    command.add_argument(
+        "--basis", metavar="FILE", help="pca's basis (brdffit basis build); adds pca to the default models"
+    )
     command.add_argument("--ridge", type=float, metavar="W", help="pca's ridge in --models (default 1e-3)")
     command.add_argument(
         "--folds", type=int, default=5, metavar="K", help="cross-validation folds (default 5, at least 2)"
@@ -108,15 +110,20 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
 def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of :func:`brdffit.compare` that :func:`add_comparison_options` gave, checked (the
     models and the loss) before any work."""
+    from ..fitting.compare import default_specs
     from ..fitting.losses import get_loss
     from ..physics.models.specs import model_of_spec, split_specs
 
     get_loss(args.loss)
     given = {"basis": args.basis, "ridge": args.ridge}
+    specs = None if args.models is None else split_specs(args.models, completed=lambda spec: _with(spec, given))
+    if args.basis is not None or args.ridge is not None:  # the data-driven model's options: pca is compared
+        if specs is None:
+            specs = [*default_specs(), _with("pca", given)]
+        elif not any(spec.partition(":")[0].strip() == "pca" for spec in specs):
+            raise BrdfInputError("--basis and --ridge apply to pca, which --models does not name; add pca to it")
     return {
-        "models": None
-        if args.models is None
-        else [model_of_spec(spec) for spec in split_specs(args.models, completed=lambda spec: _with(spec, given))],
+        "models": None if specs is None else [model_of_spec(spec) for spec in specs],
         "loss": args.loss,
         "folds": args.folds,
         "seed": args.seed,
@@ -217,6 +224,12 @@ def json_argument(value: str, option: str) -> Any:
         return json.loads(text)
     except json.JSONDecodeError as error:
         raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
+
+
+def model_files(model_options: dict[str, Any]) -> list[str]:
+    """The files a model's options name (the data-driven model's basis), which no output may overwrite."""
+    basis = model_options.get("basis")
+    return [str(basis)] if basis else []
 
 
 def output_file(value: str | os.PathLike, option: str, inputs: Sequence[str | os.PathLike] = ()) -> Path:

@@ -6,6 +6,7 @@ coefficients (``physics/pca/directions.py``). ``brdffit fit SAMPLES --model pca 
 """
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -84,6 +85,8 @@ def _build(args: argparse.Namespace) -> int:
     from ..physics.pca.basis import save_basis
 
     files = library_files(args.library)
+    if args.output == "-":
+        raise BrdfInputError("-o -: a basis is a binary file; give a file name (basis.npz)")
     output = output_file(args.output, "-o", files)
     started = time.perf_counter()
     with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=None, leave=False) as bar:
@@ -99,12 +102,23 @@ def _directions(args: argparse.Namespace) -> int:
 
     output = output_file(args.output, "-o", [args.basis])
     basis = load_basis(args.basis)
-    chosen = choose_directions(basis, args.n, max_theta=args.max_theta, candidates=args.candidates, seed=args.seed)
+    from tqdm.auto import tqdm
+
+    with tqdm(total=args.n, unit="pair", disable=None, leave=False) as bar:
+        options = dict(max_theta=args.max_theta, candidates=args.candidates, seed=args.seed, progress=bar.update)
+        chosen = choose_directions(basis, args.n, **options)
     write_directions(chosen.angles, output)
+    pairs = "pair" if args.n == 1 else "pairs"
     print(
-        f"wrote {output}: {args.n} direction pairs; condition number of the {basis.n_components} components'"
+        f"wrote {output}: {args.n} direction {pairs}; condition number of the {basis.n_components} components'"
         f" rows there {chosen.condition:.3g}"
     )
+    if chosen.poorly_conditioned:
+        print(
+            "brdffit: warning: these pairs barely determine the coefficients (condition number"
+            f" {chosen.condition:.3g}): a fit would rest on the ridge; allow a larger --max-theta or more --candidates",
+            file=sys.stderr,
+        )
     return EXIT_OK
 
 

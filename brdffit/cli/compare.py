@@ -23,7 +23,8 @@ def run(args: argparse.Namespace) -> int:
 
     enable_compilation_cache()
     arguments = comparison_arguments(args)
-    output = None if args.output in (None, "-") else output_file(args.output, "-o", [args.samples])
+    inputs = [args.samples, *([args.basis] if args.basis else [])]
+    output = None if args.output in (None, "-") else output_file(args.output, "-o", inputs)
     comparison = compare(load(args.samples, args), **arguments, progress=None)
     stream = sys.stderr if args.output == "-" else sys.stdout
     print(comparison.table(), file=stream)

@@ -8,7 +8,7 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import output_file
+from .arguments import model_files, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -39,8 +39,8 @@ def run(args: argparse.Namespace) -> int:
 
     kind = export_format(args.to, args.format)
     default = Path(args.result).stem + TARGETS[args.to].formats[kind]
-    path = output_file(args.output or default, "-o", [args.result])
     result = load_result(args.result)
+    path = output_file(args.output or default, "-o", [args.result, *model_files(result.model_options)])
     enable_compilation_cache()
     lines = export(result, args.to, path, kind)
     print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")

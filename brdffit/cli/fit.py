@@ -15,6 +15,7 @@ from .arguments import (
     add_model_options,
     json_argument,
     load,
+    model_files,
     model_options,
     output_file,
     read_options,
@@ -103,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
     get_loss(args.loss)
     mcmc = _uncertainty_settings(args)
     inputs = [*args.samples, *([args.start] if args.start and not args.start.lstrip().startswith("{") else [])]
+    inputs += model_files(model.model_options)
     outputs = output_paths(args.samples, args.output, model, inputs)
     start = _start(args.start)
     if args.workers is not None and args.workers < 1:

@@ -4,7 +4,7 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import output_file
+from .arguments import model_files, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -27,8 +27,8 @@ def run(args: argparse.Namespace) -> int:
     output = args.output or f"{Path(args.result).stem}.mitsuba.png"
     if Path(output).suffix.lower() != ".png":
         raise BrdfInputError(Argument("output", output), ": the image must end in .png")
-    path = output_file(output, "-o", [args.result])
     result = load_result(args.result)
+    path = output_file(output, "-o", [args.result, *model_files(result.model_options)])
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     exported = render_sphere(result, path, size=args.size, spp=args.spp)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")

@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     arguments = comparison_arguments(args)
     check_options(args.uncertainty)
     output = args.output or f"{Path(args.samples).stem}.report.html"
-    path = output_file(output, "-o", [args.samples])
+    path = output_file(output, "-o", [args.samples, *([args.basis] if args.basis else [])])
     check_report_path(output, argument="output")
     report(load(args.samples, args), **arguments, uncertainty=args.uncertainty, path=path, progress=None)
     print(f"wrote {output}")

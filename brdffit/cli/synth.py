@@ -5,7 +5,7 @@ import inspect
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_model_options, json_argument, model_options, output_file
+from .arguments import add_model_options, json_argument, model_files, model_options, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
     enable_compilation_cache()
     model, params, channels = _model_and_params(args)
     inputs = [args.params] if not args.params.lstrip().startswith("{") else []
+    inputs += model_files(model.model_options)
     given = {
         name: getattr(args, name)
         for name in ("n_incident", "n_theta", "n_phi", "n_samples", "spread")

@@ -46,6 +46,9 @@ def build_basis(
     or option."""
     if mapping not in MAPPINGS:
         raise BrdfInputError(Argument("mapping", mapping), f" is not a mapping; choose one of: {', '.join(MAPPINGS)}")
+    if isinstance(paths, str | os.PathLike):
+        raise BrdfInputError(Argument("paths"), " must be a list of MERL files, not one path")
+    paths = list(paths)
     for path in paths:  # every file checked before any work
         stored_planes(path)
     n_vectors = 3 * len(paths)

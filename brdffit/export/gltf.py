@@ -516,11 +516,14 @@ def fit_material(wi, wo, values, loss: str = "log") -> tuple[GltfMaterial, list[
             f" {extended_rmse:.4g} 1/sr ({gain:.1%}, at least {EXTENSION_GAIN:.0%} asked)",
             *_unconverged(extended),
         ]
-    return core_material, [
-        f"no extensions: KHR_materials_specular and KHR_materials_ior would lower the rmse by only {max(gain, 0):.1%}"
-        f" (from {core_rmse:.4g} to {extended_rmse:.4g} 1/sr; {EXTENSION_GAIN:.0%} asked)",
-        *_unconverged(core),
-    ]
+    if gain <= 0:  # the extended fit ended no better (a local optimum of more parameters): said as it is
+        why = f"do not lower the rmse ({extended_rmse:.4g} 1/sr with them, {core_rmse:.4g} without)"
+    else:
+        why = (
+            f"would lower the rmse by only {gain:.1%} (from {core_rmse:.4g} to {extended_rmse:.4g} 1/sr;"
+            f" {EXTENSION_GAIN:.0%} asked)"
+        )
+    return core_material, [f"no extensions: KHR_materials_specular and KHR_materials_ior {why}", *_unconverged(core)]
 
 
 class _Solved(NamedTuple):

@@ -16,8 +16,7 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
-from ..physics.models import MODELS, Model, get_model, model_option_names
-from ..physics.models.specs import RECORDED_ONLY
+from ..physics.models import MODELS, RECORDED_OPTIONS, Model, get_model, model_option_names
 from .buckets import compile_in_background, default_strategy, solve_bucket
 from .defaults import MAX_STEPS, N_STARTS
 from .lobes import lobe_by_lobe
@@ -112,7 +111,7 @@ def _check_option_names(options: dict[str, Any]) -> None:
     known = {name for each in MODELS for name in model_option_names(each)}
     for key in options:
         if key not in known:
-            listed = ", ".join(sorted(known - RECORDED_ONLY))  # a result's recorded options are taken, not offered
+            listed = ", ".join(sorted(known - RECORDED_OPTIONS))  # a result's recorded options are taken, not offered
             raise BrdfInputError(
                 Argument(key), f" is not an argument of the fit, nor an option of any model ({listed})"
             )

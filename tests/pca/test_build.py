@@ -119,6 +119,11 @@ def test_build_errors(library, arguments, message):
         build_basis(library[0][:2], **arguments)
 
 
+def test_one_path_is_not_a_library(library):
+    with pytest.raises(BrdfInputError, match="a list of MERL files"):
+        build_basis(str(library[0][0]))
+
+
 def test_a_file_that_is_not_merl(tmp_path, library):
     bad = tmp_path / "bad.binary"
     bad.write_bytes(b"\x00" * 100)

@@ -56,6 +56,7 @@ def test_directions_file_round_trips(tmp_path, basis_file):
         ("theta_i,phi_i,theta_o,phi_o\n1,2,x,4\n", "row 2"),
         ("theta_i,phi_i,theta_o,phi_o\n95,0,10,0\n", r"row 2: zenith angles must lie in \[0, 90\]"),
         ("theta_i,phi_i,theta_o,phi_o\n", "no pairs"),
+        ("theta_i,phi_i,theta_o,phi_o\n1,2,3,4,5\n", "row 2: 5 fields"),
     ],
 )
 def test_bad_directions_files(tmp_path, text, message):
@@ -74,3 +75,10 @@ def test_fewer_candidates_than_pairs(basis_file):
     """Asking for more pairs than candidates is refused (it once repeated a pair to fill the count)."""
     with pytest.raises(BrdfInputError, match="candidates=3"):
         select_bins(load_basis(basis_file), 8, candidates=3)
+
+
+@pytest.mark.parametrize("angles", [np.zeros((3, 3)), np.array([[100.0, 0, 10, 0]]), np.array([[np.nan, 0, 10, 0]])])
+def test_writing_bad_angles(tmp_path, angles):
+    with pytest.raises(BrdfInputError, match="angles must"):
+        write_directions(angles, tmp_path / "d.csv")
+    assert not (tmp_path / "d.csv").exists()

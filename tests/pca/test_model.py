@@ -123,6 +123,8 @@ def test_options_and_their_errors(basis_file, tmp_path):
         get_model("pca", basis=str(basis_file), ridge=-1)
     with pytest.raises(BrdfInputError, match="SHA-256 differs"):
         get_model("pca", basis=str(basis_file), basis_sha256="0" * 64)
+    with pytest.raises(BrdfInputError, match="basis file's path, got Basis"):
+        get_model("pca", basis=get_model("pca", basis=str(basis_file)).basis)
     built = get_model("pca", basis=str(basis_file), ridge=0.5)
     assert built.model_options["ridge"] == 0.5 and len(built.model_options["basis_sha256"]) == 64
     assert built == get_model("pca", basis=str(basis_file), ridge=0.5)  # hashable, equal by options (JAX static)

@@ -35,6 +35,11 @@ MODELS = {
     "pca": pca,
 }
 
+#: Options a result records that a user never gives: a basis file's digest, the ridge's scale a fit measured.
+RECORDED_OPTIONS = frozenset({"basis_sha256", "ridge_scale"})
+#: Options that name a file: a spec (a label) shows the file's name, not its whole path; a default file name, neither.
+FILE_OPTIONS = frozenset({"basis"})
+
 
 @cache
 def model_option_names(name: str) -> tuple[str, ...]:
@@ -49,9 +54,11 @@ def model_option_defaults(name: str) -> dict[str, Any]:
 
 def chosen_options(model: Model) -> dict[str, Any]:
     """The options of ``model`` that differ from their defaults: what names a fit apart from its model's default
-    (``{"fresnel": "conductor"}``; ``{}`` for Cook-Torrance with Beckmann, V-groove and Schlick)."""
+    (``{"fresnel": "conductor"}``; ``{}`` for Cook-Torrance with Beckmann, V-groove and Schlick). A file an option
+    names (pca's basis) and what a result only records (its digest, the ridge's scale) name nothing apart."""
     defaults = model_option_defaults(model.name)
-    return {key: value for key, value in model.options if defaults.get(key) != value}
+    unnamed = RECORDED_OPTIONS | FILE_OPTIONS
+    return {key: value for key, value in model.options if defaults.get(key) != value and key not in unnamed}
 
 
 def get_model(model: "str | Model", **options: Any) -> Model:

@@ -69,6 +69,10 @@ def pca(
         or not (math.isfinite(ridge_scale) and ridge_scale > 0)
     ):
         raise BrdfInputError(Argument("ridge_scale", ridge_scale), " must be a finite number > 0")
+    if not isinstance(basis, str | os.PathLike):
+        raise BrdfInputError(
+            Argument("basis"), f" must be the basis file's path, got {type(basis).__name__} (save_basis a Basis first)"
+        )
     path = os.path.abspath(os.fspath(basis))
     loaded = load_basis(path)
     if basis_sha256 is not None and basis_sha256 != loaded.digest:

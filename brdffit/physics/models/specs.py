@@ -6,22 +6,27 @@ the one option that accepts it (``lafortune:2``, ``cook-torrance:conductor``). T
 ``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``.
 """
 
+import os
 from typing import Any
 
 from ...errors import BrdfInputError
-from . import MODELS, Model, get_model, model_option_defaults, model_option_names
-
-#: Options a result records that a user never gives: a basis file's digest, the ridge's scale a fit measured.
-RECORDED_ONLY = frozenset({"basis_sha256", "ridge_scale"})
+from . import FILE_OPTIONS, MODELS, RECORDED_OPTIONS, Model, get_model, model_option_defaults, model_option_names
 
 
 def spec_of(name: str, options: dict[str, Any]) -> str:
     """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
     defaults = model_option_defaults(name) if name in MODELS else {}
     written = ",".join(
-        f"{key}={value}" for key, value in options.items() if defaults.get(key) != value and key not in RECORDED_ONLY
+        f"{key}={_shown(key, value)}"
+        for key, value in options.items()
+        if defaults.get(key) != value and key not in RECORDED_OPTIONS
     )
     return f"{name}:{written}" if written else name
+
+
+def _shown(key: str, value: Any) -> Any:
+    """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it."""
+    return os.path.basename(str(value)) if key in FILE_OPTIONS else value
 
 
 def model_of_spec(spec: str) -> Model:

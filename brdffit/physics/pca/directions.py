@@ -30,6 +30,9 @@ from .basis import Basis
 COLUMNS = ("theta_i", "phi_i", "theta_o", "phi_o")
 #: Candidate bins scored at each greedy step (a seeded subset of the bins the basis holds).
 CANDIDATES = 20_000
+#: A condition number of the chosen rows beyond which the pairs barely determine the coefficients: the data's
+#: errors reach them amplified 10⁴ times (greedy pairs of a real library: 7 to 70).
+POOR_CONDITION = 1e4
 #: Smallest angle between light and viewer, in degrees: no instrument puts its detector on its source.
 MIN_SEPARATION = 5.0
 #: Zenith angles beyond this are not chosen by default: few instruments reach them and the map weighs them little.
@@ -37,9 +40,16 @@ MAX_THETA = 80.0
 
 
 def select_bins(
-    basis: Basis, count: int, *, max_theta: float = MAX_THETA, candidates: int = CANDIDATES, seed: int = 0
+    basis: Basis,
+    count: int,
+    *,
+    max_theta: float = MAX_THETA,
+    candidates: int = CANDIDATES,
+    seed: int = 0,
+    progress=None,
 ) -> np.ndarray:
-    """Flat bin indices (count,) chosen greedily to minimise the condition number of the components' rows."""
+    """Flat bin indices (count,) chosen greedily to minimise the condition number of the components' rows;
+    ``progress`` is called after each pair chosen (each scores every candidate: ~0.1 s early, more as rows grow)."""
     wi, wo = bin_directions()
     limit = np.cos(np.radians(max_theta))
     apart = np.sum(wi * wo, axis=1) <= np.cos(np.radians(MIN_SEPARATION))
@@ -72,6 +82,8 @@ def select_bins(
             best = int(np.argmax(norms))
         chosen.append(best)
         available[best] = False
+        if progress is not None:
+            progress(1)
     return pool[chosen]
 
 
@@ -82,6 +94,7 @@ def choose_directions(
     max_theta: float = MAX_THETA,
     candidates: int = CANDIDATES,
     seed: int = 0,
+    progress=None,
 ) -> "Chosen":
     """The ``n`` pairs that best condition a coefficient fit (:func:`select_bins`): their angles (n, 4) in degrees,
     ``theta_i, phi_i, theta_o, phi_o`` (what :func:`write_directions` writes), and the condition number there;
@@ -96,7 +109,7 @@ def choose_directions(
     whole_number("seed", seed, minimum=0)
     if not 0 < max_theta <= 90:
         raise BrdfInputError(Argument("max_theta", f"{max_theta:g}"), ": must lie in (0, 90] degrees")
-    bins = select_bins(basis, n, max_theta=max_theta, candidates=candidates, seed=seed)
+    bins = select_bins(basis, n, max_theta=max_theta, candidates=candidates, seed=seed, progress=progress)
     return Chosen(bin_angles_degrees(bins), condition_number(basis, bins))
 
 
@@ -105,6 +118,12 @@ class Chosen(NamedTuple):
 
     angles: np.ndarray
     condition: float
+
+    @property
+    def poorly_conditioned(self) -> bool:
+        """Whether the pairs barely determine the coefficients (:data:`POOR_CONDITION`): a fit then leans on the
+        ridge, not on the measurements."""
+        return not self.condition < POOR_CONDITION
 
 
 def condition_number(basis: Basis, bins: np.ndarray) -> float:
@@ -123,6 +142,14 @@ def bin_angles_degrees(bins: np.ndarray) -> np.ndarray:
 
 def write_directions(angles: np.ndarray, path: str | os.PathLike) -> None:
     """Write pairs' angles (count, 4) in degrees as a directions CSV, atomically."""
+    angles = np.asarray(angles, dtype=float)
+    if angles.ndim != 2 or angles.shape[1] != 4 or angles.shape[0] == 0:
+        raise BrdfInputError(
+            f"{path}: angles must have shape (N, 4) (theta_i, phi_i, theta_o, phi_o), got {angles.shape}"
+        )
+    zenith = angles[:, [0, 2]]
+    if not np.all(np.isfinite(angles)) or np.any((zenith < 0) | (zenith > 90)):
+        raise BrdfInputError(f"{path}: angles must be finite, zenith angles in [0, 90] degrees")
     lines = [",".join(COLUMNS)] + [",".join(f"{value:.10g}" for value in row) for row in angles]
     write_text_atomic(path, "\n".join(lines) + "\n")
 
@@ -142,6 +169,8 @@ def read_directions(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     positions = [header.index(name) for name in COLUMNS]
     angles = np.empty((len(rows) - 1, 4))
     for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise BrdfInputError(f"{path}: row {number}: {len(row)} fields, but the header names {len(header)}")
         try:
             angles[number - 2] = [float(row[position]) for position in positions]
         except (ValueError, IndexError):
