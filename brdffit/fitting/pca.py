@@ -160,7 +160,8 @@ def pca_caveats(samples: Samples, coefficients: np.ndarray, empty: int) -> list[
         warnings.append(
             f"coefficients[{k}][{samples.channels[c]}] = {coefficients[k, c]:+.2f} library standard deviations"
             f" ({int(far.sum())} coefficient(s) beyond ±{OUTSIDE_LIBRARY:g}): the material lies outside the library,"
-            " where the basis extrapolates; raise --ridge or build the basis from a library that holds such materials"
+            " where the basis extrapolates; raise the ridge (--ridge) or build the basis from a library that holds"
+            " such materials"
         )
     if empty:
         warnings.append(
