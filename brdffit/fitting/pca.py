@@ -4,13 +4,15 @@ In the space the basis is linear in (``mapping.py``), the material is ``m = mean
 there is ridge regression, solved exactly in one step (``(ΦᵀΦ + ridge·I) c = Φᵀ(m(y) − mean)``, per channel).
 That is what the linearity buys: no search over starts, a unique optimum of the mapped problem, and a start that
 is already at the optimum when the measurements lie on the basis. The fit itself minimises the chosen loss on the
-BRDF values, ``Σ r² + ridge · Σ c²``, with Optimistix's Levenberg-Marquardt from that start: the loss and the map
+BRDF values, ``Σ r² + ridge · Σ c²``, with brdffit's one-pass Levenberg-Marquardt (``solver.py``, on Optimistix)
+from that start, chunk by chunk (a MERL-size measurement fits in the memory of one chunk): the loss and the map
 differ (a log loss on ``ln(1 + f cos θi)``, a map on ``ln(f cos θi cos θo + ε)``), and the BRDF between bins is a
 blend of its neighbours' (``basis.py``), so a few steps remain. Channels have their own coefficients and are
 solved one after another by one compiled program.
 """
 
 from functools import partial
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -24,13 +26,10 @@ from ..physics.pca.basis import Corners, visible_pairs
 from ..physics.pca.mapping import EPSILON, cosine_weight, mapped
 from .losses import Loss
 from .outcome import result_of
-from .problem import build_problem, target_and_scale
+from .problem import Sums, build_problem, chunk_size, target_and_scale
 from .results import FitResult
-from .solve import OUTCOMES, Solved
+from .solve import OUTCOMES, TOLERANCES, Solved
 
-#: The solve stops when a step moves the coefficients by less than this (relative and absolute, optimistix's
-#: Cauchy test): coefficients are in library standard deviations, and 1e-8 of one is far below any fit's error.
-COEFFICIENT_TOLERANCE = 1e-8
 #: A fitted coefficient this many library standard deviations from the library's mean gets a warning: the
 #: material lies outside the library, where the basis extrapolates.
 OUTSIDE_LIBRARY = 4.0
@@ -60,19 +59,20 @@ def fit_pca(
                 Argument("start"),
                 f" coefficients have {coefficients.shape[1]} channel(s) but the samples have {samples.n_channels}",
             )
-    solve = partial(_solve_channel, loss, model.basis.mapping, max_steps)
     device_corners = jax.device_put(corners)
-    cos_i = problem.wi[:, 2]
     solved, outcomes, steps = [], [], []
     for c in range(samples.n_channels):
-        value, outcome, n_steps = solve(
-            jnp.asarray(coefficients[:, c]),
-            device_corners,
-            problem.measured[:, c],
-            jnp.asarray(target[:, c]),
-            jnp.asarray(scale[:, c]),
-            cos_i,
-            jnp.asarray(np.sqrt(model.prior_weight)),
+        channel = Channel(
+            corners=device_corners,
+            measured=problem.measured[:, c],
+            target=jnp.asarray(target[:, c]),
+            scale=jnp.asarray(scale[:, c]),
+            cos_i=problem.wi[:, 2],
+            real=problem.real,
+            weight=jnp.asarray(model.prior_weight),
+        )
+        value, outcome, n_steps = _solve_channel(
+            loss, model.basis.mapping, max_steps, jnp.asarray(coefficients[:, c]), channel
         )
         solved.append(np.asarray(value))
         outcomes.append(int(outcome))
@@ -128,23 +128,69 @@ def ridge_start(model: PcaModel, corners: Corners, measured, scale, wi, wo) -> n
     return out
 
 
+class Channel(NamedTuple):
+    """One channel's data for the solve, padded rows included (scale 0): the basis at each sample's ``corners``,
+    ``measured`` (1/sr), the loss's ``target`` and residual ``scale``, ``cos_i``, which rows are ``real``, and the
+    prior's ``weight`` (``PcaModel.prior_weight``)."""
+
+    corners: Corners
+    measured: Any
+    target: Any
+    scale: Any
+    cos_i: Any
+    real: Any
+    weight: Any
+
+
+def channel_sums(loss: Loss, mapping: str, c, channel: Channel) -> Sums:
+    """``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f − y)²`` of one channel at coefficients ``c`` (K,), the prior's
+    ``weight · Σ c²`` included, in one pass over chunks of the samples (``problem.chunk_size``): memory is one
+    chunk's (its (chunk, 8, K) corners and a (chunk, K) Jacobian by forward mode) whatever the data size."""
+    n = channel.measured.shape[0]
+    size = chunk_size(n)
+    rows = channel._replace(weight=None)
+    chunked = jax.tree.map(lambda leaf: leaf.reshape(n // size, size, *leaf.shape[1:]), rows)
+
+    def residuals(c, chunk):
+        f = chunk.corners.brdf(mapping, c[:, None])[:, 0]
+        return (loss.transform(f, chunk.measured, chunk.cos_i) - chunk.target) * chunk.scale, f
+
+    def accumulate(sums, chunk):
+        (r, f), jacobian = residuals(c, chunk), jax.jacfwd(lambda x: residuals(x, chunk)[0])(c)
+        error = jnp.where(chunk.real, f - chunk.measured, 0.0)
+        cost, gradient, gram, squared_error = sums
+        return (
+            cost + r @ r,
+            gradient + jacobian.T @ r,
+            gram + jacobian.T @ jacobian,
+            squared_error + error @ error,
+        ), None
+
+    k = c.shape[0]
+    zero = jnp.zeros((), jnp.float64)
+    start = (zero, jnp.zeros(k, jnp.float64), jnp.zeros((k, k), jnp.float64), zero)
+    (cost, gradient, gram, squared_error), _ = jax.lax.scan(accumulate, start, chunked)
+    weight = channel.weight
+    return Sums(cost + weight * (c @ c), gradient + weight * c, gram + weight * jnp.eye(k), squared_error)
+
+
 @jit(static_argnums=(0, 1, 2))
-def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, corners, measured, target, scale, cos_i, ridge_root):
-    """Levenberg-Marquardt (Optimistix) on one channel's coefficients: residuals ``scale·(T(f) − T(y))`` and
-    ``sqrt(ridge)·c``. Returns the coefficients, the outcome's index into ``OUTCOMES`` and the steps taken."""
-    import lineax as lx
+def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, channel: Channel):
+    """brdffit's Levenberg-Marquardt (``solver.py``, MINPACK's tests and tolerances) on one channel's coefficients:
+    residuals ``scale·(T(f) − T(y))`` and the prior's ``sqrt(weight)·c``. Returns the coefficients, the outcome's
+    index into ``OUTCOMES`` and the steps taken."""
     import optimistix as optx
 
-    def residuals(c, _):
-        f = corners.brdf(mapping, c[:, None])[:, 0]
-        data = (loss.transform(f, measured, cos_i) - target) * scale
-        return data, ridge_root * c
+    from .solver import OnePassLevenbergMarquardt
 
-    rtol = atol = COEFFICIENT_TOLERANCE
-    # K coefficients, N samples: the normal equations (K × K, Cholesky) cost a pass over the Jacobian, where a QR
-    # of the (N + K) × K augmented matrix cost several (a MERL-size fit: ~3× slower).
-    solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol, linear_solver=lx.Normal(lx.Cholesky()))
-    solution = optx.least_squares(residuals, solver, c0, max_steps=max_steps, throw=False)
+    ftol, gtol, atol = TOLERANCES["float64"]
+    equations = partial(channel_sums, loss, mapping)
+    solver = OnePassLevenbergMarquardt(normal_equations=equations, rtol=ftol, atol=atol, gtol=gtol)
+
+    def shape(c, channel: Channel):  # optimistix asks the residuals' shape only; the solver never evaluates them
+        return jnp.zeros(channel.measured.shape, c.dtype)
+
+    solution = optx.least_squares(shape, solver, c0, args=channel, max_steps=max_steps, throw=False)
     ended = [solution.result == getattr(optx.RESULTS, name) for name in OUTCOMES]
     outcome = jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
     return solution.value, outcome, solution.stats["num_steps"]
