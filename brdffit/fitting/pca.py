@@ -78,7 +78,7 @@ def fit_pca(
         outcomes.append(int(outcome))
         steps.append(int(n_steps))
     coefficients = np.stack(solved, axis=1)
-    predicted = Corners(*(np.asarray(part) for part in corners)).brdf(model.basis.mapping, coefficients)
+    predicted = corners.brdf(model.basis.mapping, coefficients)
     real = np.asarray(problem.real)
     residuals = (np.asarray(loss.transform(predicted, problem.measured, problem.wi[:, 2:3])) - target) * scale
     failed = next((outcome for outcome in outcomes if outcome != 0), 0)  # the first channel that did not converge
@@ -101,13 +101,14 @@ def ridge_scale(mapping: str, loss: Loss, problem, scale: np.ndarray, corners: C
     mapped space is, squared, in the loss's units. The ridge is given in the mapped space, where the library's
     statistics live; the fit weighs it by this against the loss's residuals."""
     measured = np.maximum(np.asarray(problem.measured), 0.0)
-    cos_i = np.asarray(problem.wi[:, 2:3])
     _, slope = loss.value_and_slope(jnp.asarray(measured), problem.measured, problem.wi[:, 2:3])
     cosine = np.maximum(cosine_weight(np.asarray(problem.wi), np.asarray(problem.wo)), 1e-12)[:, None]
     per_mapped = 1.0 if mapping == "none" else measured + EPSILON / cosine  # dρ/dm = (ρw + ε)/w
-    counted = (scale > 0) & (corners.weight.sum(axis=1) > 0)[:, None] & (cos_i > 0)
+    # Samples below the horizon already have no corner weight (fit_pca): the weight says which count.
+    counted = (scale > 0) & (corners.weight.sum(axis=1) > 0)[:, None]
     values = (scale * np.asarray(slope) * per_mapped)[counted] ** 2
-    return float(np.median(values)) if values.size and np.median(values) > 0 else 1.0
+    median = float(np.median(values)) if values.size else 0.0
+    return median if median > 0 else 1.0
 
 
 def ridge_start(model: PcaModel, corners: Corners, measured, scale, wi, wo) -> np.ndarray:
