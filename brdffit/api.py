@@ -36,6 +36,8 @@ def fit(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     uncertainty: str | None = None,
     mcmc: MCMC | None = None,
     chain: str | os.PathLike | None = None,
@@ -53,7 +55,12 @@ def fit(
     then refines the optimum in float64 (mixed-precision iterative refinement,
     usually one or two steps), so the result is float64's.
     ``seed``: the random part of the subset the starts are searched on (above
-    16,384 samples). ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds the
+    16,384 samples). ``fixed``: parameters held at values, by the result
+    file's names (``{"eta": 1.5, "kd": 0, "lobes[1].cxy": 0.577}``; an albedo
+    takes one value for every channel or a list); ``bounds``: parameters held
+    within ranges (``{"m": (0.05, 0.3)}``); ``docs/holding.md``. Both are
+    written to the result (``fit.fixed``, ``fit.bounds``), and the uncertainty
+    covers the free parameters only. ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds the
     result's ``uncertainty``; ``mcmc`` (:class:`brdffit.MCMC`: walkers, steps,
     burn, thin, seed), ``chain`` (a ``.npz`` or ``.h5`` file for the chain) and
     ``progress`` (a progress bar) apply to ``"mcmc"``. ``model_options``:
@@ -64,8 +71,10 @@ def fit(
     if start is not None and isinstance(model, str):  # Lafortune's number of lobes may come from the start
         model, model_options = model_for(model, start, **model_options), {}
     if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
-        built, _, kept = checked(samples, model, loss, max_theta, dtype, **model_options)
-        check_walkers(mcmc or MCMC(), built, kept)
+        built, _, kept, constraints = checked(
+            samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
+        )
+        check_walkers(mcmc or MCMC(), built, kept, constraints)
     result = fit_one(
         samples,
         model,
@@ -76,6 +85,8 @@ def fit(
         max_steps=max_steps,
         dtype=dtype,
         seed=seed,
+        fixed=fixed,
+        bounds=bounds,
         **model_options,
     )
     warn_about(result)
@@ -98,6 +109,8 @@ def fit_batch(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     uncertainty: str | None = None,
     mcmc: MCMC | None = None,
     client=None,
@@ -127,6 +140,8 @@ def fit_batch(
         max_steps=max_steps,
         dtype=dtype,
         seed=seed,
+        fixed=fixed,
+        bounds=bounds,
         uncertainty=uncertainty,
         mcmc=mcmc,
     )
@@ -140,8 +155,10 @@ def fit_batch(
         samples = [as_samples(one, **read_options) for one in samples]
         if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
             for one in samples:
-                built, _, kept = checked(one, model, loss, max_theta, dtype, **model_options)
-                check_walkers(mcmc or MCMC(), built, kept)
+                built, _, kept, constraints = checked(
+                    one, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
+                )
+                check_walkers(mcmc or MCMC(), built, kept, constraints)
         results = fit_here(samples, model, loss, start=start, progress=progress, **options, **model_options)
     for result in results:
         warn_about(result)

@@ -79,7 +79,7 @@ def fit_on_cluster(
     items = list(items)
     starts = starts_per_dataset(start, len(items))
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
-    chunks = _chunks(items, starts, model, loss, options.get("max_theta"), options.get("dtype", "float64"), workers)
+    chunks = _chunks(items, starts, model, loss, options, workers)
     futures = {
         client.submit(
             _fit_chunk,
@@ -110,13 +110,20 @@ def fit_on_cluster(
     return results
 
 
-def _chunks(items: list, starts: list, model: Model, loss: str, max_theta, dtype: str, workers: int) -> list[list[int]]:
+def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, workers: int) -> list[list[int]]:
     """The indices of ``items`` each task fits, in runs of at most :data:`PER_TASK` and small enough that every
     worker gets four tasks where there are enough items: datasets in memory cut within ``fit_many``'s own work
     units (one bucket's batch, whose programs stack the datasets and treat each alone), paths in runs of
     consecutive ones."""
     in_memory = [index for index, item in enumerate(items) if isinstance(item, Samples)]
-    kept = [checked(items[index], model, loss, max_theta, dtype)[2] for index in in_memory]
+    checks = {name: options.get(name) for name in ("max_theta", "fixed", "bounds")}
+    dtype = options.get("dtype", "float64")
+    kept = [
+        checked(items[index], model, loss, checks["max_theta"], dtype, fixed=checks["fixed"], bounds=checks["bounds"])[
+            2
+        ]
+        for index in in_memory
+    ]
     units = [
         [in_memory[position] for position in unit.indices]
         for unit in work_units(model, kept, [starts[index] is not None for index in in_memory])

@@ -17,6 +17,7 @@ from ..errors import Argument, BrdfInputError
 #: Flags whose name is not the argument's with ``_`` as ``-`` (``max_theta`` → ``--max-theta``).
 FLAGS = {
     "n_starts": "--starts",
+    "fixed": "--fix",
     "n": "-n",  # brdffit basis directions
     # brdffit plot's positional files and its -o
     "results": "RESULT",
@@ -75,6 +76,78 @@ def model_options(args: argparse.Namespace) -> dict[str, Any]:
     return {name: getattr(args, name) for name in MODEL_OPTIONS}
 
 
+def add_holding_options(command: argparse.ArgumentParser) -> None:
+    """``--fix`` and ``--bounds``: parameters held at values or within ranges (``docs/holding.md``)."""
+    holding = command.add_argument_group("holding parameters (names as in the result file; docs/holding.md)")
+    holding.add_argument(
+        "--fix",
+        action="append",
+        metavar="NAME=VALUE[,…]",
+        help="hold parameters at values, out of the fit: eta=1.5, kd=0 (every channel), kd=[0.1,0.2,0.3],"
+        " lobes[1].cxy=0.577",
+    )
+    holding.add_argument(
+        "--bounds",
+        action="append",
+        metavar="NAME=LO:HI[,…]",
+        help="search parameters only within [LO, HI], inside their domains: m=0.05:0.3",
+    )
+
+
+def holding_arguments(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """``fixed`` and ``bounds`` as :func:`brdffit.fit` takes them, from ``--fix`` and ``--bounds`` (each may be given
+    more than once, each a comma-separated list); the names and values are checked against the model by the fit."""
+    fixed: dict[str, Any] = {}
+    for item in _held_items(args.fix, "--fix"):
+        name, value = _name_and_text(item, "--fix", "NAME=VALUE (eta=1.5, kd=[0.1,0.2,0.3])")
+        try:
+            fixed[_new(name, fixed, "--fix")] = json.loads(value)
+        except json.JSONDecodeError:
+            raise BrdfInputError(f"--fix {item}: {value!r} is not a number or a list of numbers") from None
+    bounds: dict[str, Any] = {}
+    for item in _held_items(args.bounds, "--bounds"):
+        name, value = _name_and_text(item, "--bounds", "NAME=LO:HI (m=0.05:0.3)")
+        low, colon, high = value.partition(":")
+        try:
+            bounds[_new(name, bounds, "--bounds")] = [float(low), float(high)] if colon else None
+        except ValueError:
+            bounds[name] = None
+        if bounds[name] is None:
+            raise BrdfInputError(f"--bounds {item}: give the range as LO:HI, two numbers (m=0.05:0.3)")
+    return {"fixed": fixed, "bounds": bounds}
+
+
+def _held_items(values: list[str] | None, flag: str) -> list[str]:
+    """The ``NAME=…`` items of every ``flag`` given, split at commas outside ``[…]`` (a per-channel list)."""
+    items = []
+    for value in values or []:
+        depth, current = 0, ""
+        for character in value:
+            depth += {"[": 1, "]": -1}.get(character, 0)
+            if character == "," and depth == 0:
+                items.append(current.strip())
+                current = ""
+            else:
+                current += character
+        items.append(current.strip())
+    if any(not item for item in items):
+        raise BrdfInputError(f"{flag}: an empty item; give NAME=… separated by commas")
+    return items
+
+
+def _name_and_text(item: str, flag: str, form: str) -> tuple[str, str]:
+    name, equals, value = item.partition("=")
+    if not equals or not name.strip() or not value.strip():
+        raise BrdfInputError(f"{flag} {item}: give {form}")
+    return name.strip(), value.strip()
+
+
+def _new(name: str, given: dict[str, Any], flag: str) -> str:
+    if name in given:
+        raise BrdfInputError(f"{flag}: {name} is given twice")
+    return name
+
+
 def add_comparison_options(command: argparse.ArgumentParser) -> None:
     """The options of a model comparison (``compare`` and ``report``): the samples, the models, the loss, the folds,
     the solver's settings, the seed and the reading options."""
@@ -104,6 +177,7 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
     command.add_argument(
         "--seed", type=int, default=0, help="seed of the folds, the start search's subset and --subsample (default 0)"
     )
+    add_holding_options(command)
     add_loading_options(command)
 
 
@@ -130,6 +204,7 @@ def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
         "max_theta": args.max_theta,
         "n_starts": args.starts,
         "max_steps": args.max_steps,
+        **holding_arguments(args),
     }
 
 

@@ -11,8 +11,10 @@ from pathlib import Path
 from ..errors import Argument, BrdfInputError
 from . import EXIT_NOT_CONVERGED, EXIT_OK
 from .arguments import (
+    add_holding_options,
     add_loading_options,
     add_model_options,
+    holding_arguments,
     json_argument,
     load,
     model_files,
@@ -31,6 +33,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     add_model_options(parser, "ward")
     parser.add_argument("--loss", default="log", metavar="NAME", help=f"one of: {', '.join(LOSSES)} (default log)")
     parser.add_argument("--max-theta", type=float, metavar="DEG", help="drop samples with θi or θo above DEG degrees")
+    add_holding_options(parser)
     add_loading_options(parser)
     parser.add_argument(
         "--start",
@@ -107,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
     inputs += model_files(model.model_options)
     outputs = output_paths(args.samples, args.output, model, inputs)
     start = _start(args.start)
+    held = holding_arguments(args)
+    _check_holding(model, held)
     if args.workers is not None and args.workers < 1:
         raise BrdfInputError(f"--workers must be 1 or more, got {args.workers}")
     if args.chain and (args.scheduler or args.workers):
@@ -117,9 +122,9 @@ def run(args: argparse.Namespace) -> int:
         samples = [load(path, args) for path in args.samples]  # every input read and checked before any fit
     if args.scheduler or args.workers:
         with cluster_client(args.scheduler, args.workers) as client:
-            results = _fit(args, model, samples, start, mcmc, client=client)
+            results = _fit(args, model, samples, start, mcmc, held, client=client)
     else:
-        results = _fit(args, model, samples, start, mcmc)
+        results = _fit(args, model, samples, start, mcmc, held)
     if outputs is None:  # -o -: the result file on standard output, everything else on standard error
         sys.stdout.write(results[0].to_json())
     else:
@@ -134,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK if all(result.converged for result in results) else EXIT_NOT_CONVERGED
 
 
-def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, client=None) -> list:
+def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, held: dict, client=None) -> list:
     """Every fit, with its uncertainty when asked; their warnings are the results' own (``_report`` prints them).
     With a Dask ``client``, spread over its workers; paths in ``samples`` are read there."""
     from .. import api
@@ -148,6 +153,7 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, client=Non
         seed=args.seed,
         uncertainty=args.uncertainty,
         mcmc=mcmc,
+        **held,
     )
     if client is not None:
         return api.fit_batch(samples, model, args.loss, client=client, read_options=read_options(args), **options)
@@ -178,6 +184,14 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None)
                 f"brdffit: warning: {path}: the fit did not converge ({result.message}); written with converged: false",
                 file=sys.stderr,
             )
+
+
+def _check_holding(model, held: dict) -> None:
+    """The names, values and bounds of ``--fix`` and ``--bounds`` checked against the model before any file is read
+    (the channel count is checked with the samples)."""
+    from ..fitting.constraints import check_names
+
+    check_names(model, **held)
 
 
 def _start(value: str | None):

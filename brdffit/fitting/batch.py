@@ -49,6 +49,8 @@ def fit_many(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch`."""
@@ -57,9 +59,10 @@ def fit_many(
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
     starts = starts_per_dataset(start, len(samples))
-    kept_by_check = [checked(one, model, loss, max_theta, dtype, **model_options) for one in samples]
+    held = dict(fixed=fixed, bounds=bounds)
+    kept_by_check = [checked(one, model, loss, max_theta, dtype, **held, **model_options) for one in samples]
     built, built_loss = kept_by_check[0][0], kept_by_check[0][1]
-    kept = [one for _, _, one in kept_by_check]
+    kept = [one for _, _, one, _ in kept_by_check]
     n_starts = whole_number("n_starts", n_starts)
     max_steps = whole_number("max_steps", max_steps)
     vectors = [
@@ -76,16 +79,27 @@ def fit_many(
                 (index,) = unit.indices
                 one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
                 given = starts[index] if built.own_fit else None
-                results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **one)
+                results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **held, **one)
             else:
                 thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
-                solved = solve_bucket(built, built_loss, [kept[i] for i in unit.indices], thetas, **options)
+                constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
+                hold = None if constraints is None else constraints.hold()
+                unit_samples = [kept[i] for i in unit.indices]
+                solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, **options)
                 each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
                 n_channels = kept[unit.indices[0]].n_channels
                 still_open = albedo_screens(built, [final_params(built, one, n_channels) for one in each])
                 for one, index, incidences in zip(each, unit.indices, still_open, strict=True):
                     results[index] = result_of(
-                        built, built_loss, kept[index], one, max_steps, dtype, max_theta, albedo_open=incidences
+                        built,
+                        built_loss,
+                        kept[index],
+                        one,
+                        max_steps,
+                        dtype,
+                        max_theta=max_theta,
+                        albedo_open=incidences,
+                        constraints=constraints,
                     )
             bar.update(len(unit.indices))
     finally:

@@ -25,6 +25,7 @@ from .._jax import float64, jit
 from .._lazy import jax
 from ..data.samples import Samples
 from ..physics.models import Model
+from .hold import Hold
 from .losses import Loss
 from .problem import Problem, build_problems, padded_size
 from .solve import best_index, solved_from
@@ -78,14 +79,18 @@ def solve_bucket(
     dtype: str,
     seed: int,
     strategy: str,
+    hold: Hold | None = None,
 ):
     """The best solve (a ``fit.Solved`` of numpy arrays with a leading axis D) of each dataset of one bucket.
 
-    ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them.
+    ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them. ``hold``:
+    what every dataset's fit holds (``hold.py``), or None.
     """
     count = padded_size(len(samples))  # few distinct batch sizes, few compiled programs
     full = build_problems(samples, dtype, count)
-    solve = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
+    holds = None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (count, leaf.size)), hold)
+    solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
+    solve = lambda thetas, problems: solver(thetas, problems, holds)
     if starts is not None:
         thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
     else:
@@ -94,16 +99,16 @@ def solve_bucket(
         if subsets[0] is not None:
             chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
             search = build_problems(chosen, dtype, count)
-        thetas = grid_starts(model, loss, n_starts, full if search is None else search)
+        thetas = grid_starts(model, loss, n_starts, full if search is None else search, holds)
         if search is not None and thetas.shape[1] > 1:  # the starts race on the subset; the winner goes on
             one_start = jax.ShapeDtypeStruct((count, 1, thetas.shape[2]), np.float64)
-            compiling = compile_in_background(solve, one_start, full)
+            compiling = compile_in_background(solver, one_start, full, holds)
             thetas = _best(solve(thetas, search)).theta[:, None]
             compiling.join()
     solved = _best(solve(thetas, full))
     if dtype == "float32":
         refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
-            solved.theta[:, None], build_problems(samples, "float64", count)
+            solved.theta[:, None], build_problems(samples, "float64", count), holds
         )
         solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
     return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
@@ -137,19 +142,20 @@ def compile_in_background(solve, *arguments) -> threading.Thread:
 
 @cache
 def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
-    """``solve(thetas (D, S, k), problems (D, N, …)) -> Solved (D, S, …)``: every start of every dataset."""
+    """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None) -> Solved (D, S, …)``: every start of
+    every dataset."""
     one = partial(solved_from, model, loss, max_steps, dtype)
 
-    def solve(thetas, problems: Problem):
+    def solve(thetas, problems: Problem, holds: Hold | None):
         if vectorise:
-            return jax.vmap(lambda starts, problem: jax.vmap(lambda theta: one(theta, problem))(starts))(
-                thetas, problems
+            return jax.vmap(lambda starts, problem, hold: jax.vmap(lambda theta: one(theta, problem, hold))(starts))(
+                thetas, problems, holds
             )
 
-        def each_dataset(pair):
-            starts, problem = pair
-            return jax.lax.map(lambda theta: one(theta, problem), starts)
+        def each_dataset(triple):
+            starts, problem, hold = triple
+            return jax.lax.map(lambda theta: one(theta, problem, hold), starts)
 
-        return jax.lax.map(each_dataset, (thetas, problems))
+        return jax.lax.map(each_dataset, (thetas, problems, holds))
 
     return jit(solve, name=f"fitting.buckets.solve[{model!r}, {loss!r}, {max_steps}, {dtype!r}, {vectorise}]")

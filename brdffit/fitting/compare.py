@@ -39,8 +39,9 @@ from ..errors import Argument, BrdfInputError
 from ..physics.fresnel import FRESNEL
 from ..physics.models import Model, get_model
 from ..physics.models.specs import model_of_spec, spec_of
+from .constraints import constraints_for, parameter_names
 from .defaults import MAX_STEPS, N_STARTS
-from .fit import fit_one
+from .fit import checked, fit_one
 from .folds import Folds, make_folds
 from .losses import Loss, get_loss
 from .problem import Problem, build_problem, cost, residuals, sample_residuals
@@ -97,6 +98,8 @@ class ModelScore:
             "message": result.message,
             "warnings": list(result.warnings),
             "params": result.params,
+            "fixed": dict(result.fixed),
+            "bounds": dict(result.bounds),
         }
 
     @classmethod
@@ -115,6 +118,8 @@ class ModelScore:
             converged=bool(entry["converged"]),
             message=str(entry.get("message", "")),
             warnings=list(entry["warnings"]),
+            fixed=dict(entry.get("fixed", {})),
+            bounds=dict(entry.get("bounds", {})),
         )
         return cls(
             entry["spec"],
@@ -224,20 +229,28 @@ def compare(
     max_theta: float | None = None,
     n_starts: int = N_STARTS,
     max_steps: int = MAX_STEPS,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     progress: bool | None = False,
 ) -> Comparison:
     """Fit every model of ``models`` (specs such as ``"lafortune:lobes=2"``, or :class:`Model` objects; default
     :func:`default_specs`) to ``samples`` by ``loss`` and rank them by their ``folds``-fold cross-validated loss.
 
     ``seed`` makes the folds (and the start search's subset); ``max_theta``, ``n_starts`` and ``max_steps`` are
-    those of :func:`brdffit.fit`. ``progress``: a progress bar on stderr (None: when stderr is a terminal).
-    Returns a :class:`Comparison`, best first.
+    those of :func:`brdffit.fit`. ``fixed`` and ``bounds`` (those of :func:`brdffit.fit`) apply to each model that
+    has the parameter named (``eta`` to Cook-Torrance's dielectric Fresnel only); a name no model has is refused.
+    A fixed parameter is not counted in ``k``. ``progress``: a progress bar on stderr (None: when stderr is a
+    terminal). Returns a :class:`Comparison`, best first.
     """
     samples = as_samples(samples).within(max_theta)
     loss_kind = get_loss(loss)
     chosen = [_model(one) for one in (default_specs() if models is None else models)]
     if not chosen:
         raise BrdfInputError(Argument("models"), ": give at least one model to compare")
+    held = [_held_by(model, fixed, bounds) for model in chosen]
+    _check_every_name_used(chosen, fixed, bounds)
+    for model, one in zip(chosen, held, strict=True):
+        checked(samples, model, loss, None, "float64", **one)  # every model's values and bounds before any fit
     split = make_folds(samples, folds, seed)
     problem = build_problem(samples)
     from tqdm.auto import tqdm
@@ -245,11 +258,10 @@ def compare(
     bar = tqdm(total=len(chosen), unit="model", disable=None if progress is None else not progress, leave=False)
     scores = []
     try:
-        for model in chosen:
+        for model, one in zip(chosen, held, strict=True):
             bar.set_description(spec_of(model.name, model.model_options))
-            result = fit_one(
-                samples, model, loss, max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, seed=seed
-            )
+            options = dict(max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, seed=seed)
+            result = fit_one(samples, model, loss, **options, **one)
             fold_losses, fold_converged = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
             score = _score(model, result, samples, fold_losses)
             notes = _fold_notes(fold_losses, fold_converged, split, samples)
@@ -287,6 +299,27 @@ def _nulls(value: Any) -> Any:
     return value
 
 
+def _held_by(model: Model, fixed, bounds) -> dict[str, dict[str, Any]]:
+    """The part of ``fixed`` and ``bounds`` that names parameters of ``model``."""
+    names = set(parameter_names(model))
+    return {
+        "fixed": {name: value for name, value in (fixed or {}).items() if name in names},
+        "bounds": {name: value for name, value in (bounds or {}).items() if name in names},
+    }
+
+
+def _check_every_name_used(models: list[Model], fixed, bounds) -> None:
+    """A held name that no compared model has is a mistake (a misspelt name would otherwise hold nothing)."""
+    names = {name for model in models for name in parameter_names(model)}
+    for argument, given in (("fixed", fixed), ("bounds", bounds)):
+        for name in given or {}:
+            if name not in names:
+                raise BrdfInputError(
+                    Argument(argument),
+                    f": no compared model has a parameter {name!r}; they have {', '.join(sorted(names))}",
+                )
+
+
 def _model(one: str | Model) -> Model:
     if isinstance(one, Model):
         return one
@@ -310,17 +343,21 @@ def _cross_validated(
         solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
         held_out_cost = _held_out_cost(model, loss)
         theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
+        constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds)
+        hold = None if constraints is None else constraints.hold()
     losses, converged = [], []
     for k in range(split.count):
         held = split.held_out(k)
         n_held = int(np.sum(held & counted)) * samples.n_channels
         if held_out_cost is None:
-            refit = fit_one(samples.select(~held), refit_model, loss, start=result.params, max_steps=max_steps)
+            refit = fit_one(
+                samples.select(~held), refit_model, loss, start=result.params, max_steps=max_steps
+            )  # no hold
             params = refit_model.dictionary.to_params(refit.params)
             total = np.sum(sample_residuals(refit_model, loss, params, samples.select(held))[counted[held]] ** 2)
             fold_converged = refit.converged
         else:
-            fitted = solve(theta0, problem._replace(real=_rows(~held, problem)))
+            fitted = solve(theta0, problem._replace(real=_rows(~held, problem)), hold)
             total = held_out_cost(fitted.theta, problem._replace(real=_rows(held, problem)))
             fold_converged = bool(fitted.converged)
         losses.append(float(total) / n_held if n_held else math.nan)
@@ -361,8 +398,9 @@ def _held_out_cost(model: Model, loss: Loss):
 
 
 def _score(model: Model, result: FitResult, samples: Samples, fold_losses: list[float]) -> ModelScore:
-    """AIC, BIC and the cross-validated loss of one fit (module docstring)."""
-    k = model.unconstrained.size(samples.n_channels)
+    """AIC, BIC and the cross-validated loss of one fit (module docstring); ``k`` counts its free parameters."""
+    constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds)
+    k = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
     counted = samples.n_samples if samples.weight is None else int(np.sum(samples.weight > 0))
     n = counted * samples.n_channels
     if samples.sigma is None:

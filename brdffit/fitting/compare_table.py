@@ -36,6 +36,11 @@ def comparison_table(comparison) -> str:
             f"  {_number(score.cv_loss):>10} ± {_number(score.cv_stderr):<9} {len(score.result.warnings):>8}{status}"
         )
     lines.append("  * best   = within one standard error of the best")
+    for score in comparison.models:
+        held = [f"{name} = {_shown(value)}" for name, value in score.result.fixed.items()]
+        held += [f"{name} in [{low:g}, {high:g}]" for name, (low, high) in score.result.bounds.items()]
+        if held:
+            lines.append(f"  {score.spec}: held: {', '.join(held)} (k counts the free parameters)")
     shared = [line for line in comparison.models[0].result.warnings if _in_every(comparison, line)]
     lines += [f"  every model: warning: {line}" for line in shared]
     for score in comparison.models[:WARNINGS_OF_FIRST]:
@@ -48,6 +53,12 @@ def comparison_table(comparison) -> str:
 def _in_every(comparison, line: str) -> bool:
     """Whether every model's fit has the warning ``line`` (one about the data, such as non-reciprocal values)."""
     return all(line in score.result.warnings for score in comparison.models)
+
+
+def _shown(value) -> str:
+    """A fixed value: one number, or an albedo's per channel (one number when they are all equal)."""
+    values = value if isinstance(value, list) else [value]
+    return f"{values[0]:g}" if len(set(values)) == 1 else "[" + ", ".join(f"{one:g}" for one in values) + "]"
 
 
 def _number(value: float) -> str:

@@ -18,7 +18,9 @@ from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
 from ..physics.models import MODELS, RECORDED_OPTIONS, Model, get_model, model_option_names
 from .buckets import compile_in_background, default_strategy, solve_bucket
+from .constraints import Constraints, constraints_for
 from .defaults import MAX_STEPS, N_STARTS
+from .hold import Hold
 from .lobes import lobe_by_lobe
 from .losses import Loss, get_loss
 from .outcome import result_of
@@ -40,10 +42,15 @@ def fit_one(
     max_steps: int = MAX_STEPS,
     dtype: str = "float64",
     seed: int = 0,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     **model_options: Any,
 ) -> FitResult:
     """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
-    model, loss, samples = checked(samples, model, loss, max_theta, dtype, **model_options)
+    model, loss, samples, constraints = checked(
+        samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
+    )
+    hold = None if constraints is None else constraints.hold()
     n_starts = whole_number("n_starts", n_starts)
     max_steps = whole_number("max_steps", max_steps)
     if model.own_fit:  # the data-driven model: a ridge start and its own solve (``pca.py``)
@@ -53,31 +60,36 @@ def fit_one(
             raise BrdfInputError(Argument("dtype", dtype), f" does not apply to model {model.name}; it fits in float64")
         return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
     if start is None and model.n_lobes > 1:
-        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed)
-        return result_of(model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta)
+        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed, hold)
+        return result_of(
+            model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
+        )
     starts = None if start is None else start_vector(model, start, samples.n_channels)[None]
     options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=default_strategy())
-    solved = jax.tree.map(lambda leaf: leaf[0], solve_bucket(model, loss, [samples], starts, **options))
-    return result_of(model, loss, samples, solved, max_steps, dtype, max_theta=max_theta)
+    solved = jax.tree.map(lambda leaf: leaf[0], solve_bucket(model, loss, [samples], starts, hold=hold, **options))
+    return result_of(model, loss, samples, solved, max_steps, dtype, max_theta=max_theta, constraints=constraints)
 
 
-def _lobe_by_lobe(model: Model, loss: Loss, samples: Samples, n_starts: int, max_steps: int, dtype: str, seed: int):
+def _lobe_by_lobe(
+    model: Model, loss: Loss, samples: Samples, n_starts: int, max_steps: int, dtype: str, seed: int, hold: Hold | None
+):
     """The best solve of a model of several lobes and the cost with one lobe less (``lobes.py``), searched on the
-    search subset when there is one and refined on every sample."""
+    search subset when there is one and refined on every sample; every solve respects ``hold``."""
     full = build_problem(samples, dtype)
-    solve = compiled_solver(model, loss, max_steps, dtype)
+    compiled = compiled_solver(model, loss, max_steps, dtype)
+    solve = lambda theta, problem: compiled(theta, problem, hold)
     search = search_problem(samples, full, dtype, seed)
     compiling = None
     if search is not full:
         theta = jax.ShapeDtypeStruct((model.unconstrained.size(samples.n_channels),), np.float64)
-        compiling = compile_in_background(solve, theta, full)
-    by_lobe = lobe_by_lobe(model, loss, search, solve, n_starts, best)
+        compiling = compile_in_background(compiled, theta, full, hold)
+    by_lobe = lobe_by_lobe(model, loss, search, solve, n_starts, best, hold)
     solved = by_lobe.best  # solved on every sample, unless searched on a subset
     if compiling is not None:
         compiling.join()
         solved = solve(by_lobe.best.theta, full)
     if dtype == "float32":
-        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples))
+        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples), hold)
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
     return solved, by_lobe.fewer_lobes_cost if search is full else None
 
@@ -88,8 +100,11 @@ def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Pr
     return full if subset is None else build_problem(samples.select(subset), dtype)
 
 
-def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Model, Loss, Samples]:
-    """The model, the loss and the samples kept by ``max_theta``, after every check of the arguments."""
+def checked(
+    samples, model, loss, max_theta, dtype, *, fixed=None, bounds=None, **model_options
+) -> tuple[Model, Loss, Samples, Constraints | None]:
+    """The model, the loss, the samples kept by ``max_theta`` and what the fit holds (``constraints.py``; None
+    for nothing), after every check of the arguments."""
     _check_option_names(model_options)
     model = get_model(model, **model_options)
     loss = get_loss(loss)
@@ -97,13 +112,15 @@ def checked(samples, model, loss, max_theta, dtype, **model_options) -> tuple[Mo
         raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
     choice("dtype", dtype, DTYPES)
     samples = samples.within(max_theta)
-    n_parameters = model.unconstrained.size(samples.n_channels)
+    constraints = constraints_for(model, samples.n_channels, fixed, bounds)
+    n_parameters = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
+    free = "" if constraints is None else "free "
     if samples.values.size < n_parameters and not model.prior_weight > 0:  # a prior determines what data cannot
         raise BrdfInputError(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
-            f" the {n_parameters} parameters of {model.name}; give at least {n_parameters} values"
+            f" the {n_parameters} {free}parameters of {model.name}; give at least {n_parameters} values"
         )
-    return model, loss, samples
+    return model, loss, samples, constraints
 
 
 def _check_option_names(options: dict[str, Any]) -> None:

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..physics.models import Model
+from .hold import Hold
 from .losses import Loss
 from .problem import Problem
 from .starts import LobeSearch, starting_points
@@ -34,9 +35,12 @@ class LobeFit(NamedTuple):
     fewer_lobes_cost: float
 
 
-def lobe_by_lobe(model: Model, loss: Loss, problem: Problem, solve: Callable, n_starts: int, best: Callable) -> LobeFit:
-    """Fit ``model``'s lobes one at a time on ``problem`` with the compiled ``solve``; ``best`` picks among runs."""
-    search = LobeSearch(model, loss, problem)
+def lobe_by_lobe(
+    model: Model, loss: Loss, problem: Problem, solve: Callable, n_starts: int, best: Callable, hold: Hold | None = None
+) -> LobeFit:
+    """Fit ``model``'s lobes one at a time on ``problem`` with the compiled ``solve``; ``best`` picks among runs.
+    Every start respects ``hold``, which ``solve`` applies (``hold.py``)."""
+    search = LobeSearch(model, loss, problem, hold)
     n_channels = problem.measured.shape[1]
     level_costs = []
     fitted = None
@@ -46,7 +50,7 @@ def lobe_by_lobe(model: Model, loss: Loss, problem: Problem, solve: Callable, n_
         starts = _each_family(search.grid, costs, extra=n_starts if placed == 0 else 0)
         runs = [solve(thetas[index], problem) for index in starts]
         if placed == model.n_lobes - 1:
-            runs += [solve(theta, problem) for theta in starting_points(model, loss, problem, n_starts)]
+            runs += [solve(theta, problem) for theta in starting_points(model, loss, problem, n_starts, hold)]
         if fitted is not None:
             runs.append(fitted)  # the lobes so far with the new one off: never worse than one lobe less
         fitted = best(runs)

@@ -12,6 +12,7 @@ from .._lazy import jax
 from ..data.samples import Samples
 from ..physics.models import Model, Params
 from .caveats import caveats
+from .constraints import Constraints
 from .losses import Loss
 from .results import FitResult
 from .solve import Solved, failure_message
@@ -37,12 +38,17 @@ def result_of(
     max_theta: float | None = None,
     albedo_open: tuple[float, ...] | None = None,
     more_caveats: Sequence[str] = (),
+    constraints: Constraints | None = None,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
     ``samples`` are those fitted, selected by ``max_theta``. ``albedo_open``: the incidences the albedo screen left
-    open, when the caller screened many fits at once (``caveats.albedo_screens``)."""
+    open, when the caller screened many fits at once (``caveats.albedo_screens``). ``constraints``: what the fit
+    held; its fixed values are written exactly, and a parameter that ended on a bound is said."""
     converged = bool(solved.converged)
     params = final_params(model, solved, samples.n_channels)
+    if constraints is not None:
+        params = constraints.with_fixed(params)
+        more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]
     return FitResult(
         model=model.name,
         model_options=model.model_options,
@@ -62,4 +68,6 @@ def result_of(
         ],
         quantity=samples.provenance.quantity if samples.provenance else None,
         max_theta=max_theta,
+        fixed={} if constraints is None else dict(constraints.fixed),
+        bounds={} if constraints is None else dict(constraints.bounds),
     )

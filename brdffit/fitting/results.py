@@ -86,7 +86,9 @@ class FitResult:
     at a plausible bound, data that are not reciprocal), one line each.
     ``quantity`` and ``max_theta`` say how the samples were read and selected
     (what their values were taken as, ``docs/quantities.md``; None for samples
-    made from arrays), so that they can be read the same way again.
+    made from arrays), so that they can be read the same way again. ``fixed``
+    and ``bounds`` are the parameters the fit held (``fitting/constraints.py``):
+    name → value (a list per channel for an albedo), and name → ``[lo, hi]``.
     ``uncertainty`` is the :class:`Uncertainty` when one was asked for
     (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
     parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
@@ -108,6 +110,8 @@ class FitResult:
     warnings: list[str] = field(default_factory=list)
     quantity: str | None = None
     max_theta: float | None = None
+    fixed: dict[str, Any] = field(default_factory=dict)
+    bounds: dict[str, Any] = field(default_factory=dict)
     uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -157,6 +161,8 @@ class FitResult:
                 "warnings": list(self.warnings),
                 "quantity": self.quantity,
                 "max_theta": self.max_theta,
+                "fixed": dict(self.fixed),
+                "bounds": dict(self.bounds),
             },
         }
         if self.uncertainty is not None:
@@ -191,6 +197,8 @@ class FitResult:
                 warnings=list(fit.get("warnings", [])),
                 quantity=None if fit.get("quantity") is None else str(fit["quantity"]),
                 max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
+                fixed=_object(fit.get("fixed", {}), "fit.fixed"),
+                bounds=_object(fit.get("bounds", {}), "fit.bounds"),
                 uncertainty=None
                 if content.get("uncertainty") is None
                 else Uncertainty.from_dict(content["uncertainty"], source),
@@ -208,6 +216,13 @@ class FitResult:
 
     def __str__(self) -> str:
         return self.table()
+
+
+def _object(value: Any, name: str) -> dict[str, Any]:
+    """A JSON object of the result file, as a dict (a missing entry of an older file is empty)."""
+    if not isinstance(value, dict):
+        raise TypeError(f"{name} must be a JSON object")
+    return dict(value)
 
 
 def save_result(result: FitResult, path: str | os.PathLike) -> None:

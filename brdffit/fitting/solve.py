@@ -16,9 +16,10 @@ import numpy as np
 from .._jax import jit
 from .._lazy import jax, jnp
 from ..physics.models import Model, Params
+from .hold import Hold, slopes, theta_of, z_of
 from .implicit import at_optimum, computed_as
 from .losses import Loss
-from .problem import Problem, cost, normal_equations, prepared, residuals
+from .problem import Problem, Sums, cost, normal_equations, prepared, residuals
 
 #: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -79,11 +80,13 @@ def best(runs: list[Solved]) -> Solved:
 
 @cache
 def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
-    """``solve(theta0, problem) -> Solved`` (:func:`solved_from`), compiled once per problem size.
+    """``solve(theta0, problem, hold=None) -> Solved`` (:func:`solved_from`), compiled once per problem size and
+    once for fits that hold parameters (``hold.py``): the held values and bounds are data, so changing them
+    compiles nothing.
 
-    Differentiable with respect to ``problem`` (its measurements, sigma, weights, directions): ``theta``,
-    ``params``, ``cost`` and ``rmse`` carry the derivatives of the optimum (``implicit.py``); the start
-    ``theta0`` has none, the optimum does not depend on it.
+    Differentiable with respect to ``problem`` (its measurements, sigma, weights, directions) and the hold's
+    values: ``theta``, ``params``, ``cost`` and ``rmse`` carry the derivatives of the optimum (``implicit.py``);
+    the start ``theta0`` has none, the optimum does not depend on it.
     """
     return jit(
         partial(solved_from, model, loss, max_steps, dtype),
@@ -91,18 +94,31 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
     )
 
 
-def solved_from(model: Model, loss: Loss, max_steps: int, dtype: str, theta0, problem: Problem) -> Solved:
-    """The Levenberg-Marquardt solve (``solver.py``) of ``problem`` from ``theta0`` (JAX, to be traced)."""
+def solved_from(
+    model: Model, loss: Loss, max_steps: int, dtype: str, theta0, problem: Problem, hold: Hold | None = None
+) -> Solved:
+    """The Levenberg-Marquardt solve (``solver.py``) of ``problem`` from ``theta0`` (JAX, to be traced).
+
+    With a ``hold`` the solver moves the coordinates ``z`` of ``hold.py`` (fixed entries stay at their values,
+    bounded ones inside their ranges), and ``theta0`` is first moved onto what the hold allows."""
     import optimistix as optx
 
     from .solver import OnePassLevenbergMarquardt
 
     ftol, gtol, atol = TOLERANCES[dtype]
-    equations = partial(normal_equations, model, loss)
+    if hold is None:
+        equations = partial(normal_equations, model, loss)
+        to_theta = lambda y, data: y
+        start = jnp.asarray(theta0, jnp.float64)  # the optimum is float64's whatever the start's dtype
+    else:
+        equations = partial(_held_equations, partial(normal_equations, model, loss))
+        to_theta = lambda y, data: theta_of(y, data[1])
+        hold = jax.tree.map(lambda leaf: jnp.asarray(leaf, jnp.float64), hold)
+        start = z_of(jnp.asarray(theta0, jnp.float64), hold)
     solver = OnePassLevenbergMarquardt(normal_equations=equations, rtol=ftol, atol=atol, gtol=gtol)
 
-    def gradient(theta, problem: Problem):
-        return equations(theta, problem).gradient
+    def gradient(y, data):
+        return equations(y, data).gradient
 
     def squared_error(theta, problem: Problem):
         n_channels = problem.measured.shape[1]
@@ -113,13 +129,13 @@ def solved_from(model: Model, loss: Loss, max_steps: int, dtype: str, theta0, pr
 
         return cost(error, theta, problem)
 
-    theta0 = jnp.asarray(theta0, jnp.float64)  # the optimum is float64's whatever the start's dtype
     problem = prepared(loss, problem)
-    frozen_theta0, frozen_problem = jax.lax.stop_gradient((theta0, problem))
+    data = problem if hold is None else (problem, hold)
+    frozen_start, frozen_data = jax.lax.stop_gradient((start, data))
     solution = optx.least_squares(
-        _residual_shape, solver, frozen_theta0, args=frozen_problem, max_steps=max_steps, throw=False
+        _residual_shape, solver, frozen_start, args=frozen_data, max_steps=max_steps, throw=False
     )
-    theta = at_optimum(gradient, solution.value, problem)
+    theta = to_theta(at_optimum(gradient, solution.value, data), data)
     n_channels = problem.measured.shape[1]
     params = model.unconstrained.to_params(theta, n_channels)
     sum_of_squares = partial(cost, partial(residuals, model, loss))
@@ -133,7 +149,16 @@ def solved_from(model: Model, loss: Loss, max_steps: int, dtype: str, theta0, pr
     return Solved(theta, total, solution.stats["num_steps"], outcome, converged, params, rmse)
 
 
-def _residual_shape(theta, problem: Problem):
+def _held_equations(equations, z, data) -> Sums:
+    """The normal equations in the coordinates ``z`` of a hold: those of ``θ`` by the chain rule, ``θ`` mapping
+    elementwise (``Jz = Jθ · diag(dθ/dz)``); a fixed entry's row and column are 0."""
+    problem, hold = data
+    sums = equations(theta_of(z, hold), problem)
+    slope = slopes(z, hold)
+    return sums._replace(gradient=slope * sums.gradient, gram=slope[:, None] * sums.gram * slope[None, :])
+
+
+def _residual_shape(theta, data):
     """The residuals' shape and dtype, which is all optimistix's interface needs of them here.
 
     The solver only calls ``normal_equations``; handing optimistix the real
@@ -141,6 +166,7 @@ def _residual_shape(theta, problem: Problem):
     (0.13 s of the first fit of a Cook-Torrance model). Nothing differentiates
     it either: the solve's derivatives come from ``implicit.py``.
     """
+    problem = data if isinstance(data, Problem) else data[0]
     return jnp.zeros(problem.measured.shape, theta.dtype)
 
 

@@ -16,11 +16,12 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     lines = [f"{result.model}{options} fit{what}: {size}, loss {result.loss}"]
     rows = list(parameter_rows(result.params))
     errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
+    fixed = {label for label, _ in parameter_rows(_nested(result.fixed))}
     label_width = max(len("parameter"), *(len(label) for label, _ in rows))
     columns = [str(c) for c in result.channels]
     cells = {
         label: [
-            value_with_error(v, e, bool(errors))
+            f"= {v:.6g}" if label in fixed else value_with_error(v, e, bool(errors))
             for v, e in zip(_as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True)
         ]
         for label, value in rows
@@ -33,8 +34,12 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     precision = " · float32, refined in float64" if result.dtype == "float32" else ""
     figures = f"cost {result.cost:.6g} · rmse {result.rmse:.4g} 1/sr · {result.n_steps} steps"
     lines.append(f"  {figures}{precision} · {status}")
+    if result.bounds:
+        bounds = ", ".join(f"{name} in [{low:g}, {high:g}]" for name, (low, high) in result.bounds.items())
+        lines.append(f"  bounds: {bounds}")
     if result.uncertainty:
-        lines.append("  " + _uncertainty_line(result.uncertainty))
+        held = "; fixed parameters (= value) have no error" if result.fixed else ""
+        lines.append("  " + _uncertainty_line(result.uncertainty) + held)
     lines += [f"  warning: {caveat}" for caveat in result.warnings]
     return "\n".join(lines)
 
@@ -52,6 +57,21 @@ def parameter_rows(params: dict[str, Any]):
                 yield f"{name}[{index}]", row
         else:
             yield name, value
+
+
+def _nested(names: dict[str, Any]) -> dict[str, Any]:
+    """Held parameters by name (``lobes[1].cxy``) nested as ``params`` is, for :func:`parameter_rows`' labels."""
+    nested: dict[str, Any] = {}
+    for name, value in names.items():
+        lobe, dot, inner = name.partition("].")
+        if name.startswith("lobes[") and dot:
+            index = int(lobe[len("lobes[") :])
+            lobes = nested.setdefault("lobes", [])
+            lobes += [{} for _ in range(index + 1 - len(lobes))]
+            lobes[index][inner] = value
+        else:
+            nested[name] = value
+    return nested
 
 
 def _shown(key: str, value) -> str:

@@ -20,7 +20,10 @@ counted in ``n`` (:func:`counted_values`).
 Priors (``physics/domains.py``): flat on albedos and bounded parameters (``f0``,
 ``psi``), log-uniform on scales (roughness, exponents, ``eta - 1``) and on
 ``s``. They are improper where unbounded; the likelihood makes the posterior
-proper whenever the fit is determined.
+proper whenever the fit is determined. A fit that held parameters
+(``fit.fixed``, ``fit.bounds``; ``fitting/constraints.py``) keeps them held:
+its fixed ones are no coordinates of the posterior (they stay at their values),
+and its bounds truncate the prior.
 
 The log density is compiled once per problem and walker batch shape, evaluates
 a whole batch of walkers at once, and returns ``-inf`` (never NaN) outside the
@@ -37,6 +40,7 @@ import numpy as np
 from .._jax import float64, jit
 from ..data.samples import Samples
 from ..errors import BrdfInputError
+from ..fitting.constraints import constraints_for
 from ..fitting.losses import Loss, get_loss
 from ..fitting.problem import Problem, build_problem, cost, prepared, residuals_at, target_and_scale
 from ..fitting.results import FitResult
@@ -58,6 +62,22 @@ class Density(NamedTuple):
     n_channels: int
     has_sigma: bool
     n_values: int  # fitted values: real samples × channels with a nonzero weight
+    free: np.ndarray  # (k,) bool: the sampling vector's coordinates the fit determined (not fixed)
+    low: np.ndarray  # (k,) the bounds the fit held each coordinate within, ±inf where none
+    high: np.ndarray
+
+    @property
+    def free_labels(self) -> list[str]:
+        """The labels of the coordinates the posterior moves (the fixed ones stay at their values)."""
+        return [label for label, free in zip(self.labels, self.free, strict=True) if free]
+
+    def embedded(self, free_values) -> np.ndarray:
+        """Whole sampling vectors (…, k) from values (…, n_free) of the free coordinates: the fixed ones at the
+        optimum's values (numpy)."""
+        free_values = np.asarray(free_values, float)
+        whole = np.broadcast_to(self.optimum, (*free_values.shape[:-1], self.optimum.size)).copy()
+        whole[..., self.free] = free_values
+        return whole
 
 
 def density_of(result: FitResult, samples: Samples) -> Density:
@@ -80,7 +100,13 @@ def density_of(result: FitResult, samples: Samples) -> Density:
     optimum = model.sampling.from_params(model.dictionary.to_params(result.params))
     n_values = int(_count_weighted(loss, problem))
     labels = model.sampling.labels(tuple(result.channels))
-    return Density(model, loss, problem, optimum, labels, len(result.channels), samples.sigma is not None, n_values)
+    constraints = constraints_for(model, len(result.channels), result.fixed, result.bounds)
+    if constraints is None:
+        free, (low, high) = np.ones(optimum.size, bool), (np.full(optimum.size, -np.inf), np.full(optimum.size, np.inf))
+    else:
+        free, (low, high) = constraints.free, constraints.sampling_bounds()
+    has_sigma = samples.sigma is not None
+    return Density(model, loss, problem, optimum, labels, len(result.channels), has_sigma, n_values, free, low, high)
 
 
 def counted_values(density: Density) -> int:
@@ -88,6 +114,11 @@ def counted_values(density: Density) -> int:
     coordinate when the model has one. A ridge is the data-driven model's pseudo-observations ``v ≈ 0`` in the
     residuals' units, so it scales with ``s²`` as they do, and counts as they do."""
     return density.n_values + (density.optimum.size if density.model.prior_weight > 0 else 0)
+
+
+def n_free(density: Density) -> int:
+    """The parameters the fit determined: the sampling vector's coordinates less the fixed ones."""
+    return int(np.count_nonzero(density.free))
 
 
 @jit(static_argnums=0)
@@ -115,35 +146,48 @@ def log_prior(model: Model, v, n_channels: int):
     return sum(domain.log_prior(v[i]) for i, domain in enumerate(model.sampling.domains(n_channels)))
 
 
+class Frame(NamedTuple):
+    """Where the walkers' free coordinates sit in the sampling vector (data to the compiled density): the optimum,
+    whose fixed entries stay, the indices of the free ones, and the bounds of every coordinate."""
+
+    optimum: object  # (k,)
+    free_index: object  # (n_free,) int
+    low: object  # (k,)
+    high: object
+
+
 @cache
 def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
-    """``(walkers (W, D), problem, n_values, prior_weight) -> (W,)`` log posterior densities, jit-compiled, vmapped
-    over walkers; ``n_values`` counts the prior's terms too (:func:`counted_values`)."""
+    """``(walkers (W, D), problem, n_values, prior_weight, frame) -> (W,)`` log posterior densities, jit-compiled,
+    vmapped over walkers; D is the number of free coordinates (+1 for ``ln s``), placed into the sampling vector by
+    ``frame`` (:class:`Frame`); ``n_values`` counts the prior's terms too (:func:`counted_values`)."""
 
-    def one(x, problem, n_values, prior_weight):
+    def one(x, problem, n_values, prior_weight, frame: Frame):
         c = problem.measured.shape[1]
-        k = len(model.sampling.domains(c))
-        v = x[:k]
+        n = frame.free_index.shape[0]
+        v = frame.optimum.at[frame.free_index].set(x[:n])
         chi2 = chi_squared(model, loss, v, problem, prior_weight)
         if has_sigma:
             likelihood = -0.5 * chi2
-        else:  # x[k] = ln s, with a flat prior (log-uniform in s)
-            likelihood = -0.5 * chi2 * jnp.exp(-2.0 * x[k]) - n_values * x[k]
-        total = log_prior(model, v, c) + likelihood
+        else:  # x[n] = ln s, with a flat prior (log-uniform in s)
+            likelihood = -0.5 * chi2 * jnp.exp(-2.0 * x[n]) - n_values * x[n]
+        within = jnp.all((v >= frame.low) & (v <= frame.high))  # the fit's bounds truncate the prior
+        total = jnp.where(within, log_prior(model, v, c), -jnp.inf) + likelihood
         return jnp.where(jnp.isfinite(total), total, -jnp.inf)
 
-    walkers = jax.vmap(one, in_axes=(0, None, None, None))
-    return jit(lambda x, problem, n_values, w: walkers(x, prepared(loss, problem), n_values, w))
+    walkers = jax.vmap(one, in_axes=(0, None, None, None, None))
+    return jit(lambda x, problem, n_values, w, frame: walkers(x, prepared(loss, problem), n_values, w, frame))
 
 
 def log_probability_function(density: Density):
-    """``log_prob(walkers) -> (W,)`` for a (W, D) numpy batch, D the sampling vector's length (+1 for ``ln s``)."""
+    """``log_prob(walkers) -> (W,)`` for a (W, D) numpy batch, D the number of free coordinates (+1 for ``ln s``)."""
     compiled = compiled_log_density(density.model, density.loss, density.has_sigma)
+    frame = Frame(density.optimum, np.flatnonzero(density.free), density.low, density.high)
 
     @float64
     def log_prob(walkers):
         x = jnp.asarray(walkers, dtype=jnp.float64)
-        return np.asarray(compiled(x, density.problem, counted_values(density), density.model.prior_weight))
+        return np.asarray(compiled(x, density.problem, counted_values(density), density.model.prior_weight, frame))
 
     return log_prob
 

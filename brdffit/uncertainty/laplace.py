@@ -14,8 +14,10 @@ coordinates ``u`` map to these by ``v = g(u)`` elementwise,
 ``(J_vᵀJ_v)⁻¹ = G (J_uᵀJ_u)⁻¹ Gᵀ`` with ``G = dv/du``: this *is* the delta
 method, evaluated where it stays finite when an albedo sits at 0 (``G → 0``
 there). Lafortune's ``(cxy, cz)`` then follow from ψ by the delta method
-proper. The inverse is taken in correlation scaling, so parameters of any
-units are treated alike; a parameter whose Jacobian column is zero, or a
+proper. Parameters the fit held fixed (``fit.fixed``) have error 0: the
+inverse is taken over the free coordinates only, ``k`` counts those. The
+inverse is taken in correlation scaling, so parameters of any units are
+treated alike; a parameter whose Jacobian column is zero, or a
 direction in which ``JᵀJ`` is singular, is *undetermined*: its error is
 reported as null and a warning names it. Correlations of |ρ| ≥
 :data:`DEGENERATE_CORRELATION` are reported as a degenerate pair.
@@ -37,7 +39,7 @@ from ..fitting.problem import Problem, chunks, residuals_at
 from ..fitting.results import FitResult, Uncertainty
 from ..physics.models import Model
 from . import findings as codes
-from .density import Density, compiled_chi_squared, counted_values, density_of
+from .density import Density, compiled_chi_squared, counted_values, density_of, n_free
 from .findings import Finding
 from .layout import QUANTILES, correlation, estimate, stderr_dict, strongest_correlation
 
@@ -151,10 +153,16 @@ class Curvature(NamedTuple):
 
 @float64
 def curvature_at_optimum(density: Density) -> Curvature:
+    """The curvature at the optimum over the free coordinates: a fixed one's rows and columns of the inverse are 0
+    (it has no error), and it takes no part in the null space or the condition number."""
     v = np.asarray(density.optimum)
     chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem, density.model.prior_weight))
     hessian, meat = gauss_newton_and_meat(density, v)
-    inverse, undetermined, condition = inverse_with_null_space(hessian, density.labels)
+    free = np.flatnonzero(density.free)
+    inverse = np.zeros_like(hessian)
+    inverse[np.ix_(free, free)], undetermined, condition = inverse_with_null_space(
+        hessian[np.ix_(free, free)], density.free_labels
+    )
     return Curvature(chi2, inverse, meat, undetermined, condition)
 
 
@@ -173,7 +181,7 @@ def laplace_estimate(
     ``for_method``: the method whose warnings these are (MCMC reuses what the curvature at the optimum finds)."""
     model, c, labels = density.model, density.n_channels, density.labels
     v = jnp.asarray(density.optimum)
-    k = v.shape[0]
+    k = n_free(density)
     chi2, inverse, meat, undetermined, condition = curvature or curvature_at_optimum(density)
     dof = counted_values(density) - k
     reduced = chi2 / dof if dof > 0 else float("nan")
@@ -252,6 +260,7 @@ def laplace_estimate(
         "robust_stderr": None if density.has_sigma else stderr_dict(model, robust, c),
         "gauss_newton_stderr": stderr_dict(model, gauss_newton, c),
         "strongest_correlation": None if pair is None else {"pair": [pair[0], pair[1]], "value": pair[2]},
+        "fixed": sorted(result.fixed),
     }
     laid_out = estimate(
         method,

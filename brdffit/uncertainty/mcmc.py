@@ -78,9 +78,13 @@ def sampled_labels(sampling_labels: list[str], has_sigma: bool) -> list[str]:
     return sampling_labels + ([] if has_sigma else [LOG_NOISE])
 
 
-def check_walkers(settings: MCMC, model, samples: Samples) -> None:
-    """emcee needs at least two walkers per sampled coordinate."""
-    n_dimensions = len(sampled_labels(model.sampling.labels(samples.channels), samples.sigma is not None))
+def check_walkers(settings: MCMC, model, samples: Samples, constraints=None) -> None:
+    """emcee needs at least two walkers per sampled coordinate (the free ones, when ``constraints`` fix some)."""
+    n_parameters = model.sampling.size(samples.n_channels) if constraints is None else constraints.n_free
+    _check_walker_count(settings, n_parameters + (samples.sigma is None))
+
+
+def _check_walker_count(settings: MCMC, n_dimensions: int) -> None:
     if settings.walkers < 2 * n_dimensions:
         raise BrdfInputError(
             Argument("walkers", str(settings.walkers)),
@@ -126,7 +130,7 @@ def sample_posterior(
     chain_path = None if chain is None else check_chain_path(chain)
     with float64():
         density = density_of(result, samples)
-        check_walkers(settings, density.model, samples)
+        _check_walker_count(settings, len(sampled_labels(density.free_labels, density.has_sigma)))
         laid_out, found, draws = sample_and_estimate(result, density, settings, chain_path, progress)
     for finding in found:
         warnings.warn(finding.warning(), stacklevel=2)
@@ -139,7 +143,7 @@ def sample_and_estimate(
     """Sample, diagnose and lay out: the estimate, what it warns about, and the draws (S, p)."""
     curvature = curvature_at_optimum(density)  # one pass: the start ball's widths and Laplace's findings
     chain = run_chain(density, curvature, settings, chain_path, progress)
-    diagnosis = diagnose(chain, settings, sampled_labels(density.labels, density.has_sigma))
+    diagnosis = diagnose(chain, settings, sampled_labels(density.free_labels, density.has_sigma))
     # What Laplace's approximation finds at the optimum holds for the posterior too: an undetermined parameter
     # makes it improper (walkers drift with the prior), a degenerate pair long and slow, a varying scatter narrow.
     _, at_optimum = laplace_estimate(result, density, curvature, for_method="mcmc")
@@ -160,13 +164,16 @@ def start_ball(
     Laplace standard errors, no wider than a tenth of a bounded domain or of a positive value's magnitude.
 
     A walker that still lands outside the prior's support (an optimum on a bound) is drawn again, in a ball
-    halved each time; a walker with density ``-inf`` would never move and would poison the draws.
+    halved each time; a walker with density ``-inf`` would never move and would poison the draws. Only the free
+    coordinates are walked (``density.free``).
     """
-    v = density.optimum
+    free = density.free
+    v = density.optimum[free]
     noise2 = 1.0 if density.has_sigma else curvature.chi2 / max(counted_values(density) - v.size, 1)
-    width = BALL * np.sqrt(noise2 * np.diag(curvature.inverse))
+    width = BALL * np.sqrt(noise2 * np.diag(curvature.inverse)[free])
     limits = []
-    for value, domain in zip(v, density.model.sampling.domains(density.n_channels), strict=True):
+    domains = [d for d, moves in zip(density.model.sampling.domains(density.n_channels), free, strict=True) if moves]
+    for value, domain in zip(v, domains, strict=True):
         lower, upper = domain.bounds
         limits.append(BALL * (upper - lower) if np.isfinite(upper) else BALL * max(abs(value), 1e-3))
     fallback = 1e-4 * np.maximum(np.abs(v), 1e-3)  # where the Laplace error is undetermined
@@ -195,7 +202,7 @@ def run_chain(density: Density, curvature: Curvature, settings: MCMC, chain_path
     """Run emcee from the start ball; with ``chain_path``, the whole chain is written there (atomically)."""
     import emcee
 
-    labels = sampled_labels(density.labels, density.has_sigma)
+    labels = sampled_labels(density.free_labels, density.has_sigma)
     n_dimensions = len(labels)
     rng = np.random.default_rng(settings.seed)
     log_prob = log_probability_function(density)
@@ -257,12 +264,15 @@ def draws_estimate(
     model, c = density.model, density.n_channels
     n_dimensions = chain.positions.shape[2]
     kept = chain.positions[settings.burn + settings.thin - 1 :: settings.thin].reshape(-1, n_dimensions)  # as emcee
-    draws = physical_draws(model, kept[:, : density.optimum.size], c)
+    draws = physical_draws(model, density.embedded(kept[:, : np.count_nonzero(density.free)]), c)
     covariance = np.atleast_2d(np.cov(draws, rowvar=False))
+    constant = np.ptp(draws, axis=0) == 0  # a fixed parameter: its mean's rounding would make a variance of 1e-30
+    covariance[constant, :] = covariance[:, constant] = 0.0
     noise = {} if density.has_sigma else {"noise_scale": _noise_quantiles(kept[:, -1])}
     diagnostics = {
         "acceptance": diagnosis.acceptance,
-        "sampled": sampled_labels(density.labels, density.has_sigma),
+        "sampled": sampled_labels(density.free_labels, density.has_sigma),
+        "fixed": sorted(result.fixed),
         "autocorr_time": diagnosis.autocorr_time.tolist(),
         "effective_samples": diagnosis.effective_samples.tolist(),
         "n_walkers": settings.walkers,
@@ -276,7 +286,7 @@ def draws_estimate(
         "mcmc",
         model,
         tuple(result.channels),
-        stderr=np.std(draws, axis=0, ddof=1),
+        stderr=np.where(constant, 0.0, np.std(draws, axis=0, ddof=1)),
         quantiles=np.quantile(draws, QUANTILES, axis=0),
         covariance=covariance,
         diagnostics=diagnostics,

@@ -49,7 +49,7 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
         draws[:, known] = rng.multivariate_normal(
             optimum[known], covariance[np.ix_(known, known)], GAUSSIAN_DRAWS, method="eigh"
         )
-    keep = np.all(np.isfinite(draws), axis=0) & (np.std(draws, axis=0) > 0)
+    keep = np.all(np.isfinite(draws), axis=0) & (np.ptp(draws, axis=0) > 0)  # a fixed parameter's draws are one value
     if keep.sum() < 1:
         raise BrdfInputError("no parameter has a posterior spread to plot")
     shown = int(keep.sum())

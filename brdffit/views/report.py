@@ -18,6 +18,7 @@ import re
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from .._files import write_text_atomic
 from .._jax import float64
@@ -71,14 +72,17 @@ def report(
     max_theta: float | None = None,
     n_starts: int = N_STARTS,
     max_steps: int = MAX_STEPS,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
     comparison: Comparison | None = None,
     path: str | os.PathLike | None = None,
     progress: bool | None = False,
 ) -> str:
     """The HTML report of ``samples`` (module docstring); also written to ``path`` (atomically) when given.
 
-    ``models``, ``loss``, ``folds``, ``seed``, ``max_theta``, ``n_starts`` and ``max_steps`` are those of
-    :func:`brdffit.compare`, which the report runs unless a ``comparison`` of these samples is given.
+    ``models``, ``loss``, ``folds``, ``seed``, ``max_theta``, ``n_starts``, ``max_steps``, ``fixed`` and
+    ``bounds`` are those of :func:`brdffit.compare`, which the report runs unless a ``comparison`` of these
+    samples is given.
     ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds error bars to the parameter tables of the models shown.
     """
     check_options(uncertainty)
@@ -94,6 +98,8 @@ def report(
             seed=seed,
             n_starts=n_starts,
             max_steps=max_steps,
+            fixed=fixed,
+            bounds=bounds,
             progress=progress,
         )
     shown = [score.result for score in comparison.models[:DETAILED]]

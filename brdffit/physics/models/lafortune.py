@@ -138,6 +138,28 @@ class LafortuneLobe(Lobe):
         scale = 1.0 / np.sqrt(norm2)
         return {"cxy": cxy * scale, "cz": cz * scale, "n": float(shape["n"])}
 
+    def shape_holding(self, given, where):
+        """``cxy`` alone gives ``cz = +sqrt(1 - 2 cxy²)`` (a lobe above the surface, forward or retro-reflective by
+        the sign of ``cxy``); ``cz`` alone is refused, since it leaves that sign open."""
+        shape = dict(self.grid[0]) | dict(given)
+        if "cz" in given and "cxy" not in given:
+            raise BrdfInputError(
+                f"{where}cz alone leaves the lobe forward or retro-reflective; give {where}cxy instead"
+                " (cz follows from 2·cxy² + cz² = 1)"
+            )
+        if "cxy" in given and "cz" not in given:
+            cxy = float(given["cxy"])
+            if not abs(cxy) <= 1.0 / np.sqrt(2.0):
+                raise BrdfInputError(
+                    f"{where}cxy = {cxy!r} is outside [-0.7071, 0.7071], where 2·cxy² + cz² = 1 leaves cz ≥ 0"
+                )
+            shape["cz"] = float(np.sqrt(max(0.0, 1.0 - 2.0 * cxy * cxy)))
+        return self.checked_shape(shape, where)
+
+    def coordinate_index(self, name):
+        """``cxy`` and ``cz`` are both the direction's angle ψ; ``n`` is ``ln n``'s or ``n``'s coordinate."""
+        return {"cxy": 0, "cz": 0, "n": 1}[name]
+
     def __call__(self, shape, wi, wo):
         cxy, cz, n = shape["cxy"], shape["cz"], shape["n"]
         tangential = wi[:, 0] * wo[:, 0] + wi[:, 1] * wo[:, 1]

@@ -149,6 +149,16 @@ class Lobe(ABC):
     def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
         """The shape (numbers) with each value checked against its domain; ``where`` prefixes errors."""
 
+    @abstractmethod
+    def shape_holding(self, given: Shape, where: str) -> dict[str, float]:
+        """A valid shape (numbers) with the ``given`` values (a user's fixed values or bounds, checked against their
+        domains), the family's first grid shape elsewhere; ``where`` prefixes errors (``lobes[1].``)."""
+
+    @abstractmethod
+    def coordinate_index(self, name: str) -> int:
+        """Which of the solver's (and the walkers') shape coordinates carries the shape parameter ``name``: a user
+        who fixes or bounds ``name`` holds that coordinate."""
+
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(name for name, _ in self.parameters)
@@ -173,6 +183,12 @@ class MappedLobe(Lobe):
     @property
     def sampling(self) -> BoundedShapeCoordinates:
         return self.physical
+
+    def coordinate_index(self, name: str) -> int:
+        return self.names.index(name)
+
+    def shape_holding(self, given: Shape, where: str) -> dict[str, float]:
+        return self.checked_shape(dict(self.grid[0]) | dict(given), where)
 
     def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
         for name, domain in self.parameters:
