@@ -81,6 +81,7 @@ SECTION_LETTERS = {
     "many_large": "j",
     "many_small": "j",
     "startup": "k",
+    "hold": "m",
 }
 
 
@@ -315,6 +316,22 @@ def merl_load_section(repeats: int, folder: Path) -> dict:
     return repeated(repeats, "merl-load", "--data", str(data))
 
 
+def hold_section(repeats: int) -> dict:
+    """(m): held parameters' fits in one process; the compilations each triggers, and scipy holding eta."""
+    log("(m) fits that hold eta at 1.5, 1.6, 1.4, then bounds: one compiled solver")
+    runs = [worker("hold") for _ in range(repeats)]
+
+    def medians(key: str) -> list[dict]:
+        fits = zip(*(run[key] for run in runs), strict=True)
+        return [one[0] | {"seconds": statistics.median(each["seconds"] for each in one)} for one in fits]
+
+    first = runs[0]
+    by_fit = medians("runs")
+    for position, fit in enumerate(by_fit):  # a compilation in any run counts: the claim is that there is none
+        fit["compilations"] = max(run["runs"][position]["compilations"] for run in runs)
+    return first | {"runs": by_fit, "scipy": medians("scipy"), "given_start": medians("given_start")}
+
+
 def machine() -> dict:
     import jax
     import optimistix
@@ -483,6 +500,23 @@ def table(results: dict) -> str:
             f" {len(compared['models'])} plain `brdffit fit` runs ({ratio:.2f}×;"
             f" round by round {', '.join(f'{c / f:.2f}×' for c, f in rounds)}), no compilation cache."
         )
+    held = results.get("hold")
+    if held:
+        pairs = zip(held["given_start"], held["scipy"], strict=True)
+        difference = max(abs(ours["cost"] - theirs["cost"]) / theirs["cost"] for ours, theirs in pairs)
+        cells = "; ".join(
+            f"{run['label']}: {run['seconds']:.2f} s, {run['compilations']} compilation(s), {run['steps']} steps"
+            for run in held["runs"]
+        )
+        lines.append(
+            f"(m) Fits of one dielectric Cook-Torrance dataset ({held['n_samples']:,} samples) that hold parameters,"
+            f" one process, medians of {held['repeats']} processes: {cells}. From one start, eta held at"
+            " 1.5 / 1.6 / 1.4: brdffit "
+            + " / ".join(f"{run['seconds']:.2f} s" for run in held["given_start"])
+            + ", scipy least_squares lm (exact Jacobian, eta held by a closure) "
+            + " / ".join(f"{run['seconds']:.2f} s" for run in held["scipy"])
+            + f"; costs equal to {difference:.0e}."
+        )
     rendered = results.get("render")
     if rendered:
         cells = ", ".join(
@@ -502,8 +536,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcfghijk",
-        help="which to run: a (with d, e), b, c, f, g, h, i, j, k; default all (the README's table needs all)",
+        default="abcfghijkm",
+        help="which to run: a (with d, e), b, c, f, g, h, i, j, k, m; default all (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -538,6 +572,8 @@ def main() -> None:
                 results[key] = many_section(count, size, args.repeats) | stamp
         if "k" in args.sections:
             results["startup"] = startup_section(args.repeats, folder) | stamp
+        if "m" in args.sections:
+            results["hold"] = hold_section(args.repeats) | stamp
     text = table(results)
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "latest.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -11,6 +11,7 @@ samples in memory to the result (parameters and cost) in hand.
     python benchmarks/worker.py mcmc --walkers 32 --steps 2000
     python benchmarks/worker.py merl-load --data FILE.binary
     python benchmarks/worker.py render --model ward
+    python benchmarks/worker.py hold
 """
 
 import argparse
@@ -259,6 +260,86 @@ def mcmc(args) -> dict:
     }
 
 
+HELD_TRUTH = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.2, "eta": 1.5}
+#: (m)'s fits, in order, all of one dataset in one process: what each holds.
+HELD_FITS = (
+    ("eta = 1.5, the first held fit (compiles)", {"fixed": {"eta": 1.5}}),
+    ("eta = 1.6", {"fixed": {"eta": 1.6}}),
+    ("eta = 1.4", {"fixed": {"eta": 1.4}}),
+    ("eta = 1.5, m in [0.1, 0.3]", {"fixed": {"eta": 1.5}, "bounds": {"m": [0.1, 0.3]}}),
+    ("kd = [0.1, 0.2, 0.3], eta in [1.2, 2]", {"fixed": {"kd": [0.1, 0.2, 0.3]}, "bounds": {"eta": [1.2, 2.0]}}),
+)
+
+
+def hold(args) -> dict:
+    """(m): fits of one dielectric Cook-Torrance dataset (8 × 36 × 36 grid, 1% noise) that hold other values in one
+    process, each timed with the XLA compilations it triggered (``jax.monitoring``): a held value is data to the
+    compiled solver, so only the first held fit compiles. Beside them, scipy's ``least_squares`` (lm, exact
+    Jacobian, float64) with ``eta`` held by a closure over the same residuals, as a scipy user would hold it, from
+    the same start (the free fit's optimum with ``m`` at 0.3)."""
+    import warnings
+
+    import jax
+    import jax.numpy as jnp
+    import scipy.optimize
+
+    from brdffit.fitting.problem import build_problem, prepared, residuals
+
+    jax.config.update("jax_enable_x64", True)
+    wi, wo = data_synth.hemisphere_grid(8, 36, 36)
+    samples = data_synth.synthesize("cook-torrance", HELD_TRUTH, wi, wo, noise=0.01, seed=7, fresnel="dielectric")
+    compiled: list[str] = []
+    jax.monitoring.register_event_duration_secs_listener(
+        lambda event, duration, **_: compiled.append(event) if "backend_compile" in event else None
+    )
+    runs = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit(samples, "cook-torrance", fresnel="dielectric")  # the free fit's programs, outside the measurement
+        for label, options in HELD_FITS:
+            before, clock = len(compiled), time.perf_counter()
+            result = fit(samples, "cook-torrance", fresnel="dielectric", **options)
+            seconds = time.perf_counter() - clock
+            runs.append(
+                {"label": label, "seconds": seconds, "compilations": len(compiled) - before, "cost": result.cost}
+                | {"steps": result.n_steps, "converged": result.converged}
+            )
+    model, loss = get_model("cook-torrance", fresnel="dielectric"), get_loss(LOSS)
+    n = samples.n_samples
+    problem = jax.tree.map(lambda a: a[:n], jax.jit(functools.partial(prepared, loss))(build_problem(samples)))
+
+    def flat(free, eta, data):  # kd (3), ks (3), ln m free; ln(eta - 1) held
+        return residuals(model, loss, jnp.concatenate([free, jnp.log(eta - 1.0)[None]]), data).ravel()
+
+    residual, jacobian = jax.jit(flat), jax.jit(jax.jacfwd(flat))
+    start = np.log(np.array([0.1, 0.2, 0.3, 0.5, 0.5, 0.5, 0.3]))
+    scipy_runs = []
+    for eta in (1.5, 1.6, 1.4):
+        clock = time.perf_counter()
+        out = scipy.optimize.least_squares(
+            lambda th, e=eta: np.asarray(residual(jnp.asarray(th), e, problem)),
+            start,
+            jac=lambda th, e=eta: np.asarray(jacobian(jnp.asarray(th), e, problem)),
+            method="lm",
+        )
+        scipy_runs.append({"eta": eta, "seconds": time.perf_counter() - clock, "cost": 2.0 * float(out.cost)})
+    brdffit_runs = []
+    for eta in (1.5, 1.6, 1.4):
+        clock = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            start_params = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.3, "eta": eta}
+            result = fit(samples, "cook-torrance", fresnel="dielectric", start=start_params, fixed={"eta": eta})
+        brdffit_runs.append({"eta": eta, "seconds": time.perf_counter() - clock, "cost": result.cost})
+    return {
+        "seconds": runs[-1]["seconds"],
+        "n_samples": n,
+        "runs": runs,
+        "scipy": scipy_runs,
+        "given_start": brdffit_runs,
+    }
+
+
 def merl_load(args) -> dict:
     """(g): ``brdffit.load_samples`` of a full MERL file (written by run.py from a Ward model), fresh process."""
     from brdffit import load_samples
@@ -327,8 +408,17 @@ def main() -> None:
     loading.add_argument("--data", required=True)
     rendering = commands.add_parser("render")
     rendering.add_argument("--model", required=True, choices=list(RENDERED))
+    commands.add_parser("hold")
     args = parser.parse_args()
-    commands = {"merl": merl, "steps": steps, "batch": batch, "mcmc": mcmc, "merl-load": merl_load, "render": render}
+    commands = {
+        "merl": merl,
+        "steps": steps,
+        "batch": batch,
+        "mcmc": mcmc,
+        "merl-load": merl_load,
+        "render": render,
+        "hold": hold,
+    }
     output = commands[args.command](args)
     print(json.dumps(output))
 

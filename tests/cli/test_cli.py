@@ -197,6 +197,8 @@ def test_fit_prints_a_table_and_writes_the_result(tmp_path, capsys):
         "warnings",
         "quantity",
         "max_theta",
+        "fixed",
+        "bounds",
     ]
     assert content["fit"]["converged"] is True and content["fit"]["n_samples"] == 10368
     assert content["fit"]["quantity"] == "brdf" and content["fit"]["max_theta"] is None
