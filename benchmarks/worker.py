@@ -263,7 +263,7 @@ def mcmc(args) -> dict:
 HELD_TRUTH = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.2, "eta": 1.5}
 #: (m)'s fits, in order, all of one dataset in one process: what each holds.
 HELD_FITS = (
-    ("eta = 1.5, the first held fit (compiles)", {"fixed": {"eta": 1.5}}),
+    ("eta = 1.5, m in [0.01, 1], the first held fit (compiles)", {"fixed": {"eta": 1.5}, "bounds": {"m": [0.01, 1.0]}}),
     ("eta = 1.6", {"fixed": {"eta": 1.6}}),
     ("eta = 1.4", {"fixed": {"eta": 1.4}}),
     ("eta = 1.5, m in [0.1, 0.3]", {"fixed": {"eta": 1.5}, "bounds": {"m": [0.1, 0.3]}}),

@@ -25,10 +25,10 @@ from .._jax import float64, jit
 from .._lazy import jax
 from ..data.samples import Samples
 from ..physics.models import Model
-from .hold import Hold
+from .hold import Hold, at_bounds
 from .losses import Loss
 from .problem import Problem, build_problems, padded_size
-from .solve import best_index, solved_from
+from .solve import SAME_COST, best_index, solved_from
 from .starts import SEARCH_SAMPLES, grid_starts, search_subset
 
 #: The most samples (datasets × padded size) in one batch of a bucket: its arrays take ~100 bytes a sample.
@@ -111,7 +111,26 @@ def solve_bucket(
             solved.theta[:, None], build_problems(samples, "float64", count), holds
         )
         solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
+    if holds is not None and np.any(hold.bounded):
+        solver64 = (
+            solver if dtype == "float64" else bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")
+        )
+        problems64 = full if dtype == "float64" else build_problems(samples, "float64", count)
+        solved = onto_bounds(lambda theta, held: solver64(theta[:, None], problems64, held), solved, holds)
     return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
+
+
+def onto_bounds(solve, solved, holds):
+    """``solved`` (numpy, leading axis D), each dataset solved again from its optimum with the bounded parameters
+    that ended near a bound held on it (``hold.at_bounds``), where that is no worse: the optimum of a fit whose
+    data pull a parameter beyond its bound is on the bound, which the logistic map reaches only in the limit.
+    ``solve(thetas (D, k), holds) -> Solved (D, 1, …)``."""
+    again = _best(solve(solved.theta, at_bounds(solved.theta, holds)))
+    better = again.cost <= solved.cost * (1.0 + SAME_COST)
+    again = again._replace(n_steps=solved.n_steps + again.n_steps)
+    return jax.tree.map(
+        lambda new, old: np.where(better.reshape(-1, *[1] * (np.ndim(old) - 1)), new, old), again, solved
+    )
 
 
 def _best(solved):

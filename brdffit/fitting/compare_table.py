@@ -58,7 +58,7 @@ def _in_every(comparison, line: str) -> bool:
 def _shown(value) -> str:
     """A fixed value: one number, or an albedo's per channel (one number when they are all equal)."""
     values = value if isinstance(value, list) else [value]
-    return f"{values[0]:g}" if len(set(values)) == 1 else "[" + ", ".join(f"{one:g}" for one in values) + "]"
+    return f"{values[0]:.10g}" if len(set(values)) == 1 else "[" + ", ".join(f"{one:.10g}" for one in values) + "]"
 
 
 def _number(value: float) -> str:

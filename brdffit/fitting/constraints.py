@@ -187,6 +187,15 @@ def constraints_for(
             constraints._placed(values)
         except BrdfInputError as error:
             raise _error(argument, str(error)) from None
+    hold = constraints.hold()
+    if np.any((hold.bounded > 0) & ~(hold.high - hold.low > 1e-9 * np.maximum(1.0, np.abs(hold.high)))):
+        raise _error("bounds", "a range too narrow to search in (its ends are one value to the fit); fix the parameter")
+    # A fixed direction is written as held: cxy and cz both given are put exactly onto 2·cxy² + cz² = 1.
+    placed = constraints._placed(checked_fixed)
+    for name in checked_fixed:
+        target = _target(model, name)
+        if target.kind == "shape":
+            checked_fixed[name] = float(placed.shape[target.parameter][target.lobe])
     if constraints.n_free == 0:
         raise BrdfInputError(Argument("fixed"), f": every parameter of {model.name} is fixed; nothing is left to fit")
     return constraints

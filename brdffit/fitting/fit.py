@@ -17,7 +17,7 @@ from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import START_FACTOR
 from ..physics.models import MODELS, RECORDED_OPTIONS, Model, get_model, model_option_names
-from .buckets import compile_in_background, default_strategy, solve_bucket
+from .buckets import compile_in_background, default_strategy, onto_bounds, solve_bucket
 from .constraints import Constraints, constraints_for
 from .defaults import MAX_STEPS, N_STARTS
 from .hold import Hold
@@ -91,7 +91,19 @@ def _lobe_by_lobe(
     if dtype == "float32":
         refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples), hold)
         solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
+    if hold is not None and np.any(hold.bounded):
+        one = compiled_solver(model, loss, max_steps)
+        full64 = full if dtype == "float64" else build_problem(samples)
+        batched = lambda thetas, holds: jax.tree.map(lambda leaf: leaf[None, None], one(thetas[0], full64, _row(holds)))
+        stacked = jax.tree.map(lambda leaf: np.asarray(leaf)[None], solved)
+        solved = jax.tree.map(
+            lambda leaf: leaf[0], onto_bounds(batched, stacked, jax.tree.map(lambda a: a[None], hold))
+        )
     return solved, by_lobe.fewer_lobes_cost if search is full else None
+
+
+def _row(holds: Hold) -> Hold:
+    return jax.tree.map(lambda leaf: leaf[0], holds)
 
 
 def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:

@@ -21,7 +21,7 @@ def result_table(result: "FitResult", source: str | None = None) -> str:
     columns = [str(c) for c in result.channels]
     cells = {
         label: [
-            f"= {v:.6g}" if label in fixed else value_with_error(v, e, bool(errors))
+            f"= {v:.10g}" if label in fixed else value_with_error(v, e, bool(errors))
             for v, e in zip(_as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True)
         ]
         for label, value in rows

@@ -149,7 +149,7 @@ class LafortuneLobe(Lobe):
             )
         if "cxy" in given and "cz" not in given:
             cxy = float(given["cxy"])
-            if not abs(cxy) <= 1.0 / np.sqrt(2.0):
+            if not abs(cxy) <= 1.0 / np.sqrt(2.0) + 1e-12:  # ±1/√2 as a user writes it: cz = 0
                 raise BrdfInputError(
                     f"{where}cxy = {cxy!r} is outside [-0.7071, 0.7071], where 2·cxy² + cz² = 1 leaves cz ≥ 0"
                 )
