@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import ALBEDO, Domain
 from ..physics.models import Model, Params
-from .hold import ON_BOUND, Hold
+from .hold import Hold, on_bound
 
 _LOBE_NAME = re.compile(r"^lobes\[(\d+)\]\.(\w+)$")
 #: The value every albedo that is not held takes while the vectors of the held ones are computed (any would do).
@@ -143,20 +143,14 @@ class Constraints:
 
     def bound_warnings(self, theta) -> list[str]:
         """One line per bounded parameter whose solve ``theta`` (unconstrained) ended on a bound."""
-        hold = self.hold()
-        theta = np.asarray(theta, float)
-        span = np.where(hold.high > hold.low, hold.high - hold.low, 1.0)
-        fraction = (theta - hold.low) / span
+        side = on_bound(theta, self.hold())
         lines = []
         for name, (low, high) in self.bounds.items():
             index = self._entries(name)
-            for side, value, ended in (
-                ("lower", low, fraction[index] <= ON_BOUND),
-                ("upper", high, fraction[index] >= 1.0 - ON_BOUND),
-            ):
-                if np.any(ended):
+            for which, value, ended in (("lower", low, -1), ("upper", high, 1)):
+                if np.any(side[index] == ended):
                     lines.append(
-                        f"{name} ended on its {side} bound {value:g} (bounds {low:g} to {high:g}): the data pull it"
+                        f"{name} ended on its {which} bound {value:g} (bounds {low:g} to {high:g}): the data pull it"
                         " beyond; widen the bound if that is physical, or the model may not suit these samples"
                     )
         return lines

@@ -77,24 +77,24 @@ def at_bounds(theta, hold: Hold) -> Hold:
     again with those entries on their bounds finds the constrained optimum exactly; the caller keeps that solve when
     its cost is no higher (an optimum just inside a bound makes it higher, and is kept).
     """
-    theta = np.asarray(theta, float)
-    low, high, bounded = (
-        np.broadcast_to(np.asarray(leaf, float), theta.shape) for leaf in (hold.low, hold.high, hold.bounded)
+    side = on_bound(theta, hold, NEAR_BOUND)
+    low, high, value, free, bounded = (
+        _as(leaf, side.shape) for leaf in (hold.low, hold.high, hold.value, hold.free, hold.bounded)
     )
-    span = np.where(high > low, high - low, 1.0)
-    fraction = (theta - low) / span
-    lower = (bounded > 0) & (fraction <= NEAR_BOUND)
-    upper = (bounded > 0) & (fraction >= 1.0 - NEAR_BOUND)
-    on = lower | upper
-    value = np.where(lower, low, np.where(upper, high, np.broadcast_to(np.asarray(hold.value, float), theta.shape)))
-    free = np.where(on, 0.0, np.broadcast_to(np.asarray(hold.free, float), theta.shape))
-    return Hold(free, np.where(on, 0.0, bounded), value, low, high)
+    value = np.where(side < 0, low, np.where(side > 0, high, value))
+    return Hold(np.where(side != 0, 0.0, free), np.where(side != 0, 0.0, bounded), value, low, high)
 
 
-def on_bound(theta, hold: Hold):
-    """-1 where a bounded entry of ``theta`` ended on its lower bound, +1 on its upper, 0 elsewhere (numpy-able)."""
-    span = jnp.where(hold.high > hold.low, hold.high - hold.low, 1.0)
-    fraction = (theta - hold.low) / span
-    lower = (hold.bounded > 0) & (fraction <= ON_BOUND)
-    upper = (hold.bounded > 0) & (fraction >= 1.0 - ON_BOUND)
-    return jnp.where(lower, -1, jnp.where(upper, 1, 0))
+def on_bound(theta, hold: Hold, within: float = ON_BOUND) -> np.ndarray:
+    """-1 where a bounded entry of ``theta`` lies within ``within`` (a fraction of its range) of its lower bound, +1
+    of its upper, 0 elsewhere (numpy, (k,) or (D, k))."""
+    theta = np.asarray(theta, float)
+    low, high, bounded = (_as(leaf, theta.shape) for leaf in (hold.low, hold.high, hold.bounded))
+    fraction = (theta - low) / np.where(high > low, high - low, 1.0)
+    lower = (bounded > 0) & (fraction <= within)
+    upper = (bounded > 0) & (fraction >= 1.0 - within)
+    return np.where(lower, -1, np.where(upper, 1, 0))
+
+
+def _as(leaf, shape) -> np.ndarray:
+    return np.broadcast_to(np.asarray(leaf, float), shape)
