@@ -25,11 +25,12 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..physics.models import Model
-from .buckets import batches, bucket_key, default_strategy, solve_bucket
-from .caveats import albedo_screens
+from .buckets import batches, bucket_key, compile_in_background, default_strategy, solve_bucket, stack_size
+from .caveats import screen_bucket, screen_program
 from .defaults import MAX_STEPS, N_STARTS
 from .fit import checked, fit_one, start_vector
 from .outcome import final_params, result_of
+from .problem import padded_size
 from .results import FitResult
 
 STRATEGIES = ("auto", "loop", "vmap")
@@ -85,11 +86,14 @@ def fit_many(
                 constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
                 hold = None if constraints is None else constraints.hold()
                 unit_samples = [kept[i] for i in unit.indices]
-                solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, **options)
+                n_channels, size = unit_samples[0].n_channels, padded_size(unit_samples[0].n_samples)
+                compiling = compile_in_background(*screen_program(built, n_channels, unit.stack, size))
+                solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, stack=unit.stack, **options)
                 each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
-                n_channels = kept[unit.indices[0]].n_channels
-                still_open = albedo_screens(built, [final_params(built, one, n_channels) for one in each])
-                for one, index, incidences in zip(each, unit.indices, still_open, strict=True):
+                compiling.join()
+                params = [final_params(built, one, n_channels) for one in each]
+                screens = screen_bucket(built, params, unit_samples, unit.stack)
+                for one, index, screened in zip(each, unit.indices, screens, strict=True):
                     results[index] = result_of(
                         built,
                         built_loss,
@@ -98,7 +102,7 @@ def fit_many(
                         max_steps,
                         dtype,
                         max_theta=max_theta,
-                        albedo_open=incidences,
+                        screened=screened,
                         constraints=constraints,
                     )
             bar.update(len(unit.indices))
@@ -120,6 +124,7 @@ class WorkUnit(NamedTuple):
 
     indices: list[int]
     given: bool  # every one has its start: no search
+    stack: int = 1  # the datasets are stacked to this many (``buckets.stack_size``), as are the others of the bucket
 
 
 def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) -> list[WorkUnit]:
@@ -134,7 +139,9 @@ def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) 
         if model.own_fit or (model.n_lobes > 1 and not has_start):
             units += [WorkUnit([index], False) for index in indices]
         else:
-            units += [WorkUnit(batch, has_start) for batch in batches(indices, key.padded_size)]
+            cut = batches(indices, key.padded_size)
+            stack = stack_size([len(batch) for batch in cut])
+            units += [WorkUnit(batch, has_start, stack) for batch in cut]
     return units
 
 

@@ -10,6 +10,9 @@
 * a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
 """
 
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -18,8 +21,9 @@ from .._jax import float64, jit
 from ..data.reciprocity import reciprocity
 from ..data.samples import Samples
 from ..physics.domains import UnitInterval
-from ..physics.geometry import above_horizon, mirror_direction, spherical_to_direction
+from ..physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ..physics.models import Model, Params
+from .problem import padded_size
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
 DEAD_SHARE = 1e-3
@@ -45,15 +49,18 @@ def caveats(
     cost: float | None = None,
     fewer_lobes_cost: float | None = None,
     *,
-    albedo_open: tuple[float, ...] | None = None,
+    screened: "Screened | None" = None,
 ) -> list[str]:
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
-    ``albedo_open``: the incidences the albedo screen left open, if the caller has them (:func:`albedo_screens`)."""
+    ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
     found = _not_reciprocal(samples)
-    found += _dead_lobes(model, params, samples)
+    if screened is None:
+        shares = _lobe_shares(model, params, samples.wi, samples.wo, np.ones(samples.n_samples, bool))
+        screened = Screened(None, np.asarray(shares))
+    found += _dead_lobes(model, params, screened.lobe_shares)
     found += _implausible(model, params, samples.channels)
-    found += _albedo_above_one(model, params, samples.channels, albedo_open)
+    found += _albedo_above_one(model, params, samples.channels, screened.albedo_open)
     if cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9):
         found.append(
             f"the fit ends at cost {cost:.6g}, worse than the {fewer_lobes_cost:.6g} of {model.n_lobes - 1} lobe(s):"
@@ -81,10 +88,8 @@ def _not_reciprocal(samples: Samples) -> list[str]:
     ]
 
 
-def _dead_lobes(model: Model, params: Params, samples: Samples) -> list[str]:
-    if not model.n_lobes:
-        return []
-    shares = np.asarray(_lobe_shares(model, params, samples.wi, samples.wo))
+def _dead_lobes(model: Model, params: Params, shares: np.ndarray) -> list[str]:
+    """The lobes whose largest ``shares`` (K,) of the model stay under :data:`DEAD_SHARE`."""
     return [
         f"{lobe_name(model, params, k)} contributes less than {DEAD_SHARE:.1%} of the model at every sample"
         f" (at most {share:.2g}): it fits nothing; fit with one lobe less"
@@ -94,13 +99,15 @@ def _dead_lobes(model: Model, params: Params, samples: Samples) -> list[str]:
 
 
 @jit(static_argnums=0)
-def _lobe_shares(model: Model, params: Params, wi, wo):
-    """Each lobe's largest share of the model over the samples and channels, (K,)."""
+def _lobe_shares(model: Model, params: Params, wi, wo, real):
+    """Each lobe's largest share of the model over the samples (those ``real``, (N,) bool) and channels, (K,)."""
+    if not model.n_lobes:
+        return jnp.zeros(0)
     visible, wi, wo = above_horizon(wi, wo)
     contributions = model.lobe_values(params.shape, wi, wo)[:, :, None] * params.specular[:, None, :]  # (K, N, C)
     total = params.diffuse / jnp.pi + contributions.sum(axis=0)
     share = contributions / jnp.maximum(total, jnp.finfo(total.dtype).tiny)
-    return (share * visible[None, :, None]).max(axis=(1, 2))
+    return (share * (visible & real)[None, :, None]).max(axis=(1, 2))
 
 
 def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
@@ -131,7 +138,7 @@ def _albedo_above_one(
 
     The fine grid (256 × 512 viewing directions per incidence; half that for an isotropic model) is evaluated only
     at the incidences where a screen (:func:`_screen_bound`, 64 × 128 directions) cannot rule an albedo above the
-    limit out; ``open_incidences``: those incidences, when :func:`albedo_screens` screened many fits at once."""
+    limit out; ``open_incidences``: those incidences, when :func:`screen_bucket` screened many fits at once."""
     if open_incidences is None:
         screened = _screen_bound(model, params) if _screenable(model) else None
         open_incidences = ALBEDO_INCIDENCE if screened is None else _open_incidences(np.asarray(screened))
@@ -150,13 +157,59 @@ def _albedo_above_one(
     return found
 
 
-def albedo_screens(model: Model, params: list[Params]) -> list[tuple[float, ...]]:
-    """For each of ``params`` (numpy, one shape), the incidences the albedo screen leaves open
-    (:func:`_screen_bound`; none: cleared): the screens of a whole bucket of fits in one program."""
-    if not _screenable(model):
-        return [ALBEDO_INCIDENCE] * len(params)
-    stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *params)
-    return [_open_incidences(bounds) for bounds in np.asarray(_screen_bounds(model, stacked))]
+class Screened(NamedTuple):
+    """What :func:`screen_bucket` found for one fit: the incidences its albedo screen left open (:func:`_screen_bound`;
+    none: cleared; all of them for a model the screen does not apply to), each lobe's largest share (K,)."""
+
+    albedo_open: tuple[float, ...]
+    lobe_shares: np.ndarray
+
+
+def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
+    """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples``, in one program, stacked
+    to ``stack`` datasets (copies of the first after the last) of :func:`screen_arrays`: every batch of a bucket
+    runs the same program, which :func:`screen_program` compiles ahead."""
+    rows = [*params, *[params[0]] * (stack - len(params))]
+    stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *rows)
+    bounds, shares = (np.asarray(out) for out in _bucket_screens(model, stacked, *screen_arrays(samples, stack)))
+    opened = [_open_incidences(one) if _screenable(model) else ALBEDO_INCIDENCE for one in bounds]
+    return [Screened(opened[d], shares[d]) for d in range(len(params))]
+
+
+def screen_arrays(samples: Sequence[Samples], stack: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``wi``, ``wo`` (stack, N, 3) and ``real`` (stack, N) of ``samples`` (one padded size), padded with the
+    normal where not real; the rows after the last dataset copy the first."""
+    size = padded_size(samples[0].n_samples)
+    rows = [*samples, *[samples[0]] * (stack - len(samples))]
+    wi, wo = np.tile(np.asarray(NORMAL, float), (2, stack, size, 1))
+    real = np.zeros((stack, size), bool)
+    for d, one in enumerate(rows):
+        wi[d, : one.n_samples], wo[d, : one.n_samples], real[d, : one.n_samples] = one.wi, one.wo, True
+    return wi, wo, real
+
+
+def screen_program(model: Model, n_channels: int, stack: int, size: int) -> tuple[Any, tuple]:
+    """:func:`screen_bucket`'s program and the shapes of its arguments for ``stack`` datasets of ``size`` padded
+    samples, to compile it ahead (``jit``'s ``precompile``)."""
+    vector = np.zeros((stack, model.unconstrained.size(n_channels)))
+    params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)
+    directions = jax.ShapeDtypeStruct((stack, size, 3), np.float64)
+    return _bucket_screens, (model, params, directions, directions, jax.ShapeDtypeStruct((stack, size), bool))
+
+
+@jit(static_argnums=0)
+def _bucket_screens(model: Model, stacked: Params, wi, wo, real):
+    """:func:`_screen_bound` (zeros where the screen does not apply) and :func:`_lobe_shares` of each of a stack of
+    fits (leading axis D), one after another."""
+
+    def one(arguments):
+        params, wi, wo, real = arguments
+        shares = _lobe_shares(model, params, wi, wo, real)
+        if not _screenable(model):
+            return jnp.zeros((len(ALBEDO_INCIDENCE), params.diffuse.shape[-1])), shares
+        return _screen_bound(model, params), shares
+
+    return jax.lax.map(one, (stacked, wi, wo, real))
 
 
 def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
@@ -167,12 +220,6 @@ def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
 def _screenable(model: Model) -> bool:
     """Whether the screen applies: a model with lobes, each peaking at the mirror direction (not Lafortune's)."""
     return bool(model.n_lobes) and not model.lobes_as_list
-
-
-@jit(static_argnums=0)
-def _screen_bounds(model: Model, stacked: Params):
-    """:func:`_screen_bound` of each of a stack of parameters (leading axis D), one after another."""
-    return jax.lax.map(lambda params: _screen_bound(model, params), stacked)
 
 
 @jit(static_argnums=0)
@@ -189,7 +236,10 @@ def _screen_bound(model: Model, params: Params):
     wi = spherical_to_direction(jnp.asarray(np.radians(ALBEDO_INCIDENCE)), jnp.zeros(len(ALBEDO_INCIDENCE)))
     wo = mirror_direction(wi)
     peak = model.brdf(params, wi, wo) * wo[:, 2:3]
-    return fine + 3.0 * jnp.abs(fine - coarse) + SCREEN_PEAK_CELLS * peak * (np.pi / SCREEN_GRID**2)
+    # A cell's d cos θo dφo: π/n² on the grid; on the axial rule's rows of width h around the normal, π h².
+    axial = np.array([_is_axial(model, theta) for theta in ALBEDO_INCIDENCE])[:, None]
+    cell = np.where(axial, np.pi * (np.pi / 2 / (AXIAL_ROWS * SCREEN_GRID)) ** 2, np.pi / SCREEN_GRID**2)
+    return fine + 3.0 * jnp.abs(fine - coarse) + SCREEN_PEAK_CELLS * peak * cell
 
 
 @jit(static_argnums=(0, 2, 3))
@@ -200,11 +250,44 @@ def _albedo_estimates(model: Model, params: Params, n: int, incidences: tuple[fl
 
 
 def _model_quadrature(model: Model, params: Params, n: int, incidences: tuple[float, ...] = ALBEDO_INCIDENCE):
-    """:func:`albedo_quadrature` of ``model`` (traced). An isotropic model, lit at azimuth 0, is symmetric in
-    ``φo → −φo``: it is evaluated on the half grid ``φo < π`` alone, which gives the same sums for half the work."""
+    """:func:`albedo_quadrature` of ``model`` (traced), (fine, coarse) each (incidences, C), with two symmetries of
+    an isotropic model used. Lit at azimuth 0 it is symmetric in ``φo → −φo``: it is evaluated on the half grid
+    ``φo < π`` alone, which gives the same sums for half the work. Lit along the normal it is symmetric about the
+    normal (rotating both directions about it changes nothing, and the normal does not move): its albedo there is
+    a one-dimensional integral over ``θo`` (:func:`_axial_quadrature`), whose rows resolve a lobe around the normal
+    that the grid's first row, ``θo`` up to ``acos(1 − 1/n)`` (10° for n = 64), would hold whole."""
     half = model.isotropic
-    directions = albedo_directions(n, jnp, half=half, incidences=incidences)
-    return albedo_quadrature(model.brdf(params, *directions), n, half=half)
+    on_grid = tuple(theta for theta in incidences if not _is_axial(model, theta))
+    rows = {}
+    if on_grid:
+        directions = albedo_directions(n, jnp, half=half, incidences=on_grid)
+        fine, coarse = albedo_quadrature(model.brdf(params, *directions), n, half=half)
+        rows = {theta: (fine[i], coarse[i]) for i, theta in enumerate(on_grid)}
+    if len(on_grid) < len(incidences):
+        rows[0.0] = _axial_quadrature(model, params, AXIAL_ROWS * n)
+    return tuple(jnp.stack([rows[theta][part] for theta in incidences]) for part in (0, 1))
+
+
+#: The axial rule's rows per row of the grid it stands in for (``_axial_quadrature``).
+AXIAL_ROWS = 16
+
+
+def _is_axial(model: Model, theta_i: float) -> bool:
+    """Whether the albedo at incidence ``theta_i`` (degrees) is the axial rule's: an isotropic model lit along the
+    normal."""
+    return model.isotropic and theta_i == 0.0
+
+
+def _axial_quadrature(model: Model, params: Params, m: int):
+    """The directional albedo (C,) at normal incidence of an isotropic model, ``2π ∫ f(θo) cos θo sin θo dθo``
+    over ``[0, π/2]`` by the midpoint rule on ``m`` rows of width ``h = π/(2m)``, and by its even rows alone
+    (weighted twice), as :func:`albedo_quadrature`'s coarse estimate is."""
+    h = np.pi / (2 * m)
+    theta_o = (jnp.arange(m) + 0.5) * h
+    wo = spherical_to_direction(theta_o, jnp.zeros(m))
+    wi = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0]), wo.shape)
+    weighted = model.brdf(params, wi, wo) * (2 * np.pi * h * jnp.cos(theta_o) * jnp.sin(theta_o))[:, None]
+    return weighted.sum(axis=0), 2.0 * weighted[::2].sum(axis=0)
 
 
 def albedo_directions(n: int, xp=np, *, half: bool = False, incidences: tuple[float, ...] = ALBEDO_INCIDENCE):

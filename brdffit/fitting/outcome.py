@@ -11,7 +11,7 @@ import numpy as np
 from .._lazy import jax
 from ..data.samples import Samples
 from ..physics.models import Model, Params
-from .caveats import caveats
+from .caveats import Screened, caveats
 from .constraints import Constraints
 from .losses import Loss
 from .results import FitResult
@@ -23,8 +23,10 @@ def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
     only in the limit."""
     physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
     domains = model.physical.domains(n_channels)
-    inside = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
-    return model.physical.to_params(inside, n_channels)
+    low, high = np.array([domain.bounds for domain in domains]).T
+    if not np.all(np.isfinite(physical) & (physical > low) & (physical < high)):  # else every domain holds it
+        physical = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
+    return model.physical.to_params(physical, n_channels)
 
 
 def result_of(
@@ -36,13 +38,13 @@ def result_of(
     dtype: str,
     fewer_lobes_cost: float | None = None,
     max_theta: float | None = None,
-    albedo_open: tuple[float, ...] | None = None,
+    screened: Screened | None = None,
     more_caveats: Sequence[str] = (),
     constraints: Constraints | None = None,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
-    ``samples`` are those fitted, selected by ``max_theta``. ``albedo_open``: the incidences the albedo screen left
-    open, when the caller screened many fits at once (``caveats.albedo_screens``). ``constraints``: what the fit
+    ``samples`` are those fitted, selected by ``max_theta``. ``screened``: what the caveats' screens found for this fit,
+    when the caller screened many fits at once (``caveats.screen_bucket``). ``constraints``: what the fit
     held; its fixed values are written exactly, and a parameter that ended on a bound is said."""
     converged = bool(solved.converged)
     params = final_params(model, solved, samples.n_channels)
@@ -63,7 +65,7 @@ def result_of(
         message="" if converged else failure_message(int(solved.result), max_steps),
         dtype=dtype,
         warnings=[
-            *caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, albedo_open=albedo_open),
+            *caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, screened=screened),
             *more_caveats,
         ],
         quantity=samples.provenance.quantity if samples.provenance else None,

@@ -47,12 +47,15 @@ def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
     if n <= SEARCH_SAMPLES:
         return None
     # A channel that is 0 almost everywhere (an albedo of 0) is scaled by a thousandth of its largest value.
-    values = samples.values
-    scale = np.maximum(np.median(values, axis=0), 1e-3 * np.max(values, axis=0))
-    brightness = np.max(values / np.maximum(scale, np.finfo(float).tiny), axis=1)
+    # Channel by channel, in rows (C, N): numpy reduces a contiguous row ~10× faster than a column of (N, C).
+    channels = np.ascontiguousarray(samples.values.T)
+    scale = np.maximum(np.median(channels, axis=1), 1e-3 * np.max(channels, axis=1))
+    brightness = np.max(channels / np.maximum(scale, np.finfo(float).tiny)[:, None], axis=0)
     n_bright = int(SEARCH_SAMPLES * BRIGHT_SHARE)
     bright = np.argpartition(-brightness, n_bright)[:n_bright]
-    others = np.setdiff1d(np.arange(n), bright, assume_unique=True)
+    others = np.ones(n, bool)
+    others[bright] = False
+    others = np.flatnonzero(others)
     rest = np.random.default_rng(seed).choice(others, SEARCH_SAMPLES - n_bright, replace=False)
     return np.sort(np.concatenate([bright, rest]))
 
