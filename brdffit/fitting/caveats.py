@@ -11,7 +11,7 @@
 """
 
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -56,8 +56,7 @@ def caveats(
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
     found = _not_reciprocal(samples)
     if screened is None:
-        shares = _lobe_shares(model, params, samples.wi, samples.wo, np.ones(samples.n_samples, bool))
-        screened = Screened(None, np.asarray(shares))
+        (screened,) = screen_bucket(model, [params], [samples], 1)
     found += _dead_lobes(model, params, screened.lobe_shares)
     found += _implausible(model, params, samples.channels)
     found += _albedo_above_one(model, params, samples.channels, screened.albedo_open)
@@ -188,13 +187,13 @@ def screen_arrays(samples: Sequence[Samples], stack: int) -> tuple[np.ndarray, n
     return wi, wo, real
 
 
-def screen_program(model: Model, n_channels: int, stack: int, size: int) -> tuple[Any, tuple]:
-    """:func:`screen_bucket`'s program and the shapes of its arguments for ``stack`` datasets of ``size`` padded
-    samples, to compile it ahead (``jit``'s ``precompile``)."""
+def screen_program(model: Model, n_channels: int, stack: int, size: int) -> tuple:
+    """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for ``stack``
+    datasets of ``size`` padded samples, to compile it ahead (``jit``'s ``precompile``)."""
     vector = np.zeros((stack, model.unconstrained.size(n_channels)))
     params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)
     directions = jax.ShapeDtypeStruct((stack, size, 3), np.float64)
-    return _bucket_screens, (model, params, directions, directions, jax.ShapeDtypeStruct((stack, size), bool))
+    return _bucket_screens, model, params, directions, directions, jax.ShapeDtypeStruct((stack, size), bool)
 
 
 @jit(static_argnums=0)
