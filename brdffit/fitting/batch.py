@@ -30,7 +30,6 @@ from .caveats import screen_bucket, screen_program
 from .defaults import MAX_STEPS, N_STARTS
 from .fit import checked, fit_one, start_vector
 from .outcome import final_params, result_of
-from .problem import padded_size
 from .results import FitResult
 
 STRATEGIES = ("auto", "loop", "vmap")
@@ -86,8 +85,8 @@ def fit_many(
                 constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
                 hold = None if constraints is None else constraints.hold()
                 unit_samples = [kept[i] for i in unit.indices]
-                n_channels, size = unit_samples[0].n_channels, padded_size(unit_samples[0].n_samples)
-                compiling = compile_in_background(*screen_program(built, n_channels, unit.stack, size))
+                n_channels = unit_samples[0].n_channels
+                compiling = compile_in_background(*screen_program(built, unit_samples, unit.stack))
                 solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, stack=unit.stack, **options)
                 each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
                 compiling.join()

@@ -23,7 +23,7 @@ from ..data.samples import Samples
 from ..physics.domains import UnitInterval
 from ..physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ..physics.models import Model, Params
-from .problem import padded_size
+from .problem import host_problems, padded_size
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
 DEAD_SHARE = 1e-3
@@ -165,31 +165,23 @@ class Screened(NamedTuple):
 
 
 def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
-    """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples``, in one program, stacked
-    to ``stack`` datasets (copies of the first after the last) of :func:`screen_arrays`: every batch of a bucket
-    runs the same program, which :func:`screen_program` compiles ahead."""
+    """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples`` (one padded size), in one
+    program, stacked to ``stack`` datasets as the bucket's problems are (``problem.host_problems``): every batch of
+    a bucket runs the same program, which :func:`screen_program` compiles ahead."""
     rows = [*params, *[params[0]] * (stack - len(params))]
     stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *rows)
-    bounds, shares = (np.asarray(out) for out in _bucket_screens(model, stacked, *screen_arrays(samples, stack)))
+    problems = host_problems(samples, "float64", stack)
+    bounds, shares = (
+        np.asarray(out) for out in _bucket_screens(model, stacked, problems.wi, problems.wo, problems.real)
+    )
     opened = [_open_incidences(one) if _screenable(model) else ALBEDO_INCIDENCE for one in bounds]
     return [Screened(opened[d], shares[d]) for d in range(len(params))]
 
 
-def screen_arrays(samples: Sequence[Samples], stack: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``wi``, ``wo`` (stack, N, 3) and ``real`` (stack, N) of ``samples`` (one padded size), padded with the
-    normal where not real; the rows after the last dataset copy the first."""
-    size = padded_size(samples[0].n_samples)
-    rows = [*samples, *[samples[0]] * (stack - len(samples))]
-    wi, wo = np.tile(np.asarray(NORMAL, float), (2, stack, size, 1))
-    real = np.zeros((stack, size), bool)
-    for d, one in enumerate(rows):
-        wi[d, : one.n_samples], wo[d, : one.n_samples], real[d, : one.n_samples] = one.wi, one.wo, True
-    return wi, wo, real
-
-
-def screen_program(model: Model, n_channels: int, stack: int, size: int) -> tuple:
-    """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for ``stack``
-    datasets of ``size`` padded samples, to compile it ahead (``jit``'s ``precompile``)."""
+def screen_program(model: Model, samples: Sequence[Samples], stack: int) -> tuple:
+    """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for
+    ``samples`` stacked to ``stack`` datasets, to compile it ahead (``buckets.compile_in_background``)."""
+    n_channels, size = samples[0].n_channels, padded_size(samples[0].n_samples)
     vector = np.zeros((stack, model.unconstrained.size(n_channels)))
     params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)
     directions = jax.ShapeDtypeStruct((stack, size, 3), np.float64)
@@ -237,7 +229,7 @@ def _screen_bound(model: Model, params: Params):
     peak = model.brdf(params, wi, wo) * wo[:, 2:3]
     # A cell's d cos θo dφo: π/n² on the grid; on the axial rule's rows of width h around the normal, π h².
     axial = np.array([_is_axial(model, theta) for theta in ALBEDO_INCIDENCE])[:, None]
-    cell = np.where(axial, np.pi * (np.pi / 2 / (AXIAL_ROWS * SCREEN_GRID)) ** 2, np.pi / SCREEN_GRID**2)
+    cell = np.where(axial, np.pi * _axial_row_width(SCREEN_GRID) ** 2, np.pi / SCREEN_GRID**2)
     return fine + 3.0 * jnp.abs(fine - coarse) + SCREEN_PEAK_CELLS * peak * cell
 
 
@@ -263,7 +255,7 @@ def _model_quadrature(model: Model, params: Params, n: int, incidences: tuple[fl
         fine, coarse = albedo_quadrature(model.brdf(params, *directions), n, half=half)
         rows = {theta: (fine[i], coarse[i]) for i, theta in enumerate(on_grid)}
     if len(on_grid) < len(incidences):
-        rows[0.0] = _axial_quadrature(model, params, AXIAL_ROWS * n)
+        rows[0.0] = _axial_quadrature(model, params, n)
     return tuple(jnp.stack([rows[theta][part] for theta in incidences]) for part in (0, 1))
 
 
@@ -277,14 +269,20 @@ def _is_axial(model: Model, theta_i: float) -> bool:
     return model.isotropic and theta_i == 0.0
 
 
-def _axial_quadrature(model: Model, params: Params, m: int):
+def _axial_row_width(n: int) -> float:
+    """The width ``h = π/(2m)`` (radians of ``θo``) of the axial rule's ``m = AXIAL_ROWS · n`` rows, standing in for
+    a grid of ``n`` rows."""
+    return np.pi / (2 * AXIAL_ROWS * n)
+
+
+def _axial_quadrature(model: Model, params: Params, n: int):
     """The directional albedo (C,) at normal incidence of an isotropic model, ``2π ∫ f(θo) cos θo sin θo dθo``
-    over ``[0, π/2]`` by the midpoint rule on ``m`` rows of width ``h = π/(2m)``, and by its even rows alone
-    (weighted twice), as :func:`albedo_quadrature`'s coarse estimate is."""
-    h = np.pi / (2 * m)
-    theta_o = (jnp.arange(m) + 0.5) * h
-    wo = spherical_to_direction(theta_o, jnp.zeros(m))
-    wi = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0]), wo.shape)
+    over ``[0, π/2]`` by the midpoint rule on ``AXIAL_ROWS · n`` rows of width ``h`` (:func:`_axial_row_width`),
+    and by its even rows alone (weighted twice), as :func:`albedo_quadrature`'s coarse estimate is."""
+    h = _axial_row_width(n)
+    theta_o = (jnp.arange(AXIAL_ROWS * n) + 0.5) * h
+    wo = spherical_to_direction(theta_o, jnp.zeros(len(theta_o)))
+    wi = jnp.broadcast_to(jnp.asarray(NORMAL), wo.shape)
     weighted = model.brdf(params, wi, wo) * (2 * np.pi * h * jnp.cos(theta_o) * jnp.sin(theta_o))[:, None]
     return weighted.sum(axis=0), 2.0 * weighted[::2].sum(axis=0)
 

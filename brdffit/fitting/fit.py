@@ -25,7 +25,7 @@ from .hold import Hold
 from .lobes import lobe_by_lobe
 from .losses import Loss, get_loss
 from .outcome import result_of
-from .problem import DTYPES, Problem, build_problem, padded_size
+from .problem import DTYPES, Problem, build_problem
 from .results import FitResult
 from .solve import best, compiled_solver
 from .starts import search_subset
@@ -67,7 +67,7 @@ def fit_one(
         )
     starts = None if start is None else start_vector(model, start, samples.n_channels)[None]
     options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=default_strategy())
-    compiling = compile_in_background(*screen_program(model, samples.n_channels, 1, padded_size(samples.n_samples)))
+    compiling = compile_in_background(*screen_program(model, [samples], 1))
     solved = jax.tree.map(lambda leaf: leaf[0], solve_bucket(model, loss, [samples], starts, hold=hold, **options))
     compiling.join()
     return result_of(model, loss, samples, solved, max_steps, dtype, max_theta=max_theta, constraints=constraints)
