@@ -140,3 +140,17 @@ def test_batch_fits_are_deterministic_and_sizes_share_compiles():
     assert padded_size(3000) == padded_size(2900) == 3072
     results = fit_batch(datasets(), "ward")
     np.testing.assert_array_equal([r.n_samples for r in results], [3000, 3000, 5000, 2900])
+
+
+@pytest.mark.parametrize("count", [1, 19, 20, 39, 40, 41, 100])
+def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
+    """20 datasets of which 19 fit in a batch go as 10 + 10 (one stacked shape, one compiled program), not 19 + 1."""
+    from brdffit.fitting.buckets import BATCH_SAMPLES, batches, stack_size
+
+    size = BATCH_SAMPLES // 19  # 19 datasets to a batch
+    cut = batches(list(range(count)), size)
+    lengths = [len(batch) for batch in cut]
+    assert [index for batch in cut for index in batch] == list(range(count))
+    assert len(cut) == -(-count // 19) and max(lengths) <= 19 and max(lengths) - min(lengths) <= 1
+    assert max(lengths) * size <= BATCH_SAMPLES
+    assert stack_size(lengths) >= max(lengths)

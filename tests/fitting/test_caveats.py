@@ -152,3 +152,35 @@ def test_the_screen_changes_no_verdict(name):
         skipped += bool(cleared.all())
     print(f"{name}: the screen skipped {skipped} of 40, {above} above 1")
     assert skipped >= 5 and above >= 1
+
+
+@pytest.mark.parametrize("n", [1.0, 30.0, 1000.0, 10000.0])
+def test_the_albedo_at_normal_incidence_is_exact_for_normalised_phong(n):
+    """Lit along the normal, normalised Phong's lobe ``(n+2)/(2π) cos^n θo`` integrates against ``cos θo dωo`` to 1
+    for every n, so the albedo is ``rho_d + rho_s``. The axial rule (64 × 16 rows of width π/2048 for the screen)
+    resolves even n = 10,000 (lobe ~0.01 rad ≈ 13 rows wide): the midpoint rule's relative error is ~(h/width)²/24
+    ≈ 3e-4 there; 1e-3 allows for it. The (cos θo, φo) grid of the same size put its first row over the whole lobe."""
+    from brdffit.fitting import caveats as module
+
+    model = get_model("phong")
+    params = model.dictionary.to_params({"rho_d": [0.3, 0.05], "rho_s": [0.6, 0.9], "n": n})
+    fine, coarse = (np.asarray(a) for a in module._axial_quadrature(model, params, module.SCREEN_GRID))
+    np.testing.assert_allclose(fine, [0.9, 0.95], rtol=1e-3)
+    assert np.all(np.isfinite(coarse))
+
+
+def test_the_bucket_screen_of_padded_stacks_equals_each_fit_screened_alone(oak):
+    """Screening three fits stacked to four (the fourth a copy, its padding rows masked) gives each fit what it gets
+    stacked alone: the same open incidences and lobe shares (1e-12: the same arithmetic, one row of a stack)."""
+    from brdffit.fitting.caveats import screen_bucket
+
+    samples = [oak.select(np.arange(k, oak.n_samples, 3)) for k in range(3)]
+    model = get_model("ward")
+    params = [
+        model.dictionary.to_params(WARD | {"rho_s": [0.3 * k, 0.2, 0.1], "alpha": 0.02 + 0.1 * k}) for k in range(3)
+    ]
+    together = screen_bucket(model, params, samples, 4)
+    for k in range(3):
+        (alone,) = screen_bucket(model, params[k : k + 1], samples[k : k + 1], 1)
+        assert together[k].albedo_open == alone.albedo_open
+        np.testing.assert_allclose(together[k].lobe_shares, alone.lobe_shares, rtol=1e-12, atol=1e-15)
