@@ -108,29 +108,30 @@ def solve_bucket(
     full = build_problems(samples, dtype, count)
     holds = None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (count, leaf.size)), hold)
     solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
-    solve = lambda thetas, problems: solver(thetas, problems, holds)
+    solve = lambda thetas, problems: solver(thetas, problems, holds, step_budget(max_steps))
     if starts is not None:
         thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
     else:
+        # the program that solves the winners, compiled while the starts are searched and raced
+        one_start = jax.ShapeDtypeStruct((count, 1, model.unconstrained.size(samples[0].n_channels)), np.float64)
+        compiling = compile_in_background(solver, one_start, full, holds, step_budget(max_steps))
         subsets = [search_subset(one, seed) for one in samples]
         search = None
         if subsets[0] is not None:
             chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
             search = build_problems(chosen, dtype, count)
-        thetas = grid_starts(model, loss, n_starts, full if search is None else search, holds)
-        if thetas.shape[1] > 1:  # the starts race; the winner goes on
-            one_start = jax.ShapeDtypeStruct((count, 1, thetas.shape[2]), np.float64)
-            compiling = compile_in_background(solver, one_start, full, holds)
-            if search is not None:  # to convergence on the subset
-                thetas = _best(solve(thetas, search)).theta[:, None]
-            else:  # a few steps on every sample
-                racer = bucket_solver(model, loss, min(RACE_STEPS, max_steps), dtype, strategy == "vmap")
-                thetas = _best(racer(thetas, full, holds)).theta[:, None]
-            compiling.join()
+        thetas = np.asarray(grid_starts(model, loss, n_starts, full if search is None else search, holds))
+        if thetas.shape[1] > 1 and search is not None:  # the starts race to convergence on the subset
+            thetas = _best(solve(thetas, search)).theta[:, None]
+        compiling.join()
+        if thetas.shape[1] > 1:  # the starts race a few steps on every sample, one start at a time
+            budget = step_budget(min(RACE_STEPS, max_steps))
+            raced = [solver(thetas[:, [s]], full, holds, budget) for s in range(thetas.shape[1])]
+            thetas = _best(jax.tree.map(lambda *leaves: np.concatenate(leaves, axis=1), *raced)).theta[:, None]
     solved = _best(solve(thetas, full))
     if dtype == "float32":
         refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
-            solved.theta[:, None], build_problems(samples, "float64", count), holds
+            solved.theta[:, None], build_problems(samples, "float64", count), holds, step_budget(max_steps)
         )
         solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
     if holds is not None and np.any(hold.bounded):
@@ -138,7 +139,9 @@ def solve_bucket(
             solver if dtype == "float64" else bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")
         )
         problems64 = full if dtype == "float64" else build_problems(samples, "float64", count)
-        solved = onto_bounds(lambda theta, held: solver64(theta[:, None], problems64, held), solved, holds)
+        solved = onto_bounds(
+            lambda theta, held: solver64(theta[:, None], problems64, held, step_budget(max_steps)), solved, holds
+        )
     return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
 
 
@@ -191,21 +194,27 @@ def compile_in_background(solve, *arguments) -> threading.Thread:
     return thread
 
 
+def step_budget(steps: int) -> np.ndarray:
+    """The most steps a solve of :func:`bucket_solver` takes, as the array its program takes."""
+    return np.asarray(steps, np.int32)
+
+
 @cache
 def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
-    """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None) -> Solved (D, S, …)``: every start of
-    every dataset."""
+    """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None, budget) -> Solved (D, S, …)``: every
+    start of every dataset, each solve stopping after ``budget`` steps (:func:`step_budget`, at most
+    ``max_steps``): one compiled program runs both the race of the starts and the winner's solve."""
     one = partial(solved_from, model, loss, max_steps, dtype)
 
-    def solve(thetas, problems: Problem, holds: Hold | None):
+    def solve(thetas, problems: Problem, holds: Hold | None, budget):
         if vectorise:
-            return jax.vmap(lambda starts, problem, hold: jax.vmap(lambda theta: one(theta, problem, hold))(starts))(
-                thetas, problems, holds
-            )
+            return jax.vmap(
+                lambda starts, problem, hold: jax.vmap(lambda theta: one(theta, problem, hold, budget))(starts)
+            )(thetas, problems, holds)
 
         def each_dataset(triple):
             starts, problem, hold = triple
-            return jax.lax.map(lambda theta: one(theta, problem, hold), starts)
+            return jax.lax.map(lambda theta: one(theta, problem, hold, budget), starts)
 
         return jax.lax.map(each_dataset, (thetas, problems, holds))
 

@@ -95,9 +95,18 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
 
 
 def solved_from(
-    model: Model, loss: Loss, max_steps: int, dtype: str, theta0, problem: Problem, hold: Hold | None = None
+    model: Model,
+    loss: Loss,
+    max_steps: int,
+    dtype: str,
+    theta0,
+    problem: Problem,
+    hold: Hold | None = None,
+    budget=None,
 ) -> Solved:
-    """The Levenberg-Marquardt solve (``solver.py``) of ``problem`` from ``theta0`` (JAX, to be traced).
+    """The Levenberg-Marquardt solve (``solver.py``) of ``problem`` from ``theta0`` (JAX, to be traced), of at
+    most ``max_steps`` steps, or ``budget`` (an integer array ≤ ``max_steps``: an argument of the program, not a
+    constant of it) when given.
 
     With a ``hold`` the solver moves the coordinates ``z`` of ``hold.py`` (fixed entries stay at their values,
     bounded ones inside their ranges), and ``theta0`` is first moved onto what the hold allows."""
@@ -133,7 +142,13 @@ def solved_from(
     data = problem if hold is None else (problem, hold)
     frozen_start, frozen_data = jax.lax.stop_gradient((start, data))
     solution = optx.least_squares(
-        _residual_shape, solver, frozen_start, args=frozen_data, max_steps=max_steps, throw=False
+        _residual_shape,
+        solver,
+        frozen_start,
+        args=frozen_data,
+        options=None if budget is None else {"budget": budget},
+        max_steps=max_steps,
+        throw=False,
     )
     theta = to_theta(at_optimum(gradient, solution.value, data), data)
     n_channels = problem.measured.shape[1]

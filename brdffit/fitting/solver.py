@@ -156,6 +156,7 @@ class _State(eqx.Module):
     descent_state: Any
     terminate: Any
     result: Any
+    steps: Any  # steps taken, for ``options["budget"]``
 
 
 def _function_info(cost, gradient, gram):
@@ -204,6 +205,7 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
             descent_state=self.descent.init(y, f_info),
             terminate=jnp.array(False),
             result=RESULTS.successful,
+            steps=jnp.zeros((), jnp.int32),
         )
 
     def step(self, fn, y, args, options, state, tags):
@@ -257,11 +259,21 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
             descent_state=descent_state,
             terminate=terminate,
             result=result,
+            steps=state.steps + 1,
         )
         return new_y, new_state, None
 
     def terminate(self, fn, y, args, options, state, tags):
-        return state.terminate, state.result
+        """The stopping tests of :meth:`step`; with ``options={"budget": b}`` (an integer, possibly traced) also a
+        stop after ``b`` steps, reported as ``max_steps`` would report it: a budget is a ``max_steps`` that a
+        program takes as an argument, so that one compiled solve serves a short race and the full solve."""
+        if not options or "budget" not in options:
+            return state.terminate, state.result
+        spent = ~state.terminate & (state.steps >= options["budget"])
+        result = RESULTS.where(
+            spent & (state.result == RESULTS.successful), RESULTS.nonlinear_max_steps_reached, state.result
+        )
+        return state.terminate | spent, result
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         return y, aux, {}
