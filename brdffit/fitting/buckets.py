@@ -112,17 +112,22 @@ def solve_bucket(
     if starts is not None:
         thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
     else:
-        # the program that solves the winners, compiled while the starts are searched and raced
+        # The program that solves the winners compiles in the background: for small datasets during the grid
+        # search (their race runs it too), for large ones during their race on the subset (started during the
+        # grid search as well, three compilations compete for the cores: 20 × 100k Ward took ~1 s longer).
         one_start = jax.ShapeDtypeStruct((count, 1, model.unconstrained.size(samples[0].n_channels)), np.float64)
-        compiling = compile_in_background(solver, one_start, full, holds, step_budget(max_steps))
+        winners = lambda: compile_in_background(solver, one_start, full, holds, step_budget(max_steps))
         subsets = [search_subset(one, seed) for one in samples]
         search = None
         if subsets[0] is not None:
             chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
             search = build_problems(chosen, dtype, count)
+        compiling = winners() if search is None else None
         thetas = np.asarray(grid_starts(model, loss, n_starts, full if search is None else search, holds))
-        if thetas.shape[1] > 1 and search is not None:  # the starts race to convergence on the subset
-            thetas = _best(solve(thetas, search)).theta[:, None]
+        if search is not None:
+            compiling = winners()
+            if thetas.shape[1] > 1:  # the starts race to convergence on the subset
+                thetas = _best(solve(thetas, search)).theta[:, None]
         compiling.join()
         if thetas.shape[1] > 1:  # the starts race a few steps on every sample, one start at a time
             budget = step_budget(min(RACE_STEPS, max_steps))
