@@ -2,12 +2,13 @@
 
 A *bucket* is a list of datasets whose problems stack: the same padded size (``problem.padded_size``), channel
 count and optional columns, all searched on a subset or none (:func:`bucket_key`). A bucket goes through the
-fit's steps as arrays (D, …) with one program per step, so a material library or the texels of a capture pay
+fit's steps as arrays (D, …) in a few compiled programs, so a material library or the texels of a capture pay
 no Python per dataset and per solver step:
 
 1. the grid start search of every dataset (``starts.grid_starts``), on its search subset when it has one;
-2. Levenberg-Marquardt from each dataset's ``n_starts`` starts (on the subset: only the winner goes on);
-3. the winner refined on every sample (float32 fits: in float64 after).
+2. a race of each dataset's ``n_starts`` starts: on the subset, Levenberg-Marquardt to convergence; without one,
+   :data:`RACE_STEPS` steps on every sample, run by the program of step 3 with a smaller step budget;
+3. Levenberg-Marquardt from the winner on every sample (float32 fits: refined in float64 after).
 
 Inside a program the datasets are solved one after another (``lax.map``) on a CPU, where a vectorised
 while-loop would run every fit until the slowest ends; on a GPU all at once (``vmap``), which fills the device.
@@ -36,8 +37,7 @@ from .starts import SEARCH_SAMPLES, grid_starts, search_subset
 BATCH_SAMPLES = 2**21
 #: Steps of the race between the starts of a dataset searched on all its samples: the one of lowest cost after
 #: them goes on. Measured on 1,000 Ward and 300 Cook-Torrance fits of 500 samples: after 2 steps the race picked a
-#: start that ends at the best cost of the three in every one (after 1, 3 Cook-Torrance fits ended worse), and
-#: it takes half the time of three full solves.
+#: start that ends at the best cost of the three in every one (after 1, 3 Cook-Torrance fits ended worse).
 RACE_STEPS = 2
 
 
@@ -108,23 +108,25 @@ def solve_bucket(
     full = build_problems(samples, dtype, count)
     holds = None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (count, leaf.size)), hold)
     solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
-    solve = lambda thetas, problems: solver(thetas, problems, holds, step_budget(max_steps))
+    full_budget = step_budget(max_steps)
+    solve = lambda thetas, problems: solver(thetas, problems, holds, full_budget)
     if starts is not None:
         thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
     else:
-        # The program that solves the winners compiles in the background: for small datasets during the grid
-        # search (their race runs it too), for large ones during their race on the subset (started during the
-        # grid search as well, three compilations compete for the cores: 20 × 100k Ward took ~1 s longer).
+        # The program that solves the winners compiles in the background, during the grid search; but when the
+        # starts race on a subset, only after it (the race's program compiles then, and three compilations at
+        # once on 2 cores cost 20 × 100k Ward ~1 s).
         one_start = jax.ShapeDtypeStruct((count, 1, model.unconstrained.size(samples[0].n_channels)), np.float64)
-        winners = lambda: compile_in_background(solver, one_start, full, holds, step_budget(max_steps))
+        winners = lambda: compile_in_background(solver, one_start, full, holds, full_budget)
         subsets = [search_subset(one, seed) for one in samples]
         search = None
         if subsets[0] is not None:
             chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
             search = build_problems(chosen, dtype, count)
-        compiling = winners() if search is None else None
+        subset_race = search is not None and n_starts > 1
+        compiling = None if subset_race else winners()
         thetas = np.asarray(grid_starts(model, loss, n_starts, full if search is None else search, holds))
-        if search is not None:
+        if subset_race:
             compiling = winners()
             if thetas.shape[1] > 1:  # the starts race to convergence on the subset
                 thetas = _best(solve(thetas, search)).theta[:, None]
@@ -136,7 +138,7 @@ def solve_bucket(
     solved = _best(solve(thetas, full))
     if dtype == "float32":
         refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
-            solved.theta[:, None], build_problems(samples, "float64", count), holds, step_budget(max_steps)
+            solved.theta[:, None], build_problems(samples, "float64", count), holds, full_budget
         )
         solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
     if holds is not None and np.any(hold.bounded):
@@ -144,9 +146,7 @@ def solve_bucket(
             solver if dtype == "float64" else bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")
         )
         problems64 = full if dtype == "float64" else build_problems(samples, "float64", count)
-        solved = onto_bounds(
-            lambda theta, held: solver64(theta[:, None], problems64, held, step_budget(max_steps)), solved, holds
-        )
+        solved = onto_bounds(lambda theta, held: solver64(theta[:, None], problems64, held, full_budget), solved, holds)
     return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
 
 
@@ -177,11 +177,11 @@ def _is_static(leaf) -> bool:
 
 
 def compile_in_background(solve, *arguments) -> threading.Thread:
-    """Compile ``solve`` for ``arguments`` (``jax.ShapeDtypeStruct``s, arrays whose shapes are taken, or static
-    models and losses) in a
-    thread while the starts are solved on the search subsets: XLA compiles with the GIL released, so on two or more
-    cores the full-size program's compilation (~1 s for a MERL-size Cook-Torrance problem) overlaps the search
-    instead of following it. A failure there is left for the real call to report."""
+    """Compile ``solve`` (a :func:`~brdffit._jax.jit` function) for ``arguments`` (``jax.ShapeDtypeStruct``s,
+    arrays whose shapes are taken, or static models and losses) in a thread, while the caller does other work (the
+    start search, the solves before a caveat screen): XLA compiles with the GIL released, so on two or more cores a
+    program's compilation (~1 s for a MERL-size Cook-Torrance solve) overlaps that work instead of following it. A
+    failure there is left for the real call to report."""
     shapes = jax.tree.map(
         lambda leaf: leaf if _is_static(leaf) else jax.ShapeDtypeStruct(leaf.shape, leaf.dtype),
         arguments,

@@ -145,7 +145,7 @@ def test_batch_fits_are_deterministic_and_sizes_share_compiles():
 @pytest.mark.parametrize("count", [1, 19, 20, 39, 40, 41, 100])
 def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
     """20 datasets of which 19 fit in a batch go as 10 + 10 (one stacked shape, one compiled program), not 19 + 1."""
-    from brdffit.fitting.buckets import BATCH_SAMPLES, batches, stack_size
+    from brdffit.fitting.buckets import BATCH_SAMPLES, batches
 
     size = BATCH_SAMPLES // 19  # 19 datasets to a batch
     cut = batches(list(range(count)), size)
@@ -153,4 +153,3 @@ def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
     assert [index for batch in cut for index in batch] == list(range(count))
     assert len(cut) == -(-count // 19) and max(lengths) <= 19 and max(lengths) - min(lengths) <= 1
     assert max(lengths) * size <= BATCH_SAMPLES
-    assert stack_size(lengths) >= max(lengths)
