@@ -23,7 +23,7 @@ from ..data.samples import Samples
 from ..physics.domains import UnitInterval
 from ..physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ..physics.models import Model, Params
-from .problem import host_problems, padded_size
+from .problem import padded_size, stacked_directions
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
 DEAD_SHARE = 1e-3
@@ -166,14 +166,12 @@ class Screened(NamedTuple):
 
 def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
     """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples`` (one padded size), in one
-    program, stacked to ``stack`` datasets as the bucket's problems are (``problem.host_problems``): every batch of
-    a bucket runs the same program, which :func:`screen_program` compiles ahead."""
+    program, stacked to ``stack`` datasets as the bucket's problems are (``problem.stacked_directions``): every
+    batch of a bucket runs the same program, which :func:`screen_program` compiles ahead."""
     rows = [*params, *[params[0]] * (stack - len(params))]
     stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *rows)
-    problems = host_problems(samples, "float64", stack)
-    bounds, shares = (
-        np.asarray(out) for out in _bucket_screens(model, stacked, problems.wi, problems.wo, problems.real)
-    )
+    directions = stacked_directions(samples, "float64", stack)
+    bounds, shares = (np.asarray(out) for out in _bucket_screens(model, stacked, *directions))
     opened = [_open_incidences(one) if _screenable(model) else ALBEDO_INCIDENCE for one in bounds]
     return [Screened(opened[d], shares[d]) for d in range(len(params))]
 

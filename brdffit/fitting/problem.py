@@ -92,28 +92,40 @@ def build_problems(samples: Sequence[Samples], dtype: str = "float64", count: in
 
 def host_problems(samples: Sequence[Samples], dtype: str = "float64", count: int | None = None) -> Problem:
     """:func:`build_problems` on the host: numpy arrays (count, N, …), each written once into aligned buffers."""
-    size = padded_size(samples[0].n_samples)
     count = len(samples) if count is None else count
-    copies = [*samples, *[samples[0]] * (count - len(samples))]
-
-    def stacked(field, dtype, fill=0.0):
-        arrays = [field(one) for one in copies]
-        if arrays[0] is None:
-            return None
-        out = _aligned((count, size, *np.shape(arrays[0])[1:]), dtype)
-        for row, array in zip(out, arrays, strict=True):
-            row[: len(array)] = array
-            row[len(array) :] = fill
-        return out
-
+    wi, wo, real = stacked_directions(samples, dtype, count)
     return Problem(
-        stacked(lambda one: one.wi, dtype, NORMAL),
-        stacked(lambda one: one.wo, dtype, NORMAL),
-        stacked(lambda one: one.values, dtype),
-        stacked(lambda one: one.sigma, dtype, 1.0),
-        stacked(lambda one: one.weight, dtype),
-        stacked(lambda one: np.ones(one.n_samples, bool), bool, False),
+        wi,
+        wo,
+        _stacked(samples, count, lambda one: one.values, dtype),
+        _stacked(samples, count, lambda one: one.sigma, dtype, 1.0),
+        _stacked(samples, count, lambda one: one.weight, dtype),
+        real,
     )
+
+
+def stacked_directions(samples: Sequence[Samples], dtype: str, count: int) -> tuple[np.ndarray, ...]:
+    """``wi``, ``wo`` (count, N, 3) and ``real`` (count, N) of ``samples`` as :func:`host_problems` stacks them:
+    padded with the normal, which is not real, the rows after the last dataset copies of the first."""
+    return (
+        _stacked(samples, count, lambda one: one.wi, dtype, NORMAL),
+        _stacked(samples, count, lambda one: one.wo, dtype, NORMAL),
+        _stacked(samples, count, lambda one: np.ones(one.n_samples, bool), bool, False),
+    )
+
+
+def _stacked(samples: Sequence[Samples], count: int, field, dtype, fill=0.0) -> np.ndarray | None:
+    """``field`` of each of ``samples`` (None when it is absent) in one aligned buffer (count, N, …): rows padded
+    to :func:`padded_size` with ``fill``, the rows after the last dataset copies of the first."""
+    copies = [*samples, *[samples[0]] * (count - len(samples))]
+    arrays = [field(one) for one in copies]
+    if arrays[0] is None:
+        return None
+    out = _aligned((count, padded_size(samples[0].n_samples), *np.shape(arrays[0])[1:]), dtype)
+    for row, array in zip(out, arrays, strict=True):
+        row[: len(array)] = array
+        row[len(array) :] = fill
+    return out
 
 
 #: Byte alignment at which the CPU backend shares a numpy buffer instead of copying it.
