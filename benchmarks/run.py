@@ -176,7 +176,15 @@ def batch_variants(model: str, materials: int, size: int, solvers: tuple[str, ..
 
 #: (j) many fits (issue 14): (materials, samples each) of Ward, the material library and the per-texel case.
 MANY = {"many_large": (20, 100_000), "many_small": (1000, 500)}
-MANY_SOLVERS = ("brdffit", "brdffit-default", "brdffit-dask-1", "brdffit-dask-2", "scipy-lm-exact")
+MANY_SOLVERS = (
+    "brdffit",
+    "brdffit-default",
+    "brdffit-default-1thread",
+    "brdffit-default-warm",
+    "brdffit-dask-1",
+    "brdffit-dask-2",
+    "scipy-lm-exact",
+)
 
 
 def many_section(materials: int, size: int, repeats: int) -> dict:
@@ -440,6 +448,8 @@ def table(results: dict) -> str:
         for label, name in (
             ("brdffit fit_batch, same starts as scipy", "brdffit"),
             ("brdffit fit_batch, default path (own start search)", "brdffit-default"),
+            ("the default path on one thread (`threads=1`)", "brdffit-default-1thread"),
+            ("the default path, compiled programs reused (a second call)", "brdffit-default-warm"),
             ("the default path on a Dask LocalCluster, 1 worker", "brdffit-dask-1"),
             ("the default path on a Dask LocalCluster, 2 workers", "brdffit-dask-2"),
             ("scipy least_squares lm (exact Jacobian) loop", "scipy-lm-exact"),

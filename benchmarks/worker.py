@@ -192,8 +192,9 @@ def batch_starts(model_name: str, datasets) -> list[dict]:
 
 
 def batch(args) -> dict:
-    """(b), (j): ``fit_batch`` of many materials (given starts, or its default path; on a Dask LocalCluster of
-    ``brdffit-dask-N`` workers), or a loop of scipy least_squares from the same starts; compile included."""
+    """(b), (j): ``fit_batch`` of many materials (given starts, or its default path: on one thread, on a Dask
+    LocalCluster of ``brdffit-dask-N`` workers, or called a second time with its programs compiled), or a loop of
+    scipy least_squares from the same starts; compile included but for ``brdffit-default-warm``."""
     import jax
 
     datasets = batch_data(args.model, args.materials, args.size)
@@ -207,9 +208,14 @@ def batch(args) -> dict:
         workers = int(args.solver.rsplit("-", 1)[1])
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
         client = Client(cluster)
+    options = dict(start=starts, progress=False, client=client)
+    if args.solver == "brdffit-default-1thread":
+        options["threads"] = 1
+    if args.solver == "brdffit-default-warm":  # the clock times a second call: compiled programs reused
+        fit_batch(datasets, args.model, **options)
     clock = time.perf_counter()
     if args.solver.startswith("brdffit"):
-        results = fit_batch(datasets, args.model, start=starts, progress=False, client=client)
+        results = fit_batch(datasets, args.model, **options)
         costs = [r.cost for r in results]
         converged = sum(r.converged for r in results)
         steps = [r.n_steps for r in results]
@@ -396,7 +402,17 @@ def main() -> None:
     per_step.add_argument("--start", required=True)
     many = commands.add_parser("batch")
     many.add_argument(
-        "--solver", required=True, choices=["brdffit", "brdffit-default", "brdffit-dask-1", "brdffit-dask-2", *SCIPY]
+        "--solver",
+        required=True,
+        choices=[
+            "brdffit",
+            "brdffit-default",
+            "brdffit-default-1thread",
+            "brdffit-default-warm",
+            "brdffit-dask-1",
+            "brdffit-dask-2",
+            *SCIPY,
+        ],
     )
     many.add_argument("--model", default="cook-torrance", choices=list(BATCH_MATERIALS))
     many.add_argument("--materials", type=int, default=100)

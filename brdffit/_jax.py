@@ -9,6 +9,7 @@ the setting per thread; a thread that brdffit starts enters it itself.
 """
 
 import functools
+import threading
 from collections.abc import Callable
 
 from . import _programs
@@ -81,6 +82,8 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
             return None
         return _programs.stored_program(name, top_level(), args, static_argnums, compiler_options())
 
+    first_calls = FirstCalls()
+
     @functools.wraps(fun)
     def call(*args, **kwargs):
         with float64():
@@ -89,7 +92,8 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
             program = stored(args, kwargs)
             if program is not None:
                 return program(*_programs.dynamic_arguments(args, static_argnums))
-            return top_level()(*args, **kwargs)
+            key = _call_key(args, kwargs, static_argnums)
+            return first_calls.run(key, lambda: top_level()(*args, **kwargs))
 
     def precompile(*args, **kwargs) -> None:
         """Trace and compile for the shapes of ``args`` (arrays or ``jax.ShapeDtypeStruct``), without running.
@@ -103,7 +107,41 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
                 shapes = _programs.dynamic_arguments(args, static_argnums)
                 program.lower(*shapes).compile()
             else:
-                top_level().lower(*args, **kwargs).compile()
+                key = _call_key(args, kwargs, static_argnums)
+                first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile())
 
     call.precompile = precompile
     return call
+
+
+class FirstCalls:
+    """The first call of each signature of a compiled function runs under a lock of its own: another thread that
+    calls the same signature meanwhile waits for it and then finds the program compiled, instead of tracing and
+    lowering it a second time (JAX shares the compilation between threads, not the tracing). Calls of other
+    signatures, and every later call, never wait."""
+
+    def __init__(self):
+        self._guard = threading.Lock()
+        self._locks: dict = {}  # signature → its lock while a first call runs, None once one has ended
+
+    def run(self, key, action):
+        with self._guard:
+            lock = self._locks.setdefault(key, threading.Lock())
+        if lock is None:
+            return action()
+        with lock:
+            result = action()
+        self._locks[key] = None
+        return result
+
+
+def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tuple:
+    """What a call's compiled program depends on: its static arguments, its tree, each array's shape and dtype (an
+    array and a ``jax.ShapeDtypeStruct`` of its shape give the same key)."""
+    statics = tuple(arg for index, arg in enumerate(args) if index in static_argnums)
+    leaves, tree = jax.tree.flatten((_programs.dynamic_arguments(args, static_argnums), kwargs))
+    described = tuple(
+        (getattr(leaf, "shape", None), str(getattr(leaf, "dtype", type(leaf))), bool(getattr(leaf, "weak_type", False)))
+        for leaf in leaves
+    )
+    return statics, tree, described

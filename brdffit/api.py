@@ -115,6 +115,7 @@ def fit_batch(
     mcmc: MCMC | None = None,
     client=None,
     read_options: dict[str, Any] | None = None,
+    threads: int | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples`` (datasets, or paths read with :func:`brdffit.load_samples` and
@@ -128,7 +129,10 @@ def fit_batch(
     settings) adds each result's ``uncertainty`` after the fits.
     ``client``: a ``dask.distributed.Client``; the fits are spread over its
     workers (``brdffit/cluster.py``), paths are read there, and the results are
-    those of this process's fit.
+    those of this process's fit. ``threads``: how many batches of datasets
+    are fitted at once (default: every CPU core this process may use; on a
+    cluster, 1 in each task, whose workers are the parallelism); the results
+    do not depend on it.
     """
     check_options(uncertainty, mcmc)
     read_options = dict(read_options or {})
@@ -144,6 +148,7 @@ def fit_batch(
         bounds=bounds,
         uncertainty=uncertainty,
         mcmc=mcmc,
+        threads=threads,
     )
     if client is not None:
         first_start = start if isinstance(start, dict) or start is None else next(iter(start), None)

@@ -78,6 +78,7 @@ def fit_on_cluster(
 
     items = list(items)
     starts = starts_per_dataset(start, len(items))
+    options = {**options, "threads": options.get("threads") or 1}  # the workers are the parallelism
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
     chunks = _chunks(items, starts, model, loss, options, workers)
     futures = {

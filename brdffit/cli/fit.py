@@ -67,6 +67,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="result file ('-' for standard output, the table then goes to standard error), or a folder (OUTDIR/)"
         " for several samples files (default: SAMPLES-stem.MODEL[.OPTION-VALUE].json in the current folder)",
     )
+    parser.add_argument(
+        "--threads",
+        type=int,
+        metavar="N",
+        help="several samples files: fit N batches of them at once (default: one per CPU core this process may use;"
+        " with --scheduler or --workers, 1 in each task)",
+    )
     spread = parser.add_argument_group("cluster (pip install 'brdffit[cluster]')").add_mutually_exclusive_group()
     spread.add_argument(
         "--scheduler",
@@ -112,8 +119,9 @@ def run(args: argparse.Namespace) -> int:
     start = _start(args.start)
     held = holding_arguments(args)
     _check_holding(model, held)
-    if args.workers is not None and args.workers < 1:
-        raise BrdfInputError(f"--workers must be 1 or more, got {args.workers}")
+    for option, value in (("--workers", args.workers), ("--threads", args.threads)):
+        if value is not None and value < 1:
+            raise BrdfInputError(f"{option} must be 1 or more, got {value}")
     if args.chain and (args.scheduler or args.workers):
         raise BrdfInputError("--chain keeps a chain in this process: give it without --scheduler and --workers")
     if args.scheduler:  # a cluster's workers read the files, at the same paths (a worker's folder may be another)
@@ -156,11 +164,13 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, held: dict
         **held,
     )
     if client is not None:
-        return api.fit_batch(samples, model, args.loss, client=client, read_options=read_options(args), **options)
+        return api.fit_batch(
+            samples, model, args.loss, client=client, read_options=read_options(args), threads=args.threads, **options
+        )
     if len(samples) == 1:
         progress = sys.stderr.isatty()
         return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]
-    return api.fit_batch(samples, model, args.loss, **options)
+    return api.fit_batch(samples, model, args.loss, threads=args.threads, **options)
 
 
 def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None) -> None:

@@ -10,11 +10,19 @@ program goes through the datasets of a bucket:
   saves;
 * ``vmap`` (the default on a GPU): all at once, which fills the device.
 
-Models with several lobes (Lafortune) are fitted lobe by lobe, one dataset after another (``fit.py``), unless
+Models with several lobes (Lafortune) are fitted lobe by lobe, one dataset at a time (``fit.py``), unless
 every dataset has its start.
+
+The units of work (a batch of a bucket, or one dataset fitted lobe by lobe) run on ``threads`` threads, by default
+one per CPU core: a compiled program runs its datasets one after another on one core, and XLA runs with the GIL
+released, so a second batch fills the second core (1,000 Ward fits of 500 samples, warm, on 2 cores: 1.3 s on one
+thread, 0.8 s on two). A bucket is cut into a multiple of ``threads`` batches that together hold at most
+``buckets.BATCH_SAMPLES`` samples; each dataset's programs treat it alone, so the results do not depend on the cut.
 """
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -51,10 +59,12 @@ def fit_many(
     seed: int = 0,
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
+    threads: int | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch`."""
     choice("strategy", strategy, STRATEGIES)
+    threads = usable_cores() if threads is None else whole_number("threads", threads)
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
@@ -72,42 +82,67 @@ def fit_many(
     strategy = default_strategy() if strategy == "auto" else strategy
     options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=strategy)
     results: list[FitResult | None] = [None] * len(kept)
+
+    @float64  # JAX's float64 switch is per thread
+    def fit_unit(unit: WorkUnit) -> int:
+        """Fit the datasets of ``unit`` into ``results``; how many they were."""
+        if built.own_fit or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
+            (index,) = unit.indices
+            one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
+            given = starts[index] if built.own_fit else None
+            results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **held, **one)
+            return 1
+        thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
+        constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
+        hold = None if constraints is None else constraints.hold()
+        unit_samples = [kept[i] for i in unit.indices]
+        n_channels = unit_samples[0].n_channels
+        compiling = compile_in_background(*screen_program(built, unit_samples, unit.stack))
+        solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, stack=unit.stack, **options)
+        each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
+        compiling.join()
+        params = [final_params(built, one, n_channels) for one in each]
+        screens = screen_bucket(built, params, unit_samples, unit.stack)
+        for one, index, fitted, screened in zip(each, unit.indices, params, screens, strict=True):
+            results[index] = result_of(
+                built,
+                built_loss,
+                kept[index],
+                one,
+                max_steps,
+                dtype,
+                max_theta=max_theta,
+                screened=screened,
+                constraints=constraints,
+                params=fitted,
+            )
+        return len(unit.indices)
+
+    units = work_units(built, kept, [vector is not None for vector in vectors], threads)
     bar = progress_bar(len(samples), progress)
     try:
-        for unit in work_units(built, kept, [vector is not None for vector in vectors]):
-            if built.own_fit or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
-                (index,) = unit.indices
-                one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
-                given = starts[index] if built.own_fit else None
-                results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **held, **one)
-            else:
-                thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
-                constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
-                hold = None if constraints is None else constraints.hold()
-                unit_samples = [kept[i] for i in unit.indices]
-                n_channels = unit_samples[0].n_channels
-                compiling = compile_in_background(*screen_program(built, unit_samples, unit.stack))
-                solved = solve_bucket(built, built_loss, unit_samples, thetas, hold=hold, stack=unit.stack, **options)
-                each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
-                compiling.join()
-                params = [final_params(built, one, n_channels) for one in each]
-                screens = screen_bucket(built, params, unit_samples, unit.stack)
-                for one, index, screened in zip(each, unit.indices, screens, strict=True):
-                    results[index] = result_of(
-                        built,
-                        built_loss,
-                        kept[index],
-                        one,
-                        max_steps,
-                        dtype,
-                        max_theta=max_theta,
-                        screened=screened,
-                        constraints=constraints,
-                    )
-            bar.update(len(unit.indices))
+        if threads == 1 or len(units) == 1:
+            for unit in units:
+                bar.update(fit_unit(unit))
+        else:
+            with ThreadPoolExecutor(min(threads, len(units)), thread_name_prefix="brdffit-fit") as pool:
+                pending = [pool.submit(fit_unit, unit) for unit in units]
+                try:
+                    for done in as_completed(pending):
+                        bar.update(done.result())
+                except BaseException:
+                    pool.shutdown(cancel_futures=True)
+                    raise
     finally:
         bar.close()
     return results
+
+
+def usable_cores() -> int:
+    """The CPU cores this process may run on (its affinity, which a batch scheduler's allocation sets)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
 
 
 def starts_per_dataset(start, count: int) -> list:
@@ -126,10 +161,11 @@ class WorkUnit(NamedTuple):
     stack: int = 1  # the datasets are stacked to this many (``buckets.stack_size``), as are the others of the bucket
 
 
-def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) -> list[WorkUnit]:
+def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], parts: int = 1) -> list[WorkUnit]:
     """How :func:`fit_many` cuts ``samples`` (as kept for the fit) into units: by bucket and by whether the start
-    is given (a given start replaces the search), each bucket in batches of at most ``buckets.BATCH_SAMPLES``
-    samples; a model with several lobes and no start, one dataset per unit."""
+    is given (a given start replaces the search), each bucket in batches for ``parts`` threads
+    (``buckets.batches``: together at most ``buckets.BATCH_SAMPLES`` samples at a time); a model with several
+    lobes and no start, one dataset per unit."""
     groups: dict[tuple, list[int]] = {}
     for index, (one, has_start) in enumerate(zip(samples, given, strict=True)):
         groups.setdefault((bucket_key(one), has_start), []).append(index)
@@ -138,7 +174,7 @@ def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool]) 
         if model.own_fit or (model.n_lobes > 1 and not has_start):
             units += [WorkUnit([index], False) for index in indices]
         else:
-            cut = batches(indices, key.padded_size)
+            cut = batches(indices, key.padded_size, parts)
             stack = stack_size([len(batch) for batch in cut])
             units += [WorkUnit(batch, has_start, stack) for batch in cut]
     return units

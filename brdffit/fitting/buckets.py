@@ -61,12 +61,13 @@ def bucket_key(samples: Samples) -> BucketKey:
     )
 
 
-def batches(indices: Sequence[int], size: int) -> list[list[int]]:
-    """``indices`` (one bucket's datasets of ``size`` padded samples) cut into batches of at most
-    :data:`BATCH_SAMPLES` samples, as few as that allows and of sizes that differ by one at most: 20 datasets that
-    need two batches go as 10 + 10, which stack into one compiled program, not as 19 + 1, which need two."""
-    per_batch = max(1, BATCH_SAMPLES // size)
-    count = -(-len(indices) // per_batch)
+def batches(indices: Sequence[int], size: int, parts: int = 1) -> list[list[int]]:
+    """``indices`` (one bucket's datasets of ``size`` padded samples) cut into batches for ``parts`` threads that
+    run one batch each at a time: together at most :data:`BATCH_SAMPLES` samples, a multiple of ``parts`` batches
+    (unless there are fewer datasets), as few as that allows and of sizes that differ by one at most: 20 datasets
+    that need two batches go as 10 + 10, which stack into one compiled program, not as 19 + 1, which need two."""
+    per_batch = max(1, BATCH_SAMPLES // parts // size)
+    count = min(-(-len(indices) // (per_batch * parts)) * parts, len(indices))
     cuts = [len(indices) * k // count for k in range(count + 1)]
     return [list(indices[start:end]) for start, end in pairwise(cuts)]
 

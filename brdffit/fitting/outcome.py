@@ -41,13 +41,15 @@ def result_of(
     screened: Screened | None = None,
     more_caveats: Sequence[str] = (),
     constraints: Constraints | None = None,
+    params: Params | None = None,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
     ``samples`` are those fitted, selected by ``max_theta``. ``screened``: what the caveats' screens found for this fit,
     when the caller screened many fits at once (``caveats.screen_bucket``). ``constraints``: what the fit
-    held; its fixed values are written exactly, and a parameter that ended on a bound is said."""
+    held; its fixed values are written exactly, and a parameter that ended on a bound is said. ``params``: the
+    solve's :func:`final_params`, when the caller has them."""
     converged = bool(solved.converged)
-    params = final_params(model, solved, samples.n_channels)
+    params = final_params(model, solved, samples.n_channels) if params is None else params
     if constraints is not None:
         params = constraints.with_fixed(params)
         more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]

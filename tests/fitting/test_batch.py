@@ -7,7 +7,7 @@ import pytest
 from reference_materials import flat_parameters
 
 import data_synth
-from brdffit import BrdfInputError, fit, fit_batch, save_samples
+from brdffit import BrdfInputError, fit, fit_batch, load_result, save_samples
 from brdffit.cli import main
 from brdffit.fitting.buckets import default_strategy
 
@@ -36,6 +36,26 @@ def test_several_lobes_fit_one_at_a_time():
     samples = datasets()[:2]
     batch = fit_batch(samples, "lafortune", lobes=2, strategy="loop")
     assert batch == [fit(one, "lafortune", lobes=2) for one in samples]
+
+
+def same_results(these, those, rel=1e-12):
+    """The same fits to ``rel``: a program stacking another number of datasets may order a sum differently."""
+    for one, other in zip(these, those, strict=True):
+        assert (other.n_samples, other.n_steps, other.converged) == (one.n_samples, one.n_steps, one.converged)
+        assert other.cost == pytest.approx(one.cost, rel=rel)
+        for name, value in flat_parameters(one.params).items():
+            assert flat_parameters(other.params)[name] == pytest.approx(value, rel=rel), name
+
+
+@pytest.mark.parametrize("model, options", [("ward", {}), ("lafortune", {"lobes": 2})])
+def test_threads_change_no_result(model, options):
+    """Batches fitted on 3 threads at once (Ward: a bucket of 3 datasets cut in 3 batches, and one of 1; Lafortune:
+    one dataset a thread) give the results of one thread, in the order of the inputs."""
+    samples = datasets() if model == "ward" else datasets()[:3]
+    alone = fit_batch(samples, model, threads=1, **options)
+    together = fit_batch(samples, model, threads=3, **options)
+    same_results(alone, together)
+    assert [r.n_samples for r in together] == [one.n_samples for one in samples]
 
 
 def test_vmap_equals_loop():
@@ -75,6 +95,8 @@ def test_strategy_and_arguments_are_checked():
         fit_batch(datasets(), "ward", strategy="gpu")
     with pytest.raises(BrdfInputError, match="fit_batch needs at least one dataset"):
         fit_batch([], "ward")
+    with pytest.raises(BrdfInputError, match=r"^threads=0 is not allowed; give a whole number ≥ 1"):
+        fit_batch(datasets(), "ward", threads=0)
 
 
 def test_progress_bar_on_request(capsys):
@@ -102,6 +124,13 @@ def test_command_line_batch(tmp_path, capsys):
     lines = out.splitlines()
     assert lines[0].split()[:2] == ["samples", "steps"] and len(lines) == 4
     assert all("converged" in line for line in lines[1:])
+    assert main(["fit", *map(str, paths), "--threads", "1", "-o", str(tmp_path / "one") + "/"]) == 0
+    for name in os.listdir(tmp_path / "out"):
+        same_results([load_result(tmp_path / "out" / name)], [load_result(tmp_path / "one" / name)])
+    capsys.readouterr()
+    assert main(["fit", *map(str, paths), "--threads", "0", "-o", str(tmp_path / "none") + "/"]) == 2
+    assert capsys.readouterr().err.strip() == "brdffit: error: --threads must be 1 or more, got 0"
+    assert not (tmp_path / "none").exists()
 
 
 def test_command_line_batch_checks_every_input_before_writing(tmp_path, capsys):
@@ -153,3 +182,19 @@ def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
     assert [index for batch in cut for index in batch] == list(range(count))
     assert len(cut) == -(-count // 19) and max(lengths) <= 19 and max(lengths) - min(lengths) <= 1
     assert max(lengths) * size <= BATCH_SAMPLES
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 7, 20, 39, 100])
+@pytest.mark.parametrize("parts", [2, 3, 8])
+def test_a_bucket_is_cut_for_its_threads(count, parts):
+    """For ``parts`` threads: a multiple of ``parts`` batches (or one a dataset), even, and the ``parts`` that run
+    at once hold at most BATCH_SAMPLES samples together."""
+    from brdffit.fitting.buckets import BATCH_SAMPLES, batches
+
+    size = BATCH_SAMPLES // 19  # 19 datasets at a time in all
+    cut = batches(list(range(count)), size, parts)
+    lengths = sorted(len(batch) for batch in cut)
+    assert [index for batch in cut for index in batch] == list(range(count))
+    assert len(cut) % parts == 0 or len(cut) == count
+    assert lengths[-1] - lengths[0] <= 1
+    assert sum(lengths[-parts:]) * size <= BATCH_SAMPLES or lengths[-1] == 1
