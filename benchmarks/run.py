@@ -56,6 +56,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from worker import BATCH_SOLVERS  # noqa: E402
+
 import data_synth  # noqa: E402
 from brdffit import get_model  # noqa: E402
 from brdffit.fitting.losses import get_loss  # noqa: E402
@@ -176,15 +178,7 @@ def batch_variants(model: str, materials: int, size: int, solvers: tuple[str, ..
 
 #: (j) many fits (issue 14): (materials, samples each) of Ward, the material library and the per-texel case.
 MANY = {"many_large": (20, 100_000), "many_small": (1000, 500)}
-MANY_SOLVERS = (
-    "brdffit",
-    "brdffit-default",
-    "brdffit-default-1thread",
-    "brdffit-default-warm",
-    "brdffit-dask-1",
-    "brdffit-dask-2",
-    "scipy-lm-exact",
-)
+MANY_SOLVERS = (*BATCH_SOLVERS, "scipy-lm-exact")
 
 
 def many_section(materials: int, size: int, repeats: int) -> dict:

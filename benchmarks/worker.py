@@ -93,6 +93,15 @@ def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str
     return {"cost": 2.0 * float(out.cost), "nfev": int(out.nfev), "converged": bool(out.status > 0)}
 
 
+#: (b), (j): brdffit's ways through many fits (``batch``), each measured against the scipy loop.
+BATCH_SOLVERS = (
+    "brdffit",
+    "brdffit-default",
+    "brdffit-default-1thread",
+    "brdffit-default-warm",
+    "brdffit-dask-1",
+    "brdffit-dask-2",
+)
 SCIPY = {"scipy-trf": ("trf", False), "scipy-lm": ("lm", False), "scipy-lm-exact": ("lm", True)}
 
 
@@ -401,19 +410,7 @@ def main() -> None:
     per_step.add_argument("--data", required=True)
     per_step.add_argument("--start", required=True)
     many = commands.add_parser("batch")
-    many.add_argument(
-        "--solver",
-        required=True,
-        choices=[
-            "brdffit",
-            "brdffit-default",
-            "brdffit-default-1thread",
-            "brdffit-default-warm",
-            "brdffit-dask-1",
-            "brdffit-dask-2",
-            *SCIPY,
-        ],
-    )
+    many.add_argument("--solver", required=True, choices=[*BATCH_SOLVERS, *SCIPY])
     many.add_argument("--model", default="cook-torrance", choices=list(BATCH_MATERIALS))
     many.add_argument("--materials", type=int, default=100)
     many.add_argument("--size", type=int, default=100_000)
