@@ -126,9 +126,12 @@ class FirstCalls:
 
     def run(self, key, action):
         with self._guard:
+            new = key not in self._locks
             lock = self._locks.setdefault(key, threading.Lock())
         if lock is None:
             return action()
+        if new:
+            _programs.count_trace()
         with lock:
             result = action()
         self._locks[key] = None

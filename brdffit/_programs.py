@@ -36,6 +36,20 @@ SUFFIX = ".jaxprogram"
 _lock = threading.Lock()
 _loaded: dict[str, Callable | None] = {}  # signature → compiled call, None when it cannot be stored
 _registered: set[type] = set()
+_lock_count = threading.Lock()
+_traced = 0  # programs traced in this process: stored programs exported, and first calls of ``_jax.jit``
+
+
+def traced() -> int:
+    """How many programs brdffit has traced in this process so far (exported for storing, or compiled by
+    ``_jax.jit``): a caller that sees the count unchanged over a piece of work knows it compiled nothing new."""
+    return _traced
+
+
+def count_trace() -> None:
+    global _traced
+    with _lock_count:
+        _traced += 1
 
 
 def stored_program(
@@ -108,6 +122,7 @@ def _load_or_export(path: Path, jitted, args: Sequence, static_argnums: Sequence
         return _read(path)
     except Exception:  # missing, cut short by a crash, written by another version: export it again
         pass
+    count_trace()
     try:
         exported = jax.export.export(jitted)(*(_shape_of(arg, i, static_argnums) for i, arg in enumerate(args)))
         types = sorted(_named_tuples(exported.in_tree) | _named_tuples(exported.out_tree), key=_type_name)

@@ -16,7 +16,7 @@ A single fit is a bucket of one (``fit.py``), so both paths are the same computa
 """
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import cache, partial
 from itertools import pairwise
 from typing import NamedTuple
@@ -98,13 +98,17 @@ def solve_bucket(
     strategy: str,
     hold: Hold | None = None,
     stack: int | None = None,
+    on_stage: Callable[[str], None] | None = None,
 ):
     """The best solve (a ``fit.Solved`` of numpy arrays with a leading axis D) of each dataset of one bucket.
 
     ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them. ``hold``:
     what every dataset's fit holds (``hold.py``), or None. ``stack``: how many datasets to stack them to
-    (:func:`stack_size` of the bucket's batches; by default that of this one).
+    (:func:`stack_size` of the bucket's batches; by default that of this one). ``on_stage``: called with
+    ``"searched"`` once the starts are searched, and ``"compiled"`` once the programs of the search, the race and
+    the solve are compiled, before the final solve runs.
     """
+    on_stage = on_stage or (lambda stage: None)
     count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few compiled programs
     full = build_problems(samples, dtype, count)
     holds = None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (count, leaf.size)), hold)
@@ -127,6 +131,7 @@ def solve_bucket(
         subset_race = search is not None and n_starts > 1
         compiling = None if subset_race else winners()
         thetas = np.asarray(grid_starts(model, loss, n_starts, full if search is None else search, holds))
+        on_stage("searched")
         if subset_race:
             compiling = winners()
             if thetas.shape[1] > 1:  # the starts race to convergence on the subset
@@ -136,6 +141,7 @@ def solve_bucket(
             budget = step_budget(min(RACE_STEPS, max_steps))
             raced = [solver(thetas[:, [s]], full, holds, budget) for s in range(thetas.shape[1])]
             thetas = _best(jax.tree.map(lambda *leaves: np.concatenate(leaves, axis=1), *raced)).theta[:, None]
+    on_stage("compiled")
     solved = _best(solve(thetas, full))
     if dtype == "float32":
         refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
