@@ -117,8 +117,9 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
 class FirstCalls:
     """The first call of each signature of a compiled function runs under a lock of its own: another thread that
     calls the same signature meanwhile waits for it and then finds the program compiled, instead of tracing and
-    lowering it a second time (JAX shares the compilation between threads, not the tracing). Calls of other
-    signatures, and every later call, never wait."""
+    lowering it a second time (JAX shares the compilation between threads, not always the tracing: two threads
+    that compiled a bucket's solve at once traced it twice, 1.5 s each). Calls of other signatures, and every later
+    call, never wait. Stored programs (``_programs.py``) do not come here: their exports share one lock there."""
 
     def __init__(self):
         self._guard = threading.Lock()
@@ -134,7 +135,8 @@ class FirstCalls:
             _programs.count_trace()
         with lock:
             result = action()
-        self._locks[key] = None
+        with self._guard:
+            self._locks[key] = None
         return result
 
 
@@ -143,8 +145,4 @@ def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tup
     array and a ``jax.ShapeDtypeStruct`` of its shape give the same key)."""
     statics = tuple(arg for index, arg in enumerate(args) if index in static_argnums)
     leaves, tree = jax.tree.flatten((_programs.dynamic_arguments(args, static_argnums), kwargs))
-    described = tuple(
-        (getattr(leaf, "shape", None), str(getattr(leaf, "dtype", type(leaf))), bool(getattr(leaf, "weak_type", False)))
-        for leaf in leaves
-    )
-    return statics, tree, described
+    return statics, tree, tuple(_programs.array_description(leaf) for leaf in leaves)

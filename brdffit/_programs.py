@@ -84,6 +84,16 @@ def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
     return tuple(arg for index, arg in enumerate(args) if index not in static_argnums)
 
 
+def array_description(leaf) -> tuple:
+    """What a compiled program depends on of an array argument: its shape, dtype and weak type (an array and a
+    ``jax.ShapeDtypeStruct`` of its shape are described alike)."""
+    return (
+        getattr(leaf, "shape", None),
+        str(getattr(leaf, "dtype", type(leaf))),
+        bool(getattr(leaf, "weak_type", False)),
+    )
+
+
 def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str | None:
     """The hex digest that names the program of ``name`` called with ``args``; None if the call cannot be stored."""
     static_args = [args[index] for index in static_argnums if index < len(args)]
@@ -97,7 +107,7 @@ def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str 
     for leaf in leaves:
         if not isinstance(leaf, np.ndarray | jax.Array | jax.ShapeDtypeStruct) or isinstance(leaf, jax.core.Tracer):
             return None
-        described.append((leaf.shape, str(leaf.dtype), bool(getattr(leaf, "weak_type", False))))
+        described.append(array_description(leaf))
     text = json.dumps([_environment(), name, statics, str(tree), repr(described)])
     return hashlib.sha256(text.encode()).hexdigest()[:40]
 

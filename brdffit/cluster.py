@@ -78,7 +78,8 @@ def fit_on_cluster(
 
     items = list(items)
     starts = starts_per_dataset(start, len(items))
-    options = {**options, "threads": options.get("threads") or 1}  # the workers are the parallelism
+    if options.get("threads") is None:  # the workers are the parallelism
+        options = {**options, "threads": 1}
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
     chunks = _chunks(items, starts, model, loss, options, workers)
     futures = {

@@ -1,39 +1,42 @@
-"""``brdffit._jax.jit`` across threads: a program is traced once, however many threads compile it at the same
-time. ``fit_batch`` fits batches on several threads, each compiling the bucket's programs in the background; JAX
-shared their compilation but traced them once per thread (the solve ~1.5 s each, measured), until the first call
-of a signature ran under a lock of its own."""
+"""``brdffit._jax.jit`` across threads, and what ``fit_batch``'s threads learn from it: a program's first call runs
+under a lock of its own (two threads compiling a bucket's solve at once traced it twice, 1.5 s each, measured),
+and a bucket says when its programs are compiled, so that the other threads start then."""
 
-import jax
-import pytest
+import threading
+import time
 
 import data_synth
-from brdffit import cache, fit_batch
-
-TRACE_EVENT = "/jax/core/compile/jaxpr_trace_duration"
-
-
-@pytest.fixture
-def traced():
-    """The names of the functions JAX traces for compilation meanwhile (its monitoring events)."""
-    names = []
-
-    def listener(event, seconds, fun_name=None, **_):
-        if event == TRACE_EVENT:
-            names.append(fun_name)
-
-    jax.monitoring.register_event_duration_secs_listener(listener)
-    yield names
-    jax.monitoring.unregister_event_duration_listener(listener)
+from brdffit import cache
+from brdffit._jax import FirstCalls
 
 
-def test_batches_on_two_threads_trace_each_program_once(monkeypatch, traced):
-    monkeypatch.setattr(cache, "_enabled", None)  # no stored programs: every new program is traced
-    params = {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.2}
-    samples = [data_synth.synthesize("ward", params, *data_synth.uniform_random(300, seed=k)) for k in range(4)]
-    # max_steps of its own: programs no other test compiled in this process; 2 batches of 2 on 2 threads
-    results = fit_batch(samples, "ward", threads=2, max_steps=97)
-    assert all(result.converged for result in results)
-    assert traced.count("solve") == 1 and traced.count("_bucket_screens") <= 1
+def test_first_calls_of_one_signature_run_one_at_a_time():
+    """Threads that call a new signature at once run its first call one after another (the later ones then find
+    it compiled); calls of another signature do not wait for them."""
+    first_calls = FirstCalls()
+    spans = {"a": [], "b": []}
+    meet = threading.Barrier(4)
+
+    def call(key):
+        def action():
+            started = time.perf_counter()
+            time.sleep(0.2)
+            spans[key].append((started, time.perf_counter()))
+
+        meet.wait()
+        first_calls.run(key, action)
+
+    threads = [threading.Thread(target=call, args=(key,)) for key in ("a", "a", "a", "b")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    (a1, a2, a3), ((b_start, b_end),) = sorted(spans["a"]), spans["b"]
+    assert a1[1] <= a2[0] and a2[1] <= a3[0]  # one after another
+    assert b_start < a1[1] and a1[0] < b_end  # beside the first "a"
+    started = time.perf_counter()
+    first_calls.run("a", lambda: None)  # a signature already called: no lock
+    assert time.perf_counter() - started < 0.1
 
 
 def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(monkeypatch):

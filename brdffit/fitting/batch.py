@@ -25,8 +25,9 @@ on 2 cores made 20 × 100k Ward slower than one thread (7.4 s against 6.4 s, com
 
 import os
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
+from contextlib import contextmanager
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -38,7 +39,15 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..physics.models import Model
-from .buckets import batches, bucket_key, compile_in_background, default_strategy, solve_bucket, stack_size
+from .buckets import (
+    BATCH_SAMPLES,
+    batches,
+    bucket_key,
+    compile_in_background,
+    default_strategy,
+    solve_bucket,
+    stack_size,
+)
 from .caveats import screen_bucket, screen_program
 from .defaults import MAX_STEPS, N_STARTS
 from .fit import checked, fit_one, start_vector
@@ -69,7 +78,10 @@ def fit_many(
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch`."""
     choice("strategy", strategy, STRATEGIES)
-    threads = usable_cores() if threads is None else whole_number("threads", threads)
+    strategy = default_strategy() if strategy == "auto" else strategy
+    if threads is None:  # one thread per core; on a GPU one, whose programs fill the device
+        threads = 1 if strategy == "vmap" else usable_cores()
+    threads = whole_number("threads", threads)
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
@@ -84,33 +96,11 @@ def fit_many(
         None if one is None else start_vector(built, one, data.n_channels)
         for one, data in zip(starts, kept, strict=True)
     ]
-    strategy = default_strategy() if strategy == "auto" else strategy
     options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=strategy)
     results: list[FitResult | None] = [None] * len(kept)
 
-    compiled = threading.Event()  # the first unit's programs are compiled: the other units may start
-
-    @float64  # JAX's float64 switch is per thread
-    def fit_unit(unit: WorkUnit, first: bool) -> int:
-        """Fit the datasets of ``unit`` into ``results``; how many they were. Every unit but the ``first`` waits
-        until the first one has compiled its programs: compilation (on a core of its own while the first unit
-        searches its starts) is then not slowed by other units' work, and threads do not compile the same
-        program at once."""
-        if not first:
-            compiled.wait()
-            return fit_one_unit(unit)
-        before = traced()
-
-        def on_stage(stage: str) -> None:  # a search that traced nothing new: every program was compiled before
-            if stage == "compiled" or traced() == before:
-                compiled.set()
-
-        try:
-            return fit_one_unit(unit, on_stage)
-        finally:
-            compiled.set()
-
-    def fit_one_unit(unit: WorkUnit, on_stage=None) -> int:
+    def fit_unit(unit: WorkUnit, on_stage: Callable[[str], None] | None) -> int:
+        """Fit the datasets of ``unit`` into ``results``; how many they were."""
         if built.own_fit or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
             (index,) = unit.indices
             one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
@@ -148,21 +138,83 @@ def fit_many(
     units = work_units(built, kept, [vector is not None for vector in vectors], threads)
     bar = progress_bar(len(samples), progress)
     try:
-        if threads == 1 or len(units) == 1:
-            for unit in units:
-                bar.update(fit_unit(unit, first=True))
-        else:
-            with ThreadPoolExecutor(min(threads, len(units)), thread_name_prefix="brdffit-fit") as pool:
-                pending = [pool.submit(fit_unit, unit, index == 0) for index, unit in enumerate(units)]
-                try:
-                    for done in as_completed(pending):
-                        bar.update(done.result())
-                except BaseException:
-                    pool.shutdown(cancel_futures=True)
-                    raise
+        run_units(units, fit_unit, threads, bar)
     finally:
         bar.close()
     return results
+
+
+def run_units(units: list["WorkUnit"], fit_unit: Callable, threads: int, bar) -> None:
+    """``fit_unit(unit, on_stage)`` (how many datasets it fitted) for each of ``units``, on ``threads`` threads,
+    each fitted count added to ``bar``.
+
+    The first unit starts alone, the others once its programs are compiled (its ``on_stage("compiled")``, from
+    ``buckets.solve_bucket``) or once its start search traced nothing new (every program was compiled before);
+    the units running at once hold at most :data:`~.buckets.BATCH_SAMPLES` samples (one larger unit runs alone).
+    A unit that fails stops those not yet started, and the failure is raised at once.
+    """
+    if threads == 1 or len(units) == 1:
+        for unit in units:
+            bar.update(fit_unit(unit, None))
+        return
+    compiled, stop = threading.Event(), threading.Event()
+    budget = SampleBudget(BATCH_SAMPLES)
+
+    @float64  # JAX's float64 switch is per thread
+    def run(unit: WorkUnit, first: bool) -> int:
+        if not first:
+            compiled.wait()
+        if stop.is_set():
+            return 0
+        with budget.taken(unit.stack * unit.size):
+            if not first:
+                return fit_unit(unit, None)
+            before = traced()
+
+            def on_stage(stage: str) -> None:
+                if stage == "compiled" or traced() == before:
+                    compiled.set()
+
+            try:
+                return fit_unit(unit, on_stage)
+            except BaseException:
+                stop.set()
+                raise
+            finally:
+                compiled.set()
+
+    pool = ThreadPoolExecutor(min(threads, len(units)), thread_name_prefix="brdffit-fit")
+    pending = [pool.submit(run, unit, index == 0) for index, unit in enumerate(units)]
+    try:
+        for done in as_completed(pending):
+            bar.update(done.result())
+    except BaseException:  # a failed unit, or Ctrl-C: the units not yet started do nothing
+        stop.set()
+        compiled.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+
+
+class SampleBudget:
+    """How many samples the units running at once may hold: a unit waits until its samples fit beside the others'
+    (or, larger than the whole budget, until it runs alone)."""
+
+    def __init__(self, total: int):
+        self._total, self._used = total, 0
+        self._changed = threading.Condition()
+
+    @contextmanager
+    def taken(self, samples: int):
+        with self._changed:
+            self._changed.wait_for(lambda: self._used == 0 or self._used + samples <= self._total)
+            self._used += samples
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._used -= samples
+                self._changed.notify_all()
 
 
 def usable_cores() -> int:
@@ -186,11 +238,12 @@ class WorkUnit(NamedTuple):
     indices: list[int]
     given: bool  # every one has its start: no search
     stack: int = 1  # the datasets are stacked to this many (``buckets.stack_size``), as are the others of the bucket
+    size: int = 0  # samples of each stacked dataset (``problem.padded_size``)
 
 
-def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], parts: int = 1) -> list[WorkUnit]:
+def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], threads: int = 1) -> list[WorkUnit]:
     """How :func:`fit_many` cuts ``samples`` (as kept for the fit) into units: by bucket and by whether the start
-    is given (a given start replaces the search), each bucket in batches for ``parts`` threads
+    is given (a given start replaces the search), each bucket in batches for ``threads`` threads
     (``buckets.batches``: together at most ``buckets.BATCH_SAMPLES`` samples at a time); a model with several
     lobes and no start, one dataset per unit."""
     groups: dict[tuple, list[int]] = {}
@@ -199,11 +252,11 @@ def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], 
     units = []
     for (key, has_start), indices in groups.items():
         if model.own_fit or (model.n_lobes > 1 and not has_start):
-            units += [WorkUnit([index], False) for index in indices]
+            units += [WorkUnit([index], False, 1, key.padded_size) for index in indices]
         else:
-            cut = batches(indices, key.padded_size, parts)
+            cut = batches(indices, key.padded_size, threads)
             stack = stack_size([len(batch) for batch in cut])
-            units += [WorkUnit(batch, has_start, stack) for batch in cut]
+            units += [WorkUnit(batch, has_start, stack, key.padded_size) for batch in cut]
     return units
 
 

@@ -61,13 +61,13 @@ def bucket_key(samples: Samples) -> BucketKey:
     )
 
 
-def batches(indices: Sequence[int], size: int, parts: int = 1) -> list[list[int]]:
-    """``indices`` (one bucket's datasets of ``size`` padded samples) cut into batches for ``parts`` threads that
-    run one batch each at a time: together at most :data:`BATCH_SAMPLES` samples, a multiple of ``parts`` batches
+def batches(indices: Sequence[int], size: int, threads: int = 1) -> list[list[int]]:
+    """``indices`` (one bucket's datasets of ``size`` padded samples) cut into batches for ``threads`` threads that
+    run one batch each at a time: together at most :data:`BATCH_SAMPLES` samples, a multiple of ``threads`` batches
     (unless there are fewer datasets), as few as that allows and of sizes that differ by one at most: 20 datasets
     that need two batches go as 10 + 10, which stack into one compiled program, not as 19 + 1, which need two."""
-    per_batch = max(1, BATCH_SAMPLES // parts // size)
-    count = min(-(-len(indices) // (per_batch * parts)) * parts, len(indices))
+    per_batch = max(1, BATCH_SAMPLES // threads // size)
+    count = min(-(-len(indices) // (per_batch * threads)) * threads, len(indices))
     cuts = [len(indices) * k // count for k in range(count + 1)]
     return [list(indices[start:end]) for start, end in pairwise(cuts)]
 
@@ -105,8 +105,9 @@ def solve_bucket(
     ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them. ``hold``:
     what every dataset's fit holds (``hold.py``), or None. ``stack``: how many datasets to stack them to
     (:func:`stack_size` of the bucket's batches; by default that of this one). ``on_stage``: called with
-    ``"searched"`` once the starts are searched, and ``"compiled"`` once the programs of the search, the race and
-    the solve are compiled, before the final solve runs.
+    ``"searched"`` once the starts are searched, and ``"compiled"`` right before the final solve, when the programs
+    of the search and the race have run and that of the solve is compiled (with given starts, nothing has run yet;
+    a float32 fit's refinement and a bounded fit's second solve compile after it).
     """
     on_stage = on_stage or (lambda stage: None)
     count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few compiled programs
@@ -211,8 +212,18 @@ def step_budget(steps: int) -> np.ndarray:
     return np.asarray(steps, np.int32)
 
 
-@cache
+_building = threading.Lock()
+
+
 def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
+    """:func:`_bucket_solver`, built once even when threads ask for it at the same time (two builds would be two
+    compiled functions, each tracing its programs)."""
+    with _building:
+        return _bucket_solver(model, loss, max_steps, dtype, vectorise)
+
+
+@cache
+def _bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
     """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None, budget) -> Solved (D, S, …)``: every
     start of every dataset, each solve stopping after ``budget`` steps (:func:`step_budget`, at most
     ``max_steps``): one compiled program runs both the race of the starts and the winner's solve."""

@@ -1,6 +1,8 @@
 """fit_batch and `brdffit fit A B … -o OUTDIR/`: many datasets, one model."""
 
 import os
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -52,10 +54,48 @@ def test_threads_change_no_result(model, options):
     """Batches fitted on 3 threads at once (Ward: a bucket of 3 datasets cut in 3 batches, and one of 1; Lafortune:
     one dataset a thread) give the results of one thread, in the order of the inputs."""
     samples = datasets() if model == "ward" else datasets()[:3]
-    alone = fit_batch(samples, model, threads=1, **options)
-    together = fit_batch(samples, model, threads=3, **options)
-    same_results(alone, together)
-    assert [r.n_samples for r in together] == [one.n_samples for one in samples]
+    # Equal, as fit and fit_batch are (above): a dataset's programs treat it alone, however many are stacked.
+    assert fit_batch(samples, model, threads=3, **options) == fit_batch(samples, model, threads=1, **options)
+
+
+def test_a_failed_batch_stops_the_others(monkeypatch):
+    """The first batch fails: its error comes out, and the batches waiting for its programs never start."""
+    from brdffit.fitting import batch
+
+    calls = []
+
+    def failing(*args, **kwargs):
+        calls.append(1)
+        raise RuntimeError("the solver broke")
+
+    monkeypatch.setattr(batch, "solve_bucket", failing)
+    with pytest.raises(RuntimeError, match="the solver broke"):
+        fit_batch(datasets()[:2] + datasets()[3:], "ward", threads=3)  # one bucket of 3, cut in 3 batches
+    assert len(calls) == 1
+
+
+def test_the_batches_running_at_once_hold_at_most_the_budget():
+    """Units of 3, 2, 2, 5 (alone: beyond the budget) and 1 samples on 4 threads, a budget of 4."""
+    from brdffit.fitting.batch import SampleBudget
+
+    budget, lock = SampleBudget(4), threading.Lock()
+    held, largest = [0], []
+
+    def unit(samples):
+        with budget.taken(samples):
+            with lock:
+                held[0] += samples
+                largest.append((held[0], samples))
+            time.sleep(0.05)
+            with lock:
+                held[0] -= samples
+
+    threads = [threading.Thread(target=unit, args=(n,)) for n in (3, 2, 2, 5, 1)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert all(total <= 4 or total == samples for total, samples in largest) and len(largest) == 5
 
 
 def test_vmap_equals_loop():
