@@ -43,6 +43,21 @@ def float64(function: Callable | None = None):
     return in_float64
 
 
+def built_once(builder: Callable) -> Callable:
+    """``functools.cache`` for a function that builds a compiled function (a solver for a model and loss), safe
+    across threads: threads that ask for the same one at once (``fit_batch``'s batches) get one, where two would
+    be two compiled functions, each tracing its programs."""
+    cached = functools.cache(builder)
+    lock = threading.Lock()
+
+    @functools.wraps(builder)
+    def once(*args, **kwargs):
+        with lock:
+            return cached(*args, **kwargs)
+
+    return once
+
+
 @functools.cache
 def compiler_options() -> dict | None:
     """:data:`CPU_COMPILER_OPTIONS` when JAX's default backend is the CPU, else None (XLA's defaults)."""
@@ -143,6 +158,6 @@ class FirstCalls:
 def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tuple:
     """What a call's compiled program depends on: its static arguments, its tree, each array's shape and dtype (an
     array and a ``jax.ShapeDtypeStruct`` of its shape give the same key)."""
-    statics = tuple(arg for index, arg in enumerate(args) if index in static_argnums)
     leaves, tree = jax.tree.flatten((_programs.dynamic_arguments(args, static_argnums), kwargs))
+    statics = _programs.static_arguments(args, static_argnums)
     return statics, tree, tuple(_programs.array_description(leaf) for leaf in leaves)

@@ -84,6 +84,11 @@ def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
     return tuple(arg for index, arg in enumerate(args) if index not in static_argnums)
 
 
+def static_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
+    """The static ones of ``args`` (models, losses, counts): part of a program's identity, not its inputs."""
+    return tuple(arg for index, arg in enumerate(args) if index in static_argnums)
+
+
 def array_description(leaf) -> tuple:
     """What a compiled program depends on of an array argument: its shape, dtype and weak type (an array and a
     ``jax.ShapeDtypeStruct`` of its shape are described alike)."""
@@ -96,7 +101,7 @@ def array_description(leaf) -> tuple:
 
 def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str | None:
     """The hex digest that names the program of ``name`` called with ``args``; None if the call cannot be stored."""
-    static_args = [args[index] for index in static_argnums if index < len(args)]
+    static_args = static_arguments(args, static_argnums)
     if any(getattr(arg, "storable", True) is False for arg in static_args):  # its programs call back into Python
         return None
     statics = [repr(arg) for arg in static_args]

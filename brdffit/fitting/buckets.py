@@ -17,13 +17,13 @@ A single fit is a bucket of one (``fit.py``), so both paths are the same computa
 
 import threading
 from collections.abc import Callable, Sequence
-from functools import cache, partial
+from functools import partial
 from itertools import pairwise
 from typing import NamedTuple
 
 import numpy as np
 
-from .._jax import float64, jit
+from .._jax import built_once, float64, jit
 from .._lazy import jax
 from ..data.samples import Samples
 from ..physics.models import Model
@@ -212,18 +212,8 @@ def step_budget(steps: int) -> np.ndarray:
     return np.asarray(steps, np.int32)
 
 
-_building = threading.Lock()
-
-
+@built_once
 def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
-    """:func:`_bucket_solver`, built once even when threads ask for it at the same time (two builds would be two
-    compiled functions, each tracing its programs)."""
-    with _building:
-        return _bucket_solver(model, loss, max_steps, dtype, vectorise)
-
-
-@cache
-def _bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
     """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None, budget) -> Solved (D, S, …)``: every
     start of every dataset, each solve stopping after ``budget`` steps (:func:`step_budget`, at most
     ``max_steps``): one compiled program runs both the race of the starts and the winner's solve."""

@@ -25,13 +25,13 @@ import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from functools import cache, partial
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from .._files import write_text_atomic
-from .._jax import float64, jit
+from .._jax import built_once, float64, jit
 from .._version import __version__
 from ..data.load import as_samples
 from ..data.samples import Samples
@@ -391,7 +391,7 @@ def _rows(mask: np.ndarray, problem: Problem) -> np.ndarray:
     return rows
 
 
-@cache
+@built_once
 def _held_out_cost(model: Model, loss: Loss):
     """``Σr²`` over the problem's rows that are on, compiled once per model and loss."""
     return jit(lambda theta, problem: cost(partial(residuals, model, loss), theta, problem))

@@ -8,12 +8,12 @@ The compiled solve is differentiable with respect to the data: its derivatives a
 (the implicit function theorem, ``implicit.py``), never of the solver's iterations.
 """
 
-from functools import cache, partial
+from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._jax import jit
+from .._jax import built_once, jit
 from .._lazy import jax, jnp
 from ..physics.models import Model, Params
 from .hold import Hold, slopes, theta_of, z_of
@@ -78,7 +78,7 @@ def best(runs: list[Solved]) -> Solved:
     return runs[int(best_index([float(run.cost) for run in runs]))]
 
 
-@cache
+@built_once
 def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
     """``solve(theta0, problem, hold=None) -> Solved`` (:func:`solved_from`), compiled once per problem size and
     once for fits that hold parameters (``hold.py``): the held values and bounds are data, so changing them

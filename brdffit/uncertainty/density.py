@@ -30,14 +30,14 @@ a whole batch of walkers at once, and returns ``-inf`` (never NaN) outside the
 prior's support or wherever the model cannot be evaluated.
 """
 
-from functools import cache, partial
+from functools import partial
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import float64, jit
+from .._jax import built_once, float64, jit
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..fitting.constraints import constraints_for
@@ -135,7 +135,7 @@ def chi_squared(model: Model, loss: Loss, v, problem: Problem, prior_weight=0.0)
     return data + prior_weight * jnp.sum(jnp.square(v.astype(jnp.float64)))
 
 
-@cache
+@built_once
 def compiled_chi_squared(model: Model, loss: Loss):
     """:func:`chi_squared` compiled: ``(v, problem, prior_weight) -> Σ r² + prior_weight · Σ v²``."""
     return jit(partial(chi_squared, model, loss))
@@ -156,7 +156,7 @@ class Frame(NamedTuple):
     high: object
 
 
-@cache
+@built_once
 def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
     """``(walkers (W, D), problem, n_values, prior_weight, frame) -> (W,)`` log posterior densities, jit-compiled,
     vmapped over walkers; D is the number of free coordinates (+1 for ``ln s``), placed into the sampling vector by

@@ -24,7 +24,6 @@ reported as null and a warning names it. Correlations of |ρ| ≥
 """
 
 import warnings
-from functools import cache
 from statistics import NormalDist
 from typing import NamedTuple
 
@@ -32,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import float64, jit
+from .._jax import built_once, float64, jit
 from ..data.samples import Samples
 from ..fitting.losses import Loss
 from ..fitting.problem import Problem, chunks, residuals_at
@@ -75,7 +74,7 @@ def gauss_newton_and_meat(density: Density, v) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(hessian) + density.model.prior_weight * np.eye(np.size(v)), np.asarray(meat)
 
 
-@cache
+@built_once
 def compiled_gauss_newton(model: Model, loss: Loss):
     """``(v, problem) -> (JᵀJ, Σ r² JᵢᵀJᵢ)``, compiled once per model and loss (and problem shape)."""
 
