@@ -30,11 +30,11 @@ from pathlib import Path
 import numpy as np
 
 import brdffit
-from brdffit.data.library import build_basis
 from brdffit.data.merl import SCALES, bin_directions, stored_planes
 from brdffit.data.samples import Samples
-from brdffit.physics.pca.basis import save_basis
-from brdffit.physics.pca.directions import condition_number, select_bins
+from brdffit.datadriven.basis import save_basis
+from brdffit.datadriven.build import build_basis
+from brdffit.datadriven.directions import condition_number, select_bins
 
 RESULTS = Path(__file__).parent / "results"
 ANALYTIC = {
@@ -82,7 +82,7 @@ def measure_build(files: list[Path], components: int, repeats: int) -> dict:
     """``build_basis`` of ``files`` in fresh processes: wall time and peak resident memory, medians."""
     code = (
         "import json, resource, sys, time\n"
-        "from brdffit.data.library import build_basis\n"
+        "from brdffit.datadriven.build import build_basis\n"
         "files = sys.argv[2:]\n"
         "start = time.perf_counter()\n"
         "build_basis(files, components=int(sys.argv[1]))\n"

@@ -60,7 +60,7 @@ from worker import BATCH_SOLVERS  # noqa: E402
 
 import data_synth  # noqa: E402
 from brdffit import get_model  # noqa: E402
-from brdffit.fitting.losses import get_loss  # noqa: E402
+from brdffit.fitting.objective.losses import get_loss  # noqa: E402
 
 WORKER = Path(__file__).with_name("worker.py")
 RESULTS = Path(__file__).with_name("results")
@@ -138,9 +138,9 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
     samples = data_synth.synthesize(model_name, MATERIALS[model_name], wi, wo, noise=0.01, seed=2)
     data = folder / f"{model_name}.npz"
     np.savez(data, wi=samples.wi, wo=samples.wo, values=samples.values)
-    from brdffit.fitting.fit import search_problem
-    from brdffit.fitting.problem import build_problem
-    from brdffit.fitting.starts import starting_points
+    from brdffit.fitting.objective.problem import build_problem
+    from brdffit.fitting.single.fit import search_problem
+    from brdffit.fitting.starts.grid import starting_points
 
     search = search_problem(samples, build_problem(samples), "float64", seed=0)
     theta = starting_points(model, loss, search, 1)[0]

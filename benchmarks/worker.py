@@ -29,7 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import data_synth
 from brdffit import Samples, enable_compilation_cache, fit, fit_batch, get_model
-from brdffit.fitting.losses import get_loss
+from brdffit.fitting.objective.losses import get_loss
 
 LOSS = "log"
 
@@ -59,7 +59,7 @@ def scipy_functions(model_name: str):
     competent scipy user would write them (compiled on first call, inside the clock)."""
     import jax
 
-    from brdffit.fitting.problem import prepared, residuals
+    from brdffit.fitting.objective.problem import prepared, residuals
 
     model, loss = get_model(model_name), get_loss(LOSS)
 
@@ -76,7 +76,7 @@ def scipy_fit(model_name: str, samples: Samples, theta0: np.ndarray, method: str
     import jax.numpy as jnp
     import scipy.optimize
 
-    from brdffit.fitting.problem import build_problem
+    from brdffit.fitting.objective.problem import build_problem
 
     jax.config.update("jax_enable_x64", True)
 
@@ -128,9 +128,9 @@ def steps(args) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from brdffit._jax import jit
-    from brdffit.fitting.problem import build_problem, normal_equations, prepared
-    from brdffit.fitting.solve import compiled_solver
+    from brdffit._programs import jit
+    from brdffit.fitting.objective.problem import build_problem, normal_equations, prepared
+    from brdffit.fitting.solver.compiled import compiled_solver
 
     samples = load(args.data)
     model, loss = get_model(args.model), get_loss(LOSS)
@@ -187,8 +187,8 @@ def batch_data(model_name: str, materials: int, size: int):
 
 def batch_starts(model_name: str, datasets) -> list[dict]:
     """brdffit's data-driven start of each dataset, given to both solvers (computed before the clock)."""
-    from brdffit.fitting.problem import build_problems
-    from brdffit.fitting.starts import grid_starts, search_subset
+    from brdffit.fitting.objective.problem import build_problems
+    from brdffit.fitting.starts.grid import grid_starts, search_subset
 
     model, loss = get_model(model_name), get_loss(LOSS)
     starts = []
@@ -298,7 +298,7 @@ def hold(args) -> dict:
     import jax.numpy as jnp
     import scipy.optimize
 
-    from brdffit.fitting.problem import build_problem, prepared, residuals
+    from brdffit.fitting.objective.problem import build_problem, prepared, residuals
 
     jax.config.update("jax_enable_x64", True)
     wi, wo = data_synth.hemisphere_grid(8, 36, 36)

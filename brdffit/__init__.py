@@ -34,64 +34,64 @@ _EXPORTS = {
     "UncertaintyWarning": ".errors",
     "FitWarning": ".errors",
     "InputWarning": ".errors",
-    "MODELS": ".physics.models",
-    "Model": ".physics.models",
-    "get_model": ".physics.models",
+    "MODELS": ".physics.models.registry",
+    "Model": ".physics.models.model",
+    "get_model": ".physics.models.registry",
     "evaluate": ".physics.evaluate",
     "Samples": ".data.samples",
     "load_samples": ".data.load",
     "save_samples": ".data.load",
     "describe": ".data.summary",
-    "LOSSES": ".fitting.losses",
-    "FitResult": ".fitting.results",
-    "load_result": ".fitting.results",
-    "save_result": ".fitting.results",
+    "LOSSES": ".fitting.objective.losses",
+    "FitResult": ".fitting.single.result",
+    "load_result": ".fitting.single.result",
+    "save_result": ".fitting.single.result",
     "fit": ".api",
     "fit_batch": ".api",
-    "compare": ".fitting.compare",
-    "Comparison": ".fitting.compare",
+    "compare": ".fitting.comparison.compare",
+    "Comparison": ".fitting.comparison.compare",
     "MCMC": ".uncertainty.mcmc",
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
     "corner_plot": ".views.corner",
     "report": ".views.report",
-    "enable_compilation_cache": ".cache",
-    "build_basis": ".data.library",
-    "load_basis": ".physics.pca.basis",
-    "save_basis": ".physics.pca.basis",
-    "choose_directions": ".physics.pca.directions",
-    "read_directions": ".physics.pca.directions",
-    "write_directions": ".physics.pca.directions",
+    "enable_compilation_cache": "._programs.cache",
+    "build_basis": ".datadriven.build",
+    "load_basis": ".datadriven.basis",
+    "save_basis": ".datadriven.basis",
+    "choose_directions": ".datadriven.directions",
+    "read_directions": ".datadriven.directions",
+    "write_directions": ".datadriven.directions",
 }
 
 if TYPE_CHECKING:
+    from ._programs.cache import enable_compilation_cache as enable_compilation_cache
     from .api import fit as fit
     from .api import fit_batch as fit_batch
-    from .cache import enable_compilation_cache as enable_compilation_cache
-    from .data.library import build_basis as build_basis
     from .data.load import load_samples as load_samples
     from .data.load import save_samples as save_samples
     from .data.samples import Samples as Samples
     from .data.summary import describe as describe
+    from .datadriven.basis import load_basis as load_basis
+    from .datadriven.basis import save_basis as save_basis
+    from .datadriven.build import build_basis as build_basis
+    from .datadriven.directions import choose_directions as choose_directions
+    from .datadriven.directions import read_directions as read_directions
+    from .datadriven.directions import write_directions as write_directions
     from .errors import BrdfInputError as BrdfInputError
     from .errors import FitWarning as FitWarning
     from .errors import InputWarning as InputWarning
     from .errors import UncertaintyWarning as UncertaintyWarning
-    from .fitting.compare import Comparison as Comparison
-    from .fitting.compare import compare as compare
-    from .fitting.losses import LOSSES as LOSSES
-    from .fitting.results import FitResult as FitResult
-    from .fitting.results import load_result as load_result
-    from .fitting.results import save_result as save_result
+    from .fitting.comparison.compare import Comparison as Comparison
+    from .fitting.comparison.compare import compare as compare
+    from .fitting.objective.losses import LOSSES as LOSSES
+    from .fitting.single.result import FitResult as FitResult
+    from .fitting.single.result import load_result as load_result
+    from .fitting.single.result import save_result as save_result
     from .physics.evaluate import evaluate as evaluate
-    from .physics.models import MODELS as MODELS
-    from .physics.models import Model as Model
-    from .physics.models import get_model as get_model
-    from .physics.pca.basis import load_basis as load_basis
-    from .physics.pca.basis import save_basis as save_basis
-    from .physics.pca.directions import choose_directions as choose_directions
-    from .physics.pca.directions import read_directions as read_directions
-    from .physics.pca.directions import write_directions as write_directions
+    from .physics.models.model import Model as Model
+    from .physics.models.registry import MODELS as MODELS
+    from .physics.models.registry import get_model as get_model
     from .uncertainty.laplace import laplace_uncertainty as laplace_uncertainty
     from .uncertainty.mcmc import MCMC as MCMC
     from .uncertainty.mcmc import sample_posterior as sample_posterior

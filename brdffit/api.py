@@ -8,18 +8,20 @@ API lives in its layer and is re-exported by name in ``brdffit/__init__.py``.
 import os
 import warnings
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 from ._jax import float64
-from .cluster import fit_here, fit_on_cluster
 from .data.load import as_samples, check_read_options
 from .data.samples import Samples
 from .errors import FitWarning
-from .fitting.defaults import MAX_STEPS, N_STARTS
-from .fitting.fit import checked, fit_one
-from .fitting.losses import get_loss
-from .fitting.results import FitResult
-from .physics.models import Model, model_for
+from .fitting.many.cluster import fit_here, fit_on_cluster
+from .fitting.objective.losses import get_loss
+from .fitting.single.defaults import MAX_STEPS, N_STARTS
+from .fitting.single.fit import checked, fit_one
+from .fitting.single.result import FitResult
+from .physics.models.model import Model
+from .physics.models.registry import model_for
 from .uncertainty.mcmc import MCMC, check_walkers
 from .uncertainty.methods import check_options, with_uncertainty
 
@@ -128,7 +130,7 @@ def fit_batch(
     terminal). ``uncertainty`` (``"laplace"`` or ``"mcmc"``, with ``mcmc``
     settings) adds each result's ``uncertainty`` after the fits.
     ``client``: a ``dask.distributed.Client``; the fits are spread over its
-    workers (``brdffit/cluster.py``), paths are read there, and the results are
+    workers (``brdffit/fitting/many/cluster.py``), paths are read there, and the results are
     those of this process's fit. ``threads``: how many batches of datasets
     are fitted at once (default: every CPU core this process may use; on a
     cluster, 1 in each task, whose workers are the parallelism); the results
@@ -146,9 +148,8 @@ def fit_batch(
         seed=seed,
         fixed=fixed,
         bounds=bounds,
-        uncertainty=uncertainty,
-        mcmc=mcmc,
         threads=threads,
+        then=None if uncertainty is None else partial(with_uncertainty, method=uncertainty, mcmc=mcmc),
     )
     if client is not None:
         first_start = start if isinstance(start, dict) or start is None else next(iter(start), None)

@@ -7,11 +7,11 @@
     brdffit.save_samples(samples, "ward.csv")
 """
 
-from .geometries import GEOMETRIES as GEOMETRIES
-from .geometries import hemisphere_grid as hemisphere_grid
-from .geometries import in_plane as in_plane
-from .geometries import near_specular as near_specular
-from .geometries import uniform_random as uniform_random
-from .noise import NOISE_KINDS as NOISE_KINDS
-from .noise import add_noise as add_noise
-from .synthesize import synthesize as synthesize
+from data_synth.geometries import GEOMETRIES as GEOMETRIES
+from data_synth.geometries import hemisphere_grid as hemisphere_grid
+from data_synth.geometries import in_plane as in_plane
+from data_synth.geometries import near_specular as near_specular
+from data_synth.geometries import uniform_random as uniform_random
+from data_synth.noise import NOISE_KINDS as NOISE_KINDS
+from data_synth.noise import add_noise as add_noise
+from data_synth.synthesize import synthesize as synthesize

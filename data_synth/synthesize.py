@@ -7,8 +7,7 @@ import numpy as np
 from brdffit.data.samples import Samples
 from brdffit.errors import BrdfInputError
 from brdffit.physics.evaluate import evaluate
-
-from .noise import add_noise
+from data_synth.noise import add_noise
 
 
 def synthesize(

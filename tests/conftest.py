@@ -1,6 +1,6 @@
 """Shared test set-up: float64 for the tests' own JAX arrays, warnings as errors (pyproject), a private cache.
 
-brdffit itself never switches float64 on for the process (``brdffit/_jax.py``); the tests build JAX arrays
+brdffit itself never switches float64 on for the process (``brdffit/_jax/precision.py``); the tests build JAX arrays
 of their own and compare them with brdffit's to 1e-12, so they run with it on, as equinox's tests do.
 ``tests/test_float64.py`` checks in a fresh interpreter that brdffit leaves a user's float32 JAX alone.
 """

@@ -1,5 +1,5 @@
-"""fit_batch over a Dask cluster (``brdffit/cluster.py``): a LocalCluster of two worker processes gives the local
-results, reads paths on its workers, and loses no result when a worker dies mid-run."""
+"""fit_batch over a Dask cluster (``brdffit/fitting/many/cluster.py``): a LocalCluster of two worker processes gives
+the local results, reads paths on its workers, and loses no result when a worker dies mid-run."""
 
 import os
 import signal

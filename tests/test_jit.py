@@ -1,4 +1,4 @@
-"""``brdffit._jax.jit`` across threads, and what ``fit_batch``'s threads learn from it: a program's first call runs
+"""``brdffit._programs.jit`` across threads, and what ``fit_batch``'s threads learn from it: a program's first call runs
 under a lock of its own (two threads compiling a bucket's solve at once traced it twice, 1.5 s each, measured),
 and a bucket says when its programs are compiled, so that the other threads start then."""
 
@@ -6,8 +6,8 @@ import threading
 import time
 
 import data_synth
-from brdffit import cache
-from brdffit._jax import FirstCalls
+from brdffit._programs import cache
+from brdffit._programs.first_calls import FirstCalls
 
 
 def test_first_calls_of_one_signature_run_one_at_a_time():
@@ -42,10 +42,10 @@ def test_first_calls_of_one_signature_run_one_at_a_time():
 def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(monkeypatch):
     """``solve_bucket``'s stages, which ``fit_batch`` uses to start its other threads: once the first batch's
     programs are compiled, or after its search when that traced nothing (every program was compiled before)."""
-    from brdffit._programs import traced
-    from brdffit.fitting.buckets import solve_bucket
-    from brdffit.fitting.losses import get_loss
-    from brdffit.physics.models import get_model
+    from brdffit._programs.stored import traced
+    from brdffit.fitting.objective.losses import get_loss
+    from brdffit.fitting.single.stacked import solve_bucket
+    from brdffit.physics.models.registry import get_model
 
     monkeypatch.setattr(cache, "_enabled", None)
     params = {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.2}

@@ -1,10 +1,12 @@
-"""The layout holds: imports go one way through the layers, no module imports itself round a circle, and the
-README's architecture tree is the tree on disk.
+"""The layout holds: imports go one way through the layers, no module imports itself round a circle, every folder,
+module and the package's top stay within the house's limits, and the README's architecture tree is the tree on disk.
 
-Layers, lowest first: the base modules (errors, checks, files, JAX set-up), ``physics``, ``data``, ``fitting``,
-``uncertainty``, then ``api`` / ``views`` / ``export`` (and ``data_synth``), then ``cli``. A module may import
-its own layer and those below. Imports under ``if TYPE_CHECKING:`` never run and are not counted; the ones
-inside functions are.
+Layers, lowest first: the base modules (errors, checks, files, JAX set-up, compiled programs), ``physics``,
+``data``, ``fitting`` (its rooms in order: objective, solver, starts, single, then many and comparison),
+``uncertainty``, then ``api`` / ``views`` / ``export`` (and ``data_synth``), then ``cli``; ``brdffit/__init__.py``,
+the public face that re-exports names from every layer, above them all. A module may import its own layer and those
+below. Every import counts: those inside functions, and those under ``if TYPE_CHECKING:``, which never run but
+still tie one module's meaning to another's.
 """
 
 import ast
@@ -18,26 +20,38 @@ import pytest
 from paths import ROOT
 
 PACKAGES = ("brdffit", "data_synth")
+#: The layer of each package or module (the longest prefix named here counts); fractions order the rooms of a layer.
 LAYERS = {
-    "brdffit": 0,
+    "brdffit": 7,  # the public face: names of every layer, loaded on first use
     "brdffit._version": 0,
     "brdffit._jax": 0,
-    "brdffit._arrays": 0,
+    "brdffit._programs": 0,
     "brdffit._files": 0,
     "brdffit.errors": 0,
     "brdffit.checks": 0,
-    "brdffit.cache": 0,
     "brdffit.physics": 1,
+    "brdffit.datadriven": 1,  # the basis and the pca model: physics
     "brdffit.data": 2,
+    "brdffit.datadriven.build": 2,  # a basis learned from a library of files: data
     "brdffit.fitting": 3,
+    "brdffit.fitting.objective": 3.1,
+    "brdffit.fitting.solver": 3.2,
+    "brdffit.fitting.starts": 3.3,
+    "brdffit.fitting.single": 3.4,
+    "brdffit.datadriven.fit": 3.4,  # the pca model's fit, which the single fit dispatches to
+    "brdffit.fitting.many": 3.5,
+    "brdffit.fitting.comparison": 3.5,
     "brdffit.uncertainty": 4,
     "brdffit.api": 5,
-    "brdffit.cluster": 5,
     "brdffit.views": 5,
     "brdffit.export": 5,
     "data_synth": 5,
     "brdffit.cli": 6,
 }
+#: The house's limits: modules a folder holds, lines a module holds, modules flat in ``brdffit/`` (``__init__``s count).
+MAX_FOLDER_MODULES = 15
+MAX_MODULE_LINES = 600
+MAX_FLAT_MODULES = 8
 
 
 def module_files() -> dict[str, Path]:
@@ -63,23 +77,13 @@ def layer(module: str) -> int:
     raise AssertionError(f"{module} is in no layer; add it to LAYERS")
 
 
-def _runtime_nodes(tree: ast.AST):
-    """Every node except those under ``if TYPE_CHECKING:``."""
-    for node in ast.iter_child_nodes(tree):
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            yield from (child for statement in node.orelse for child in [statement, *_runtime_nodes(statement)])
-            continue
-        yield node
-        yield from _runtime_nodes(node)
-
-
 def imports_of(module: str) -> set[str]:
-    """The project modules ``module`` imports at run time (a name imported from a package counts as the package,
-    unless it is a submodule)."""
+    """The project modules ``module`` imports, type-only ones included (a name imported from a package counts as the
+    package, unless it is a submodule)."""
     path = MODULES[module]
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found = set()
-    for node in _runtime_nodes(ast.parse(path.read_text())):
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -98,7 +102,17 @@ def imports_of(module: str) -> set[str]:
                 target = target.rpartition(".")[0]
             if target and target != module:
                 found.add(target)
-    return found
+    # Importing a module runs its packages' __init__ first: those that are not this module's own packages (which
+    # run before it) are imported too. A package that imports a module that imports the package again is a circle.
+    # brdffit's own __init__ imports nothing at run time but the version (every name loads on first use).
+    own = _packages(module) | {module, "brdffit"}
+    return found | {package for target in found for package in _packages(target) - own if package in MODULES}
+
+
+def _packages(module: str) -> set[str]:
+    """The packages ``module`` sits in (``brdffit.physics.models.ward``: ``brdffit``, …, ``brdffit.physics.models``)."""
+    parts = module.split(".")
+    return {".".join(parts[:n]) for n in range(1, len(parts))}
 
 
 GRAPH = {module: imports_of(module) for module in MODULES}
@@ -116,6 +130,33 @@ def test_no_import_circle():
     except graphlib.CycleError as error:
         pytest.fail(f"an import circle: {' → '.join(error.args[1])}")
     assert set(order) == set(MODULES)
+
+
+def test_the_solver_knows_nothing_of_brdfs():
+    """Levenberg-Marquardt is tested on NIST's problems on its own: it imports only the base modules."""
+    module = "brdffit.fitting.solver.levenberg_marquardt"
+    assert all(layer(target) == 0 for target in GRAPH[module]), sorted(GRAPH[module])
+
+
+def folders() -> dict[Path, list[Path]]:
+    """Each folder of the packages with the modules directly in it."""
+    found: dict[Path, list[Path]] = {}
+    for path in MODULES.values():
+        found.setdefault(path.parent, []).append(path)
+    return found
+
+
+@pytest.mark.parametrize("folder", sorted(folders()), ids=lambda folder: str(folder.relative_to(ROOT)))
+def test_a_folder_holds_few_modules(folder):
+    modules = folders()[folder]
+    limit = MAX_FLAT_MODULES if folder == ROOT / "brdffit" else MAX_FOLDER_MODULES
+    assert len(modules) <= limit, f"{folder.relative_to(ROOT)} holds {len(modules)} modules (at most {limit})"
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_a_module_is_short(module):
+    lines = len(MODULES[module].read_text().splitlines())
+    assert lines <= MAX_MODULE_LINES, f"{module} has {lines} lines (at most {MAX_MODULE_LINES})"
 
 
 def test_every_module_imports_in_a_fresh_interpreter_in_layer_order():

@@ -1,4 +1,4 @@
-"""Stored programs (``brdffit/_programs.py``): a jitted function's program is kept on disk under a signature
+"""Stored programs (``brdffit/_programs/stored.py``): a jitted function's program is kept on disk under a signature
 computed without tracing, read back by a later call (or process) instead of tracing, and never trusted when it
 is stale, unreadable or cannot be named."""
 
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from paths import EXAMPLE, ROOT
 
-from brdffit import _programs, cache
-from brdffit._jax import jit
+from brdffit._programs import cache, jit
+from brdffit._programs import stored as stored_programs
 
 
 def _scaled_sum(scale, x):
@@ -42,12 +42,12 @@ with_static = jit(_with_static, static_argnums=0)
 def programs(tmp_path, monkeypatch):
     """A cache of its own and an empty table of loaded programs; the folder of stored programs."""
     monkeypatch.setattr(cache, "_enabled", tmp_path)
-    monkeypatch.setattr(_programs, "_loaded", {})
+    monkeypatch.setattr(stored_programs, "_loaded", {})
     return tmp_path / "programs"
 
 
 def stored_files(folder):
-    return sorted(folder.glob(f"*{_programs.SUFFIX}"))
+    return sorted(folder.glob(f"*{stored_programs.SUFFIX}"))
 
 
 def test_a_program_is_stored_once_and_read_back_without_exporting(programs, monkeypatch):
@@ -58,7 +58,7 @@ def test_a_program_is_stored_once_and_read_back_without_exporting(programs, monk
     header = json.loads(stored.read_bytes().partition(b"\n")[0])
     assert header == {"named_tuples": []}
 
-    monkeypatch.setattr(_programs, "_loaded", {})  # a later process: nothing loaded yet
+    monkeypatch.setattr(stored_programs, "_loaded", {})  # a later process: nothing loaded yet
 
     def no_export(*args, **kwargs):
         raise AssertionError("a stored program was exported again")
@@ -78,29 +78,29 @@ def test_a_stale_or_broken_program_is_never_read(programs, monkeypatch):
     scaled_sum(np.asarray(2.0), x)
     (stored,) = stored_files(programs)
     # another brdffit source or JAX: another signature, another file
-    monkeypatch.setattr(_programs, "_loaded", {})
-    monkeypatch.setattr(_programs, "_environment", lambda: ["another source", "another jax"])
+    monkeypatch.setattr(stored_programs, "_loaded", {})
+    monkeypatch.setattr(stored_programs, "_environment", lambda: ["another source", "another jax"])
     assert float(scaled_sum(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
     assert len(stored_files(programs)) == 2
     # a file cut short (a crash while writing elsewhere): exported again, the answer still right
     monkeypatch.undo()
     monkeypatch.setattr(cache, "_enabled", programs.parent)
-    monkeypatch.setattr(_programs, "_loaded", {})
+    monkeypatch.setattr(stored_programs, "_loaded", {})
     stored.write_bytes(b'{"named_tuples": []}\n\x00\x01')
     assert float(scaled_sum(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
     assert stored.stat().st_size > 100
 
 
 def test_a_call_that_cannot_be_named_runs_as_a_plain_jit(programs):
-    assert _programs._signature("m.f", (Unnamed(), np.ones(3)), (0,)) is None
+    assert stored_programs._signature("m.f", (Unnamed(), np.ones(3)), (0,)) is None
     assert float(with_static(Unnamed(), np.ones(3))) == 6.0
-    assert _programs._signature("m.f", (1.5, [1, 2]), ()) is None  # not arrays
+    assert stored_programs._signature("m.f", (1.5, [1, 2]), ()) is None  # not arrays
     assert stored_files(programs) == []
 
 
 def test_no_program_is_stored_while_the_cache_is_off(tmp_path, monkeypatch):
     monkeypatch.setattr(cache, "_enabled", None)
-    monkeypatch.setattr(_programs, "_loaded", {})
+    monkeypatch.setattr(stored_programs, "_loaded", {})
     assert float(scaled_sum(np.asarray(1.0), np.zeros(3))) == 0.0
     assert not (tmp_path / "programs").exists()
 

@@ -9,7 +9,7 @@ import pytest
 from paths import ROOT
 
 import brdffit
-from brdffit.cache import CACHE_VARIABLE, default_cache_dir, enable_compilation_cache
+from brdffit._programs.cache import CACHE_VARIABLE, default_cache_dir, enable_compilation_cache
 
 
 def test_import_loads_no_jax():
@@ -63,7 +63,7 @@ LAMBERT_RESULT = (
 )
 def test_commands_that_compute_nothing_import_no_jax(argv, tmp_path):
     """Listing the models, describing or converting a file, an exact Mitsuba export (a mapping of parameters) and
-    the commands' help need no JAX (0.4–1 s to import): ``brdffit/_lazy.py``. The cache is turned on as a fit's is
+    the commands' help need no JAX (0.4–1 s to import): ``brdffit/_jax/lazy.py``. The cache is turned on as a fit's is
     (``cache.py`` then leaves it to JAX's environment variables)."""
     from paths import EXAMPLE, TAPE
 
@@ -89,7 +89,7 @@ def test_the_cache_set_before_jax_is_imported_is_jaxs(tmp_path):
     code = "\n".join(
         [
             "import sys",
-            "from brdffit.cache import enable_compilation_cache",
+            "from brdffit._programs.cache import enable_compilation_cache",
             f"enable_compilation_cache({folder!r})",
             "assert 'jax' not in sys.modules",
             "import jax",

@@ -47,7 +47,7 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
     ``--ridge``)."""
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
-    from ..physics.models import MODELS
+    from ..physics.models.registry import MODELS
 
     default_text = f" (default {default})" if default else " (default: the model of a result file given as --params)"
     command.add_argument("--model", default=default, metavar="NAME", help=f"one of: {', '.join(MODELS)}{default_text}")
@@ -151,8 +151,8 @@ def _new(name: str, given: dict[str, Any], flag: str) -> str:
 def add_comparison_options(command: argparse.ArgumentParser) -> None:
     """The options of a model comparison (``compare`` and ``report``): the samples, the models, the loss, the folds,
     the solver's settings, the seed and the reading options."""
-    from ..fitting.defaults import MAX_STEPS, N_STARTS
-    from ..fitting.losses import LOSSES
+    from ..fitting.objective.losses import LOSSES
+    from ..fitting.single.defaults import MAX_STEPS, N_STARTS
 
     command.add_argument("samples", metavar="SAMPLES", help="samples file: CSV, MERL, ALTA, ASTM")
     command.add_argument(
@@ -184,8 +184,8 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
 def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of :func:`brdffit.compare` that :func:`add_comparison_options` gave, checked (the
     models and the loss) before any work."""
-    from ..fitting.compare import default_specs
-    from ..fitting.losses import get_loss
+    from ..fitting.comparison.compare import default_specs
+    from ..fitting.objective.losses import get_loss
     from ..physics.models.specs import model_of_spec, split_specs
 
     get_loss(args.loss)

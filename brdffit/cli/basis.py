@@ -16,9 +16,9 @@ from .arguments import output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from ..data.library import DEFAULT_COMPONENTS
-    from ..physics.pca.directions import CANDIDATES, MAX_THETA
-    from ..physics.pca.mapping import MAPPINGS
+    from ..datadriven.build import DEFAULT_COMPONENTS
+    from ..datadriven.directions import CANDIDATES, MAX_THETA
+    from ..datadriven.mapping import MAPPINGS
 
     actions = parser.add_subparsers(title="actions", metavar="ACTION", required=True)
     build = actions.add_parser("build", help="learn a basis from a library of MERL tables", allow_abbrev=False)
@@ -80,9 +80,9 @@ def library_files(entries: list[str]) -> list[Path]:
 def _build(args: argparse.Namespace) -> int:
     from tqdm.auto import tqdm
 
-    from ..data.library import build_basis
     from ..data.merl import N_BINS
-    from ..physics.pca.basis import save_basis
+    from ..datadriven.basis import save_basis
+    from ..datadriven.build import build_basis
 
     files = library_files(args.library)
     if args.output == "-":
@@ -97,8 +97,8 @@ def _build(args: argparse.Namespace) -> int:
 
 
 def _directions(args: argparse.Namespace) -> int:
-    from ..physics.pca.basis import load_basis
-    from ..physics.pca.directions import choose_directions, write_directions
+    from ..datadriven.basis import load_basis
+    from ..datadriven.directions import choose_directions, write_directions
 
     output = output_file(args.output, "-o", [args.basis])
     basis = load_basis(args.basis)

@@ -18,8 +18,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cache import enable_compilation_cache
-    from ..fitting.compare import compare
+    from .._programs.cache import enable_compilation_cache
+    from ..fitting.comparison.compare import compare
 
     enable_compilation_cache()
     arguments = comparison_arguments(args)

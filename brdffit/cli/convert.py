@@ -53,9 +53,9 @@ def _tabulate(args: argparse.Namespace, output: Path) -> int:
             f"{output}: a MERL file tabulates a whole BRDF; convert a fit result (.json) to .binary, e.g."
             " brdffit convert fit.json out.binary"
         )
-    from ..cache import enable_compilation_cache
+    from .._programs.cache import enable_compilation_cache
     from ..export.merl import write_merl
-    from ..fitting.results import load_result
+    from ..fitting.single.result import load_result
 
     enable_compilation_cache()
     result = load_result(args.input)

@@ -33,9 +33,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cache import enable_compilation_cache
+    from .._programs.cache import enable_compilation_cache
     from ..export.targets import TARGETS, export, export_format
-    from ..fitting.results import load_result
+    from ..fitting.single.result import load_result
 
     kind = export_format(args.to, args.format)
     default = Path(args.result).stem + TARGETS[args.to].formats[kind]

@@ -26,8 +26,8 @@ from .cluster import cluster_client
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from ..fitting.defaults import MAX_STEPS, N_STARTS
-    from ..fitting.losses import LOSSES
+    from ..fitting.objective.losses import LOSSES
+    from ..fitting.single.defaults import MAX_STEPS, N_STARTS
 
     parser.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s): CSV, MERL, ALTA, ASTM")
     add_model_options(parser, "ward")
@@ -105,9 +105,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cache import enable_compilation_cache
-    from ..fitting.losses import get_loss
-    from ..physics.models import get_model
+    from .._programs.cache import enable_compilation_cache
+    from ..fitting.objective.losses import get_loss
+    from ..physics.models.registry import get_model
 
     enable_compilation_cache()
     model = get_model(args.model, **model_options(args))
@@ -199,7 +199,7 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None)
 def _check_holding(model, held: dict) -> None:
     """The names, values and bounds of ``--fix`` and ``--bounds`` checked against the model before any file is read
     (the channel count is checked with the samples)."""
-    from ..fitting.constraints import check_names
+    from ..fitting.single.constraints import check_names
 
     check_names(model, **held)
 
@@ -280,7 +280,7 @@ def output_paths(inputs: list[str], output: str | None, model, protected: list[s
 def default_name(path: str, model) -> str:
     """``<stem>.<model>[.<option>-<value>…].json`` with the options that differ from their defaults:
     ``tape.lafortune.lobes-2.json``, ``oak.cook-torrance.fresnel-conductor.json``, ``oak.ward.json``."""
-    from ..physics.models import chosen_options
+    from ..physics.models.registry import chosen_options
 
     options = "".join(f".{key}-{value}" for key, value in chosen_options(model).items())
     return f"{Path(path).stem}.{model.name}{options}.json"

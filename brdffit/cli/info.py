@@ -16,7 +16,7 @@ def run(args: argparse.Namespace) -> int:
     from ..data.summary import describe
 
     if is_basis_file(args.input):
-        from ..physics.pca.basis import load_basis
+        from ..datadriven.basis import load_basis
         from .basis import describe_basis
 
         basis = load_basis(args.input)

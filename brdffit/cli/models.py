@@ -13,7 +13,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
-    from ..physics.models import MODELS, get_model, model_option_names
+    from ..physics.models.registry import MODELS, get_model, model_option_names
 
     for name in MODELS:
         if name == "pca":  # its model needs a basis file: described, not built

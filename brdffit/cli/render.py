@@ -20,7 +20,7 @@ def run(args: argparse.Namespace) -> int:
     from ..checks import whole_number
     from ..errors import Argument, BrdfInputError
     from ..export.mitsuba_render import mitsuba, render_sphere
-    from ..fitting.results import load_result
+    from ..fitting.single.result import load_result
 
     whole_number("size", args.size, 16, 4096)
     whole_number("spp", args.spp, 1)

@@ -20,7 +20,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cache import enable_compilation_cache
+    from .._programs.cache import enable_compilation_cache
     from ..uncertainty.methods import check_options
     from ..views.report import check_report_path, report
 

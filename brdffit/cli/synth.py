@@ -57,7 +57,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from data_synth import GEOMETRIES, synthesize
 
-    from ..cache import enable_compilation_cache
+    from .._programs.cache import enable_compilation_cache
     from ..data.load import save_samples
 
     enable_compilation_cache()
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         if getattr(args, name) is not None
     }
     if args.directions is not None:  # the file gives the pairs; --seed still draws the noise
-        from ..physics.pca.directions import read_directions
+        from ..datadriven.directions import read_directions
 
         if given or args.geometry is not None:
             what = "geometry" if args.geometry is not None else next(iter(given)).replace("_", "-")
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 def _model_and_params(args: argparse.Namespace):
     """The model, its parameters and the channel names (None: named by their count), from ``--model`` and
     ``--params`` (a parameter dictionary, or a result file, whose channel names are kept)."""
-    from ..physics.models import model_for
+    from ..physics.models.registry import model_for
 
     params = json_argument(args.params, "--params")
     model_name, options, channels = args.model, model_options(args), None

@@ -62,8 +62,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._arrays import first_bad
 from .._files import write_text_atomic
+from .._jax import first_bad
 from ..errors import BrdfInputError
 from ..physics.geometry import (
     UNIT_LENGTH_TOLERANCE,

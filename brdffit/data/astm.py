@@ -43,8 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._arrays import first_bad
 from .._files import write_text_atomic
+from .._jax import first_bad
 from ..errors import BrdfInputError
 from ..physics.geometry import direction_to_spherical
 from .cells import TableChecks, named

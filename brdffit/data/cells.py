@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._arrays import first_bad
+from .._jax import first_bad
 from ..errors import BrdfInputError
 from ..physics.geometry import UNIT_LENGTH_TOLERANCE, normalised, spherical_to_direction
 

@@ -33,12 +33,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .._arrays import first_bad
 from .._files import atomic_path, reading
+from .._jax import first_bad
 from ..checks import choice, whole_number
 from ..checks import max_theta as checked_max_theta
 from ..errors import Argument, BrdfInputError
-from ..physics.table import HORIZON, N_BINS, SHAPE, bin_directions
+from ..physics.merl_table import HORIZON, N_BINS, SHAPE, bin_directions
 from .samples import Provenance, Samples
 
 HEADER_BYTES = 12

@@ -46,7 +46,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._arrays import first_bad
+from .._jax import first_bad
 from ..checks import choice
 from ..errors import Argument, BrdfInputError, not_allowed
 from .samples import Samples

@@ -12,11 +12,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.samples import Samples
-from ..fitting.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
-from ..fitting.fit import fit_one
-from ..fitting.results import FitResult
+from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
+from ..fitting.single.fit import fit_one
+from ..fitting.single.result import FitResult
 from ..physics.geometry import spherical_to_direction
-from ..physics.models import Model, get_model
+from ..physics.models.model import Model
+from ..physics.models.registry import get_model
 
 #: An approximation whose rmse exceeds this fraction of the BRDF's own rms misses its shape, and says so.
 POOR_SHAPE = 0.5

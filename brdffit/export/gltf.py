@@ -71,14 +71,15 @@ import numpy as np
 import optimistix as optx
 
 from .._files import write_text_atomic
-from .._jax import float64, jit
+from .._jax import float64
+from .._programs import jit
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
-from ..fitting.defaults import MAX_STEPS
-from ..fitting.losses import get_loss
-from ..fitting.results import FitResult, json_text
-from ..fitting.solve import TOLERANCES
-from ..fitting.solver import OnePassLevenbergMarquardt, ScaledTrustRegionDescent
+from ..fitting.objective.losses import get_loss
+from ..fitting.single.defaults import MAX_STEPS
+from ..fitting.single.result import FitResult, json_text
+from ..fitting.solver.compiled import TOLERANCES
+from ..fitting.solver.levenberg_marquardt import OnePassLevenbergMarquardt, ScaledTrustRegionDescent
 from ..physics.geometry import above_horizon, half_vector, mirror_direction, spherical_to_direction
 from ..physics.microfacet import ggx_distribution, ggx_lambda
 from ..views.render import display_rgb

@@ -35,8 +35,8 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult
-from ..physics.models import get_model
+from ..fitting.single.result import FitResult
+from ..physics.models.registry import get_model
 from ..physics.models.specs import spec_of
 
 if TYPE_CHECKING:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._files import atomic_path
 from ..errors import BrdfInputError
-from ..fitting.results import FitResult
+from ..fitting.single.result import FitResult
 from .mitsuba import MitsubaExport, mitsuba_bsdf
 
 #: What to install for :func:`render_sphere`.

@@ -1,6 +1,12 @@
-"""A fit: losses, the problem as padded arrays, data-driven starts, the Levenberg-Marquardt solver, the result.
+"""Fitting, one room per concept, each using only the rooms before it:
 
-``fit.py`` fits one dataset (:func:`~brdffit.fitting.fit.fit_one`), ``batch.py`` many
-(:func:`~brdffit.fitting.batch.fit_many`); the public ``brdffit.fit`` and ``fit_batch`` (``brdffit/api.py``)
-add the uncertainty on top. Imports ``physics`` and ``data``.
+``objective/``   what is minimised: losses, the data as padded arrays, residuals and normal equations
+``solver/``      Levenberg-Marquardt (independent of BRDFs), held parameters, the compiled solve of a fit
+``starts/``      data-driven starting points: variable projection over a grid, lobes one at a time
+``single/``      one fit, start → solve → caveats → result, and the result file
+``many/``        many datasets: buckets, batches, threads, a Dask cluster
+``comparison/``  which model suits the data: cross-validation, AIC, BIC
+
+The public ``brdffit.fit`` and ``fit_batch`` (``brdffit/api.py``) add the uncertainty on top. Imports ``physics``,
+``data`` and the data-driven model's fit (``brdffit/datadriven/fit.py``).
 """

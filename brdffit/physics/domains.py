@@ -25,8 +25,7 @@ from typing import final
 
 import numpy as np
 
-from .._arrays import namespace
-from .._lazy import jax, jnp
+from .._jax import jax, jnp, namespace
 
 #: Boundary values are moved this far inside the domain before inverting.
 BOUNDARY_OFFSET = 1e-12

@@ -4,10 +4,12 @@ from typing import Any
 
 import numpy as np
 
-from .._jax import jit
+from .._programs import jit
 from ..errors import BrdfInputError
 from .geometry import UNIT_LENGTH_TOLERANCE, normalised
-from .models import Model, Params, model_for
+from .models.model import Model
+from .models.params import Params
+from .models.registry import model_for
 
 
 def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any) -> np.ndarray:

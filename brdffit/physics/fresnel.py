@@ -10,7 +10,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .._lazy import jnp
+from .._jax import jnp
 from .domains import UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
 
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._arrays import first_bad, namespace
+from .._jax import first_bad, namespace
 from ..errors import BrdfInputError
 
 if TYPE_CHECKING:

@@ -25,8 +25,8 @@ with ``a = 1/(m tan θ)``:
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .._lazy import jnp
-from .._lazy import jsp_special as jsp
+from .._jax import jnp
+from .._jax import jsp_special as jsp
 from .geometry import tan2_from_cos
 
 #: Beyond this ``a = 1/(m tan θ)`` the Beckmann Λ is below 1e-270: it is taken as its value there (and its slope as

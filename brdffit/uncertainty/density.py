@@ -37,14 +37,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import built_once, float64, jit
+from .._jax import float64
+from .._programs import built_once, jit
 from ..data.samples import Samples
 from ..errors import BrdfInputError
-from ..fitting.constraints import constraints_for
-from ..fitting.losses import Loss, get_loss
-from ..fitting.problem import Problem, build_problem, cost, prepared, residuals_at, target_and_scale
-from ..fitting.results import FitResult
-from ..physics.models import Model, get_model
+from ..fitting.objective.losses import Loss, get_loss
+from ..fitting.objective.problem import Problem, build_problem, cost, prepared, residuals_at, target_and_scale
+from ..fitting.single.constraints import constraints_for
+from ..fitting.single.result import FitResult
+from ..physics.models.model import Model
+from ..physics.models.registry import get_model
 
 #: Name of the noise coordinate ``ln s`` (sampled only when the samples carry no sigma).
 LOG_NOISE = "ln_noise"

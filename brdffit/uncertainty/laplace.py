@@ -31,12 +31,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._jax import built_once, float64, jit
+from .._jax import float64
+from .._programs import built_once, jit
 from ..data.samples import Samples
-from ..fitting.losses import Loss
-from ..fitting.problem import Problem, chunks, residuals_at
-from ..fitting.results import FitResult, Uncertainty
-from ..physics.models import Model
+from ..fitting.objective.losses import Loss
+from ..fitting.objective.problem import Problem, chunks, residuals_at
+from ..fitting.single.result import FitResult, Uncertainty
+from ..physics.models.model import Model
 from . import findings as codes
 from .density import Density, compiled_chi_squared, counted_values, density_of, n_free
 from .findings import Finding

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..fitting.results import Uncertainty
-from ..physics.models import Model
+from ..fitting.single.result import Uncertainty
+from ..physics.models.model import Model
 from .findings import Finding
 
 #: The quantiles written for every parameter: the median and the central 68% and 95% intervals.

@@ -28,7 +28,7 @@ from .._jax import float64
 from ..checks import whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult, Uncertainty
+from ..fitting.single.result import FitResult, Uncertainty
 from . import findings as codes
 from .density import LOG_NOISE, Density, counted_values, density_of, log_probability_function, physical_draws
 from .findings import Finding

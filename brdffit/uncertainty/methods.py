@@ -9,7 +9,7 @@ import os
 from ..checks import choice
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult
+from ..fitting.single.result import FitResult
 from .laplace import laplace_uncertainty
 from .mcmc import MCMC, check_chain_path, sample_posterior
 

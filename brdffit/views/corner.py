@@ -7,8 +7,7 @@ import numpy as np
 
 from .._jax import float64
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult
-from ..fitting.table import value_with_error
+from ..fitting.single.result import FitResult, value_with_error
 from .figures import check_figure_path, save_figure
 
 #: Draws taken from the Laplace Gaussian when a result has no MCMC draws.
@@ -105,7 +104,7 @@ def _histogram(draws: np.ndarray, label: str, marked: float):
 
 @float64
 def _flat_parameters(result: FitResult) -> np.ndarray:
-    from ..physics.models import get_model
+    from ..physics.models.registry import get_model
 
     model = get_model(result.model, **result.model_options)
     return np.asarray(model.physical.from_params(model.dictionary.to_params(result.params)), dtype=float)

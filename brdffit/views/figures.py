@@ -14,7 +14,7 @@ from .._files import atomic_path
 from ..data.load import as_samples
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult
+from ..fitting.single.result import FitResult
 from ..physics.models.specs import spec_of
 
 #: File types figures are written as (matplotlib chooses the format by suffix).
@@ -39,7 +39,7 @@ FROM_A_COMPARISON = 4
 def as_list(results) -> list[FitResult]:
     """One result, several, or a :class:`~brdffit.Comparison` (its best fits: ``Comparison.best_results``), as a
     list."""
-    from ..fitting.compare import Comparison
+    from ..fitting.comparison.compare import Comparison
 
     if isinstance(results, Comparison):
         return results.best_results(FROM_A_COMPARISON)

@@ -15,7 +15,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from ..data.samples import Samples
-from ..fitting.results import FitResult
+from ..fitting.single.result import FitResult
 from .figures import FIT_STYLES, channel_colour, save_figure
 from .slices import (
     PLANE_TOLERANCE,

@@ -41,13 +41,15 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
-from .._arrays import namespace
-from .._jax import jit
+from .._jax import namespace
+from .._programs import jit
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..physics.geometry import to_half_difference
-from ..physics.models import Model, Params, model_for
+from ..physics.models.model import Model
+from ..physics.models.params import Params
+from ..physics.models.registry import model_for
 
 #: The view direction in world (= camera) coordinates: towards the viewer.
 VIEW = (0.0, 0.0, 1.0)

@@ -27,11 +27,10 @@ from ..data.load import as_samples
 from ..data.samples import Samples
 from ..data.summary import describe
 from ..errors import Argument, BrdfInputError, UncertaintyWarning
-from ..fitting.compare import Comparison, compare
-from ..fitting.defaults import MAX_STEPS, N_STARTS
-from ..fitting.results import FitResult
-from ..fitting.table import parameter_rows, value_with_error
-from ..physics.models import Model
+from ..fitting.comparison.compare import Comparison, compare
+from ..fitting.single.defaults import MAX_STEPS, N_STARTS
+from ..fitting.single.result import FitResult, parameter_rows, value_with_error
+from ..physics.models.model import Model
 from ..uncertainty.methods import check_options, with_uncertainty
 from . import plots
 from .figures import label

@@ -15,8 +15,8 @@ from matplotlib.figure import Figure
 from ..data.samples import Samples
 from ..data.summary import half_difference_angles
 from ..errors import Argument, BrdfInputError
-from ..fitting.losses import LOSSES
-from ..fitting.results import FitResult
+from ..fitting.objective.losses import LOSSES
+from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical
 from .figures import check_figure_path, checked_samples, evenly_spread, label, save_figure
 

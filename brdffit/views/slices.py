@@ -25,8 +25,8 @@ from matplotlib.lines import Line2D
 from ..checks import whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError, not_allowed
-from ..fitting.compare import Comparison
-from ..fitting.results import FitResult
+from ..fitting.comparison.compare import Comparison
+from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
 from .figures import (
     FIT_STYLES,

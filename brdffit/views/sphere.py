@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
-from ..fitting.results import FitResult
+from ..fitting.single.result import FitResult
 from .figures import as_list, check_figure_path, checked_samples, label, save_figure
 from .render import (
     LIGHTS,

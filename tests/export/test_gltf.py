@@ -24,7 +24,7 @@ from brdffit.export.gltf import (
     gltf_brdf,
     write_gltf,
 )
-from brdffit.fitting.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
+from brdffit.fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from brdffit.physics.microfacet import ggx_lambda
 
 #: Direction pairs (θi, φi, θo, φo in degrees) for golden values: near the mirror, off it, the exact mirror, grazing.

@@ -11,7 +11,7 @@ from reference_materials import flat_parameters
 import data_synth
 from brdffit import BrdfInputError, fit, fit_batch, load_result, save_samples
 from brdffit.cli import main
-from brdffit.fitting.buckets import default_strategy
+from brdffit.fitting.single.stacked import default_strategy
 
 WARD = [{"rho_d": [0.1, 0.2], "rho_s": [0.02 * k, 0.03], "alpha": 0.05 + 0.04 * k} for k in range(1, 5)]
 
@@ -60,7 +60,7 @@ def test_threads_change_no_result(model, options):
 
 def test_a_failed_batch_stops_the_others(monkeypatch):
     """The first batch fails: its error comes out, and the batches waiting for its programs never start."""
-    from brdffit.fitting import batch
+    from brdffit.fitting.many import batch
 
     calls = []
 
@@ -76,7 +76,7 @@ def test_a_failed_batch_stops_the_others(monkeypatch):
 
 def test_the_batches_running_at_once_hold_at_most_the_budget():
     """Units of 3, 2, 2, 5 (alone: beyond the budget) and 1 samples on 4 threads, a budget of 4."""
-    from brdffit.fitting.batch import SampleBudget
+    from brdffit.fitting.many.batch import SampleBudget
 
     budget, lock = SampleBudget(4), threading.Lock()
     held, largest = [0], []
@@ -204,7 +204,7 @@ def test_command_line_batch_output_errors(names, output, message, tmp_path, caps
 
 def test_batch_fits_are_deterministic_and_sizes_share_compiles():
     """Datasets of 3000 and 2900 samples share the 3072-row bucket: their solves reuse one compilation."""
-    from brdffit.fitting.problem import padded_size
+    from brdffit.fitting.objective.problem import padded_size
 
     assert padded_size(3000) == padded_size(2900) == 3072
     results = fit_batch(datasets(), "ward")
@@ -214,7 +214,7 @@ def test_batch_fits_are_deterministic_and_sizes_share_compiles():
 @pytest.mark.parametrize("count", [1, 19, 20, 39, 40, 41, 100])
 def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
     """20 datasets of which 19 fit in a batch go as 10 + 10 (one stacked shape, one compiled program), not 19 + 1."""
-    from brdffit.fitting.buckets import BATCH_SAMPLES, batches
+    from brdffit.fitting.single.stacked import BATCH_SAMPLES, batches
 
     size = BATCH_SAMPLES // 19  # 19 datasets to a batch
     cut = batches(list(range(count)), size)
@@ -229,7 +229,7 @@ def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
 def test_a_bucket_is_cut_for_its_threads(count, parts):
     """For ``parts`` threads: a multiple of ``parts`` batches (or one a dataset), even, and the ``parts`` that run
     at once hold at most BATCH_SAMPLES samples together."""
-    from brdffit.fitting.buckets import BATCH_SAMPLES, batches
+    from brdffit.fitting.single.stacked import BATCH_SAMPLES, batches
 
     size = BATCH_SAMPLES // 19  # 19 datasets at a time in all
     cut = batches(list(range(count)), size, parts)

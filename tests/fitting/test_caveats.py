@@ -10,7 +10,7 @@ from paths import TAPE
 
 import data_synth
 from brdffit import FitWarning, fit, get_model, load_samples
-from brdffit.fitting.caveats import caveats
+from brdffit.fitting.single.caveats import caveats
 
 WARD = CASES[1][2]
 
@@ -126,7 +126,7 @@ def test_the_screen_changes_no_verdict(name):
     random materials per model whose albedos straddle 1 (diffuse 0.02–0.9, specular 0.01–1.5, roughness
     0.002–1.5 or the equivalent exponents), the verdicts equal those of the fine grid alone; both verdicts
     occur, and the screen does skip some."""
-    from brdffit.fitting import caveats as module
+    from brdffit.fitting.single import caveats as module
 
     model = get_model(name)
     rng = np.random.default_rng(5)
@@ -163,7 +163,7 @@ def test_the_albedo_at_normal_incidence_is_exact_for_normalised_phong(n):
     ``rho_s h² (n+2)/24`` (9.8e-4 of rho_s at n = 10⁴); for the diffuse term, ``g = 2 rho_d cos θ sin θ``,
     ``rho_d h²/6``. The tolerance is 1.5× their sum, plus 1e-12. The (cos θo, φo) grid of the same size put its
     first row over the whole lobe: 0.700 instead of 0.9 for Blinn-Phong at n = 3,000."""
-    from brdffit.fitting import caveats as module
+    from brdffit.fitting.single import caveats as module
 
     model = get_model("phong")
     rho_d, rho_s = np.array([0.3, 0.05]), np.array([0.6, 0.9])
@@ -177,7 +177,7 @@ def test_the_albedo_at_normal_incidence_is_exact_for_normalised_phong(n):
 def test_the_bucket_screen_of_padded_stacks_equals_each_fit_screened_alone(oak):
     """Screening three fits stacked to four (the fourth a copy, its padding rows masked) gives each fit what it gets
     stacked alone: the same open incidences and lobe shares (1e-12: the same arithmetic, one row of a stack)."""
-    from brdffit.fitting.caveats import screen_bucket
+    from brdffit.fitting.single.caveats import screen_bucket
 
     samples = [oak.select(np.arange(k, oak.n_samples, 3)) for k in range(3)]
     model = get_model("ward")

@@ -11,8 +11,8 @@ from paths import TAPE
 
 import data_synth
 from brdffit import BrdfInputError, FitWarning, Samples, fit, load_samples
-from brdffit.fitting.compare import Comparison, compare, default_specs, load_comparison
-from brdffit.fitting.folds import make_folds
+from brdffit.fitting.comparison.compare import Comparison, compare, default_specs, load_comparison
+from brdffit.fitting.comparison.folds import make_folds
 
 #: A gonioreflectometer grid: 6 light zeniths × 18 view zeniths × 24 azimuths.
 GRID = data_synth.hemisphere_grid(6, 18, 24)
@@ -123,8 +123,8 @@ def test_a_fold_that_dominates_the_mean_or_did_not_converge_is_said():
     """The 3-lobe Lafortune fit of the oak example predicts the held-out light zeniths 39.4° and 84.4° ~3000× worse
     than the other folds (its third lobe fits the grazing light alone); the table says so rather than leaving a
     user to wonder why a model with the lower cost ranks last."""
-    from brdffit.fitting.compare import _fold_notes
-    from brdffit.fitting.folds import make_folds
+    from brdffit.fitting.comparison.compare import _fold_notes
+    from brdffit.fitting.comparison.folds import make_folds
 
     samples = data_synth.synthesize("lambert", {"rho_d": [0.3]}, *data_synth.hemisphere_grid(6, 6, 8))
     split = make_folds(samples, 3, seed=0)

@@ -176,7 +176,7 @@ def test_float32_is_refined_to_the_float64_optimum():
 def test_large_data_searches_starts_on_a_subsample(monkeypatch):
     """Above SEARCH_SAMPLES the starts are searched on a seeded subsample and the winner refined on all:
     the optimum is the same as searching on everything."""
-    starts_module = sys.modules["brdffit.fitting.starts"]
+    starts_module = sys.modules["brdffit.fitting.starts.grid"]
     model, options, params = CASES[1]
     samples = data_synth.synthesize(model, params, WI, WO, noise=0.01, seed=8, **options)
     everything = fit(samples, model)
@@ -206,7 +206,7 @@ def test_starts_that_reach_one_optimum_tie_and_the_first_wins():
     wins, so the reported step count does not depend on how a sum was rounded; a real improvement still wins."""
     from types import SimpleNamespace
 
-    from brdffit.fitting.solve import best
+    from brdffit.fitting.solver.compiled import best
 
     runs = [SimpleNamespace(cost=c, name=i) for i, c in enumerate([3.2728725253445340e-03, 3.2728725253445335e-03])]
     assert best(runs).name == 0

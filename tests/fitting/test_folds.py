@@ -5,7 +5,7 @@ import pytest
 
 import data_synth
 from brdffit import BrdfInputError
-from brdffit.fitting.folds import MIN_GROUPS, make_folds
+from brdffit.fitting.comparison.folds import MIN_GROUPS, make_folds
 
 LAMBERT = {"rho_d": [0.3]}
 

@@ -18,10 +18,10 @@ from scipy.optimize import nnls
 import brdffit
 import data_synth
 from brdffit import BrdfInputError, get_model
-from brdffit.fitting.constraints import check_names, constraints_for
-from brdffit.fitting.hold import Hold, on_bound, respected, slopes, theta_of, z_of
-from brdffit.fitting.starts import nonnegative_least_squares
-from brdffit.physics.models import Model
+from brdffit.fitting.single.constraints import check_names, constraints_for
+from brdffit.fitting.solver.hold import Hold, on_bound, respected, slopes, theta_of, z_of
+from brdffit.fitting.starts.grid import nonnegative_least_squares
+from brdffit.physics.models.model import Model
 
 DIELECTRIC = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.2, "eta": 1.5}
 SCHLICK = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.2, "f0": 0.04}

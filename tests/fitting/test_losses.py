@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from brdffit import BrdfInputError
-from brdffit.fitting.losses import LOSSES, RELATIVE_FLOOR, get_loss, residual_scale
+from brdffit.fitting.objective.losses import LOSSES, RELATIVE_FLOOR, get_loss, residual_scale
 
 F, Y, CI = 0.7, 0.5, math.cos(math.radians(60))
 BY_HAND = {

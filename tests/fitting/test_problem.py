@@ -12,8 +12,8 @@ from catalogue import CASES, parametrize_cases
 import data_synth
 from brdffit import get_model
 from brdffit.data.samples import Samples
-from brdffit.fitting.losses import LOSSES, get_loss
-from brdffit.fitting.problem import (
+from brdffit.fitting.objective.losses import LOSSES, get_loss
+from brdffit.fitting.objective.problem import (
     CHUNK,
     build_problem,
     chunk_size,
@@ -24,7 +24,7 @@ from brdffit.fitting.problem import (
     residuals,
 )
 
-problem_module = sys.modules["brdffit.fitting.problem"]
+problem_module = sys.modules["brdffit.fitting.objective.problem"]
 
 
 @pytest.mark.parametrize("n", [1, 7, 8, 15, 16, 17, 100, 1000, 10368, 65537, 1_458_000])
@@ -111,10 +111,11 @@ def test_residuals_follow_the_loss_formula_on_samples_and_vanish_on_padding(colu
 
 
 def test_brdffit_jit_agrees_with_jax_jit_at_top_level_and_inside_traces():
-    """``brdffit._jax.jit`` compiles with the CPU options on its own and falls back to plain ``jax.jit`` inside an
+    """``brdffit._programs.jit`` compiles with the CPU options on its own and falls back to plain ``jax.jit`` inside an
     outer ``jit`` or ``vmap`` (where JAX refuses compiler options). Another emitter may sum 1001 terms in another
     order, hence rtol 1e-12 (~1000 ulp of float64) rather than equality."""
-    from brdffit._jax import CPU_COMPILER_OPTIONS, compiler_options, jit
+    from brdffit._programs import jit
+    from brdffit._programs.jit import CPU_COMPILER_OPTIONS, compiler_options
 
     def f(x):
         return jnp.sum(jnp.log1p(x) * x[::-1])

@@ -30,7 +30,7 @@ from reference_materials import NGAN_FOLDER, SKIP_REASON, flat_parameters, ngan_
 import data_synth
 from brdffit import get_model, save_samples
 from brdffit.cli import main
-from brdffit.fitting.losses import get_loss
+from brdffit.fitting.objective.losses import get_loss
 
 pytestmark = pytest.mark.skipif(not NGAN_FOLDER.is_dir(), reason=SKIP_REASON)
 

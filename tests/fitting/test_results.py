@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 import data_synth
 from brdffit import FitWarning, UncertaintyWarning, evaluate, fit, get_model, laplace_uncertainty, load_result
 from brdffit.cli import main
-from brdffit.fitting.defaults import MAX_STEPS
-from brdffit.fitting.losses import get_loss
-from brdffit.fitting.outcome import result_of
-from brdffit.fitting.solve import Solved
+from brdffit.fitting.objective.losses import get_loss
+from brdffit.fitting.single.defaults import MAX_STEPS
+from brdffit.fitting.single.outcome import result_of
+from brdffit.fitting.solver.compiled import Solved
 
 GEOMETRY = data_synth.uniform_random(200, seed=4)
 

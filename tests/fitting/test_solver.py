@@ -10,10 +10,10 @@ import scipy.optimize
 
 import data_synth
 from brdffit import fit, get_model
-from brdffit.fitting.losses import get_loss
-from brdffit.fitting.problem import build_problem, residuals
-from brdffit.fitting.solver import MAX_COORDINATE_STEP, ScaledTrustRegionDescent
-from brdffit.fitting.starts import starting_points
+from brdffit.fitting.objective.losses import get_loss
+from brdffit.fitting.objective.problem import build_problem, residuals
+from brdffit.fitting.solver.levenberg_marquardt import MAX_COORDINATE_STEP, ScaledTrustRegionDescent
+from brdffit.fitting.starts.grid import starting_points
 
 LOG = get_loss("log")
 
@@ -105,7 +105,7 @@ def test_a_step_budget_stops_the_solve_as_max_steps_does(budget):
     solve) stops after that many steps with the result max_steps gives: the same parameters, cost, step count and
     outcome as a solve compiled with max_steps = budget; a budget the solve does not reach (50) changes nothing.
     The same steps on the same numbers; 1e-12 only allows two programs to order a sum differently."""
-    from brdffit.fitting.solve import solved_from
+    from brdffit.fitting.solver.compiled import solved_from
 
     model = get_model("cook-torrance")
     wi, wo = data_synth.uniform_random(2000, seed=4)

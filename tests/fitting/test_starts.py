@@ -7,9 +7,9 @@ import scipy.optimize
 
 import data_synth
 from brdffit import get_model
-from brdffit.fitting.losses import get_loss
-from brdffit.fitting.problem import build_problems
-from brdffit.fitting.starts import grid_starts, nonnegative_least_squares
+from brdffit.fitting.objective.losses import get_loss
+from brdffit.fitting.objective.problem import build_problems
+from brdffit.fitting.starts.grid import grid_starts, nonnegative_least_squares
 
 
 @pytest.mark.parametrize("n_basis", [1, 2, 3, 5])

@@ -9,10 +9,10 @@ is exact and a mixture outside it is reproduced exactly.
 import numpy as np
 import pytest
 
-from brdffit.data.library import build_basis
 from brdffit.data.merl import HORIZON, N_BINS, bin_directions, write_merl_table
+from brdffit.datadriven.basis import save_basis
+from brdffit.datadriven.build import build_basis
 from brdffit.physics.evaluate import evaluate
-from brdffit.physics.pca.basis import save_basis
 
 
 def ward_table(params: dict) -> np.ndarray:

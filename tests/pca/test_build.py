@@ -4,11 +4,11 @@ the basis file and its errors."""
 import numpy as np
 import pytest
 
-from brdffit.data.library import build_basis
 from brdffit.data.merl import SCALES, read_merl, stored_planes
+from brdffit.datadriven.basis import bin_cosine_weights, horizon_filled, load_basis, save_basis
+from brdffit.datadriven.build import build_basis
+from brdffit.datadriven.mapping import mapped
 from brdffit.errors import BrdfInputError
-from brdffit.physics.pca.basis import bin_cosine_weights, horizon_filled, load_basis, save_basis
-from brdffit.physics.pca.mapping import mapped
 
 
 def test_a_rank_two_library_has_two_components(linear_library):

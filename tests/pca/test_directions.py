@@ -4,9 +4,8 @@ import numpy as np
 import pytest
 
 from brdffit.data.merl import bin_directions
-from brdffit.errors import BrdfInputError
-from brdffit.physics.pca.basis import load_basis
-from brdffit.physics.pca.directions import (
+from brdffit.datadriven.basis import load_basis
+from brdffit.datadriven.directions import (
     MIN_SEPARATION,
     bin_angles_degrees,
     condition_number,
@@ -14,6 +13,7 @@ from brdffit.physics.pca.directions import (
     select_bins,
     write_directions,
 )
+from brdffit.errors import BrdfInputError
 
 
 def test_selection_is_seeded_distinct_and_within_limits(basis_file):

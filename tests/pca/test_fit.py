@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 import brdffit
-from brdffit.data.library import build_basis
 from brdffit.data.merl import bin_directions, read_merl
 from brdffit.data.samples import Samples
+from brdffit.datadriven.basis import load_basis, save_basis
+from brdffit.datadriven.build import build_basis
+from brdffit.datadriven.directions import select_bins
 from brdffit.errors import BrdfInputError, FitWarning
-from brdffit.physics.pca.basis import load_basis, save_basis
-from brdffit.physics.pca.directions import select_bins
 
 from .conftest import ward_table
 
@@ -80,7 +80,7 @@ def test_the_curvature_holds_the_ridge(basis_file, library):
     """Laplace's JᵀJ is the data's plus ``prior_weight·I`` (the prior's residuals are linear, so exactly; 1e-9 for
     the data part summed in another order); the cost the sampler sees holds the prior, and the prior's terms count
     as values that share the noise."""
-    from brdffit.physics.models import get_model
+    from brdffit.physics.models.registry import get_model
     from brdffit.uncertainty.density import compiled_chi_squared, counted_values, density_of
     from brdffit.uncertainty.laplace import gauss_newton_matrix
 

@@ -7,7 +7,7 @@ import pytest
 
 import brdffit
 from brdffit.errors import BrdfInputError
-from brdffit.physics.models import get_model
+from brdffit.physics.models.registry import get_model
 from tests.conftest import random_directions
 
 
@@ -59,8 +59,8 @@ def test_mean_material_at_zero_coefficients(model, library):
     """Coefficients 0 give the library's mean in the mapped space: at a bin, exactly the map's inverse of the
     mean there (the blend has one corner)."""
     from brdffit.data.merl import bin_directions
-    from brdffit.physics.pca.basis import bin_cosine_weights
-    from brdffit.physics.pca.mapping import unmapped
+    from brdffit.datadriven.basis import bin_cosine_weights
+    from brdffit.datadriven.mapping import unmapped
 
     wi, wo = bin_directions()
     chosen = np.array([30 * 16200 + 20 * 180 + 40, 10 * 16200 + 45 * 180 + 90])
@@ -149,7 +149,7 @@ def test_evaluated_in_a_float32_process(basis_file):
 
     code = f"""
 import jax, jax.numpy as jnp, numpy as np
-from brdffit.physics.models import get_model
+from brdffit.physics.models.registry import get_model
 model = get_model("pca", basis={str(basis_file)!r})
 rng = np.random.default_rng(0)
 v = rng.normal(size=(200_000, 3)); v[:, 2] = np.abs(v[:, 2]); v /= np.linalg.norm(v, axis=1, keepdims=True)

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from brdffit.data.merl import SHAPE, bin_directions
+from brdffit.datadriven.mapping import EPSILON, MAPPINGS, mapped, unmapped
+from brdffit.datadriven.tabulation import interpolation, table_coordinates
 from brdffit.physics.geometry import from_half_difference
-from brdffit.physics.pca.mapping import EPSILON, MAPPINGS, mapped, unmapped
-from brdffit.physics.pca.tabulation import interpolation, table_coordinates
-from brdffit.physics.table import bin_angles
+from brdffit.physics.merl_table import bin_angles
 from tests.conftest import random_directions
 
 

@@ -12,7 +12,7 @@ from numpy.polynomial.legendre import leggauss
 
 import brdffit
 from brdffit import BrdfInputError, evaluate, get_model
-from brdffit.fitting.basis import jacobian_coefficients, value_and_basis
+from brdffit.fitting.objective.jacobian import jacobian_coefficients, value_and_basis
 
 # -------------------------------------------------------------------- physics
 

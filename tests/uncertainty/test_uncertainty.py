@@ -20,7 +20,7 @@ from brdffit import (
     laplace_uncertainty,
     sample_posterior,
 )
-from brdffit.fitting.problem import residuals_at
+from brdffit.fitting.objective.problem import residuals_at
 from brdffit.physics.domains import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, GreaterThan, Interval
 from brdffit.uncertainty.density import density_of, log_probability_function
 from brdffit.uncertainty.laplace import gauss_newton_matrix, inverse_with_null_space

@@ -8,7 +8,7 @@ from paths import EXAMPLE, EXAMPLE_PARAMS
 
 import data_synth
 from brdffit import BrdfInputError, load_samples
-from brdffit.fitting.results import FitResult
+from brdffit.fitting.single.result import FitResult
 from brdffit.views.sphere import sphere
 
 WARD = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}

@@ -17,7 +17,7 @@ then GGX's ``α``. With ``ks = 1`` and ``F = 1`` the lobe's directional albedo i
 from dataclasses import dataclass
 from typing import final
 
-from ..._lazy import jnp
+from ..._jax import jnp
 from ...checks import choice
 from ..domains import ALBEDO, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL

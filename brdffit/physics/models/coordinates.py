@@ -20,7 +20,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, final
 
-from ..._arrays import namespace
+from ..._jax import namespace
 from ..domains import ALBEDO, Domain
 from .lobe import BoundedShapeCoordinates, ShapeCoordinates
 from .params import Params

@@ -19,8 +19,7 @@ from typing import final
 
 import numpy as np
 
-from ..._arrays import namespace
-from ..._lazy import jnp
+from ..._jax import jnp, namespace
 from ...checks import whole_number
 from ...errors import BrdfInputError
 from ..domains import EXPONENT, Domain, Interval, Positive

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, final
 
 import numpy as np
 
-from ..._arrays import namespace
+from ..._jax import namespace
 from ...errors import BrdfInputError
 from ..domains import Domain, MappedDomain
 

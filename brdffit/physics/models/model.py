@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from ..._lazy import jax, jnp
+from ..._jax import jax, jnp
 from ..geometry import above_horizon
 from .coordinates import PhysicalCoordinates, SamplingCoordinates, UnconstrainedCoordinates
 from .dictionary import ParameterDictionary

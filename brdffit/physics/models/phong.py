@@ -13,7 +13,7 @@ normalisation of Akenine-Möller et al., *Real-Time Rendering*::
 from dataclasses import dataclass
 from typing import final
 
-from ..._lazy import jnp
+from ..._jax import jnp
 from ..domains import ALBEDO, EXPONENT
 from ..geometry import half_vector, mirror_direction, safe_power
 from .grids import EXPONENT_GRID

@@ -10,7 +10,8 @@ import os
 from typing import Any
 
 from ...errors import BrdfInputError
-from . import FILE_OPTIONS, MODELS, RECORDED_OPTIONS, Model, get_model, model_option_defaults, model_option_names
+from .model import Model
+from .registry import FILE_OPTIONS, MODELS, RECORDED_OPTIONS, get_model, model_option_defaults, model_option_names
 
 
 def spec_of(name: str, options: dict[str, Any]) -> str:

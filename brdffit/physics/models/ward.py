@@ -12,7 +12,7 @@ Ward reflectance model", JGT 2006 (``ward-duer``)::
 from dataclasses import dataclass
 from typing import final
 
-from ..._lazy import jnp
+from ..._jax import jnp
 from ..domains import ALBEDO, ROUGHNESS
 from ..geometry import half_vector, tan2_from_cos
 from .grids import ROUGHNESS_GRID

@@ -1,0 +1,119 @@
+"""One ``jit`` for brdffit's compiled functions: float64, the CPU compiler options that suit them, stored programs.
+
+Every function brdffit compiles goes through :func:`jit`: it traces and runs in float64 (``_jax.precision``),
+compiles with :data:`CPU_COMPILER_OPTIONS` on a CPU, runs the program stored for its signature while the compilation
+cache is on (``stored.py``), and lets only one thread compile each signature (``first_calls.py``).
+:func:`built_once` caches the builders of compiled functions (a solver for a model and a loss) across threads.
+"""
+
+import functools
+import threading
+from collections.abc import Callable
+
+from .._jax import float64, jax
+from . import stored
+from .first_calls import FirstCalls
+
+#: XLA options for the CPU backend, measured on the MERL-size Cook-Torrance solver (2-core Xeon, jax 0.10.2):
+#: XLA's newer CPU "fusion emitters" (the default) compile it in 1.3–1.4 s, the classic loop emitters in 0.5–0.6 s,
+#: and the classic code runs faster. Turning YNNPACK's fusions (of the pass's reductions and dots) off adds ~0.2 s
+#: of compile time and saves ~25% of every pass (5 passes: 0.70 s → 0.55 s). XNNPACK rewrites only add compile time.
+CPU_COMPILER_OPTIONS = {
+    "xla_cpu_use_fusion_emitters": False,
+    "xla_cpu_use_xnnpack": False,
+    "xla_cpu_experimental_ynn_fusion_type": "",
+}
+
+
+def built_once(builder: Callable) -> Callable:
+    """``functools.cache`` for a function that builds a compiled function (a solver for a model and loss), safe
+    across threads: threads that ask for the same one at once (``fit_batch``'s batches) get one, where two would
+    be two compiled functions, each tracing its programs."""
+    cached = functools.cache(builder)
+    lock = threading.Lock()
+
+    @functools.wraps(builder)
+    def once(*args, **kwargs):
+        with lock:
+            return cached(*args, **kwargs)
+
+    return once
+
+
+@functools.cache
+def compiler_options() -> dict | None:
+    """:data:`CPU_COMPILER_OPTIONS` when JAX's default backend is the CPU, else None (XLA's defaults)."""
+    return CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
+
+
+def jit(fun=None, *, name: str | None = None, **jit_arguments):
+    """``jax.jit`` in :func:`float64` with :func:`compiler_options`, chosen at the first call (importing does no work).
+
+    Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
+    options only for a program compiled on its own, so inside a traced function (``jit`` or ``vmap`` of a
+    caller) the plain ``jax.jit`` is used and the outer program's options apply.
+
+    While the compilation cache is on, a call at the top level runs the program stored for its signature
+    (``stored.py``): a later process then neither traces nor lowers it. A module-level function is stored
+    under its module and name; a closure only under the ``name`` its caller gives, which must name everything
+    it closes over (``solve[model, loss, max_steps, dtype]``).
+    """
+    if fun is None:
+        return functools.partial(jit, name=name, **jit_arguments)
+    if name is None and "<" not in getattr(fun, "__qualname__", "<"):  # not a lambda, a closure or a partial
+        name = f"{fun.__module__}.{fun.__qualname__}"
+    static_argnums = jit_arguments.get("static_argnums", ())
+    static_argnums = (static_argnums,) if isinstance(static_argnums, int) else tuple(static_argnums)
+
+    @functools.cache
+    def plain():
+        return jax.jit(fun, **jit_arguments)
+
+    @functools.cache
+    def top_level():
+        return jax.jit(fun, compiler_options=compiler_options(), **jit_arguments)
+
+    def stored_for(args, kwargs):
+        """The stored program for a top-level call, or None (``stored.stored_program``)."""
+        if name is None or kwargs:
+            return None
+        return stored.stored_program(name, top_level(), args, static_argnums, compiler_options())
+
+    first_calls = FirstCalls()
+
+    @functools.wraps(fun)
+    def call(*args, **kwargs):
+        with float64():
+            if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
+                return plain()(*args, **kwargs)
+            program = stored_for(args, kwargs)
+            if program is not None:
+                return program(*stored.dynamic_arguments(args, static_argnums))
+            key = _call_key(args, kwargs, static_argnums)
+            return first_calls.run(key, lambda: top_level()(*args, **kwargs))
+
+    def precompile(*args, **kwargs) -> None:
+        """Trace and compile for the shapes of ``args`` (arrays or ``jax.ShapeDtypeStruct``), without running.
+
+        A later call with arrays of those shapes reuses JAX's caches; so this
+        can run in another thread while the caller does other work.
+        """
+        with float64():
+            program = stored_for(args, kwargs)
+            if program is not None:
+                shapes = stored.dynamic_arguments(args, static_argnums)
+                program.lower(*shapes).compile()
+            else:
+                key = _call_key(args, kwargs, static_argnums)
+                first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile())
+
+    call.precompile = precompile
+    return call
+
+
+def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tuple:
+    """What a call's compiled program depends on: its static arguments, its tree, each array's shape and dtype (an
+    array and a ``jax.ShapeDtypeStruct`` of its shape give the same key)."""
+    leaves, tree = jax.tree.flatten((stored.dynamic_arguments(args, static_argnums), kwargs))
+    statics = stored.static_arguments(args, static_argnums)
+    return statics, tree, tuple(stored.array_description(leaf) for leaf in leaves)

@@ -1,0 +1,152 @@
+"""The work of :func:`brdffit.fit_batch`: here, or spread over a Dask cluster when one machine is not enough.
+
+:func:`fit_here` fits a list of datasets in this process (``batch.py``: one bucket of datasets whose problems
+stack at a time) and passes each result through a function on request (``brdffit.fit_batch``: its uncertainty).
+:func:`fit_on_cluster` cuts the same work into *chunks* and gives each to a worker of a
+``dask.distributed.Client`` as one task, which calls :func:`fit_here` there:
+
+* datasets in memory are cut within the units :func:`fit_here` would cut them into (the batches of one bucket,
+  ``buckets.work_units``), at most :data:`PER_TASK` at a time and fewer where that gives every worker
+  four tasks; a bucket's programs treat each dataset alone, so the results are this process's (to 1e-12, the
+  tests' tolerance: a program for another number of datasets may round differently);
+* datasets given as paths are read on the workers, runs of consecutive paths: the client never holds the data;
+* each worker keeps its compiled programs (JAX's persistent compilation cache, switched on in the task), so a
+  worker pays the compilation of a bucket's programs once;
+* a worker lost mid-run has its tasks re-run on another (Dask's scheduler does this), and the results come back
+  in the order of the inputs.
+
+``dask[distributed]`` is the ``cluster`` extra (``pip install 'brdffit[cluster]'``).
+"""
+
+import os
+import warnings
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+from ...data.load import load_samples
+from ...data.samples import Samples
+from ...errors import BrdfInputError
+from ...physics.models.model import Model
+from ..single.fit import checked
+from ..single.result import FitResult
+from .batch import fit_many, progress_bar, starts_per_dataset
+from .buckets import work_units
+
+#: The most datasets one task fits: a few seconds of work for small ones, so that a lost worker costs little and
+#: the progress bar moves, and enough that a task's programs stack many datasets.
+PER_TASK = 256
+
+
+def fit_here(
+    samples: Sequence[Samples],
+    model,
+    loss: str,
+    *,
+    then: Callable[[FitResult, Samples], FitResult] | None = None,
+    **fit_options: Any,
+) -> list[FitResult]:
+    """Each of ``samples`` fitted in this process (``fit_many``), each result then passed through ``then`` with the
+    samples it was fitted to (``brdffit.fit_batch`` adds the uncertainty so: a function a worker can unpickle)."""
+    results = fit_many(samples, model, loss, **fit_options)
+    if then is None:
+        return results
+    max_theta = fit_options.get("max_theta")
+    return [then(result, one.within(max_theta)) for result, one in zip(results, samples, strict=True)]
+
+
+def fit_on_cluster(
+    client,
+    items: Sequence[Samples | str | os.PathLike],
+    model: Model,
+    loss: str,
+    *,
+    read_options: dict[str, Any] | None = None,
+    start: dict[str, Any] | Sequence[dict[str, Any] | None] | None = None,
+    progress: bool | None = None,
+    **options: Any,
+) -> list[FitResult]:
+    """The results of :func:`fit_here` for ``items`` (datasets, or paths that the workers read with
+    :func:`brdffit.load_samples` and ``read_options``), computed on ``client``'s cluster, in the order of ``items``.
+
+    ``model``: a built model. ``start``: one parameter dictionary for all, one per item, or None. ``options``:
+    those of :func:`fit_here` but ``progress``, which is the client's bar here.
+    """
+    from distributed import as_completed
+
+    items = list(items)
+    starts = starts_per_dataset(start, len(items))
+    if options.get("threads") is None:  # the workers are the parallelism
+        options = {**options, "threads": 1}
+    workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
+    chunks = _chunks(items, starts, model, loss, options, workers)
+    futures = {
+        client.submit(
+            _fit_chunk,
+            [items[i] for i in chunk],
+            [starts[i] for i in chunk],
+            model,
+            loss,
+            read_options or {},
+            options,
+            pure=False,
+            key=f"brdffit-fit-{index}-{os.urandom(4).hex()}",
+        ): chunk
+        for index, chunk in enumerate(chunks)
+    }
+    results: list[FitResult | None] = [None] * len(items)
+    bar = progress_bar(len(items), progress)
+    try:
+        for future in as_completed(futures):
+            chunk, fitted = futures[future], future.result()
+            if isinstance(fitted, _BadInput):
+                raise BrdfInputError(fitted.message)
+            for index, result in zip(chunk, fitted, strict=True):
+                results[index] = result
+            bar.update(len(chunk))
+    finally:
+        bar.close()
+        client.cancel(list(futures))
+    return results
+
+
+def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, workers: int) -> list[list[int]]:
+    """The indices of ``items`` each task fits, in runs of at most :data:`PER_TASK` and small enough that every
+    worker gets four tasks where there are enough items: datasets in memory cut within ``fit_many``'s own work
+    units (one bucket's batch, whose programs stack the datasets and treat each alone), paths in runs of
+    consecutive ones."""
+    in_memory = [index for index, item in enumerate(items) if isinstance(item, Samples)]
+    checks = {name: options.get(name) for name in ("max_theta", "fixed", "bounds")}
+    dtype = options.get("dtype", "float64")
+    kept = [
+        checked(items[index], model, loss, checks["max_theta"], dtype, fixed=checks["fixed"], bounds=checks["bounds"])[
+            2
+        ]
+        for index in in_memory
+    ]
+    units = [
+        [in_memory[position] for position in unit.indices]
+        for unit in work_units(model, kept, [starts[index] is not None for index in in_memory])
+    ]
+    paths = [index for index, item in enumerate(items) if not isinstance(item, Samples)]
+    size = max(1, min(PER_TASK, -(-len(items) // (4 * workers))))
+    return [run[i : i + size] for run in [*units, paths] for i in range(0, len(run), size)]
+
+
+def _fit_chunk(items: list, starts: list, model, loss: str, read_options: dict, options: dict):
+    """One task, on a worker: read what is a path, fit everything (warnings are the results' own; the client
+    raises them), with the worker's compiled programs kept on disk. Bad input comes back as its one-line message
+    (:class:`_BadInput`), for the client to raise: a task that raised would have the worker log a traceback."""
+    from ..._programs.cache import enable_compilation_cache
+
+    enable_compilation_cache()
+    try:
+        samples = [item if isinstance(item, Samples) else load_samples(item, **read_options) for item in items]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return fit_here(samples, model, loss, start=starts, progress=False, **options)
+    except BrdfInputError as error:
+        return _BadInput(str(error))
+
+
+class _BadInput(NamedTuple):
+    message: str

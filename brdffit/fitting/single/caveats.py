@@ -1,0 +1,312 @@
+"""What a user must know before trusting a fit, one line each: the result's ``fit.warnings``.
+
+* the samples as read are not reciprocal (``data/reciprocity.py``): their quantity is probably wrong;
+* a lobe contributes less than :data:`DEAD_SHARE` of the model at every sample: it fits nothing;
+* a parameter lies beyond its plausible range (``physics/domains.py``: a roughness above 2, an exponent
+  above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1), or a bounded one (Schlick's ``f0``)
+  ends on an end of its domain: the optimum is against the bound;
+* the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives (one line
+  per channel);
+* a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
+"""
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..._jax import float64
+from ..._programs import jit
+from ...data.reciprocity import reciprocity
+from ...data.samples import Samples
+from ...physics.domains import UnitInterval
+from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
+from ...physics.models.model import Model
+from ...physics.models.params import Params
+from ..objective.problem import padded_size, stacked_directions
+
+#: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
+DEAD_SHARE = 1e-3
+#: A parameter of a bounded domain this close to one of its ends ended against it.
+EDGE = 1e-6
+#: Incidence zeniths (degrees) at which the directional albedo is checked.
+ALBEDO_INCIDENCE = (0.0, 30.0, 60.0, 80.0)
+#: A directional albedo counts as above 1 beyond this (quadrature rounds), and only where two grids agree.
+ALBEDO_LIMIT = 1.005
+#: The screening grid's n (n × 2n viewing directions per incidence), and the bound (``_screen_bound``) below which
+#: the fine grid is not evaluated: 5% under the limit, for the bound's own guesswork.
+SCREEN_GRID = 64
+SCREEN_BELOW = 0.95
+#: The screen's allowance for a lobe its grid samples too sparsely: the BRDF's peak over this many cells.
+SCREEN_PEAK_CELLS = 16
+
+
+@float64
+def caveats(
+    model: Model,
+    samples: Samples,
+    params: Params,
+    cost: float | None = None,
+    fewer_lobes_cost: float | None = None,
+    *,
+    screened: "Screened | None" = None,
+) -> list[str]:
+    """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
+    ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
+    ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
+    found = _not_reciprocal(samples)
+    if screened is None:
+        (screened,) = screen_bucket(model, [params], [samples], 1)
+    found += _dead_lobes(model, params, screened.lobe_shares)
+    found += _implausible(model, params, samples.channels)
+    found += _albedo_above_one(model, params, samples.channels, screened.albedo_open)
+    if cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9):
+        found.append(
+            f"the fit ends at cost {cost:.6g}, worse than the {fewer_lobes_cost:.6g} of {model.n_lobes - 1} lobe(s):"
+            " it stopped in a local minimum"
+        )
+    return found
+
+
+def lobe_name(model: Model, params: Params, k: int) -> str:
+    """How a message names lobe ``k``: ``lobe 2 (cxy +0.577, cz 0.577, n 1.8e+03)``, or the specular lobe."""
+    if not model.lobes_as_list:
+        return f"the specular lobe ({model.specular_name})"
+    shape = ", ".join(f"{name} {float(params.shape[name][k]):.3g}" for name in model.lobe.names)
+    return f"lobe {k + 1} ({shape})"
+
+
+def _not_reciprocal(samples: Samples) -> list[str]:
+    found = reciprocity(samples)
+    if found is None or found.reciprocal:
+        return []
+    return [
+        f"the samples as read ({found.in_force}) are not reciprocal: over {found.pairs} reciprocal pairs the median"
+        f" of f(a→b)/f(b→a) is {found.as_read:.3g}; read as {found.best} it is {found.ratios[found.best]:.3g}"
+        f": read them with --quantity {found.best} (quantity='{found.best}' in Python)"
+    ]
+
+
+def _dead_lobes(model: Model, params: Params, shares: np.ndarray) -> list[str]:
+    """The lobes whose largest ``shares`` (K,) of the model stay under :data:`DEAD_SHARE`."""
+    return [
+        f"{lobe_name(model, params, k)} contributes less than {DEAD_SHARE:.1%} of the model at every sample"
+        f" (at most {share:.2g}): it fits nothing; fit with one lobe less"
+        for k, share in enumerate(shares)
+        if share < DEAD_SHARE
+    ]
+
+
+@jit(static_argnums=0)
+def _lobe_shares(model: Model, params: Params, wi, wo, real):
+    """Each lobe's largest share of the model over the samples (those ``real``, (N,) bool) and channels, (K,)."""
+    if not model.n_lobes:
+        return jnp.zeros(0)
+    visible, wi, wo = above_horizon(wi, wo)
+    contributions = model.lobe_values(params.shape, wi, wo)[:, :, None] * params.specular[:, None, :]  # (K, N, C)
+    total = params.diffuse / jnp.pi + contributions.sum(axis=0)
+    share = contributions / jnp.maximum(total, jnp.finfo(total.dtype).tiny)
+    return (share * (visible & real)[None, :, None]).max(axis=(1, 2))
+
+
+def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
+    values = np.asarray(model.physical.from_params(params))
+    found = []
+    for label, value, domain in zip(
+        model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True
+    ):
+        low, high = domain.plausible
+        if isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE:
+            found.append(
+                f"{label} = {value:.10g} lies on an end of its domain {domain.text}: the fit ended against the bound,"
+                " where the model may not describe the data"
+            )
+        elif value > high:
+            found.append(f"{label} = {value:.4g} is beyond its plausible range (≤ {high:g})")
+        elif value < low:
+            found.append(f"{label} = {value:.10g} is below its plausible range (≥ {low:.10g})")
+    return found
+
+
+def _albedo_above_one(
+    model: Model, params: Params, channels: tuple[str, ...], open_incidences: tuple[float, ...] | None = None
+) -> list[str]:
+    """The directional albedo ``∫ f cos θo dωo`` by midpoint quadrature in ``(cos θo, φo)``; a value above
+    :data:`ALBEDO_LIMIT` counts only where the grid's even points alone (a grid half as fine) agree within 1%,
+    i.e. where the grid resolves the lobe.
+
+    The fine grid (256 × 512 viewing directions per incidence; half that for an isotropic model) is evaluated only
+    at the incidences where a screen (:func:`_screen_bound`, 64 × 128 directions) cannot rule an albedo above the
+    limit out; ``open_incidences``: those incidences, when :func:`screen_bucket` screened many fits at once."""
+    if open_incidences is None:
+        screened = _screen_bound(model, params) if _screenable(model) else None
+        open_incidences = ALBEDO_INCIDENCE if screened is None else _open_incidences(np.asarray(screened))
+    if not open_incidences:
+        return []
+    fine, coarse = (np.asarray(estimate) for estimate in _albedo_estimates(model, params, 256, open_incidences))
+    above = (fine > ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)  # (incidences, C)
+    found = []
+    for c, channel in enumerate(channels):
+        where = [f"{fine[i, c]:.3g} at θi = {theta:g}°" for i, theta in enumerate(open_incidences) if above[i, c]]
+        if where:
+            found.append(
+                f"the directional albedo in channel {channel} exceeds 1: {', '.join(where)}"
+                " (the model reflects more light than it receives)"
+            )
+    return found
+
+
+class Screened(NamedTuple):
+    """What :func:`screen_bucket` found for one fit: the incidences its albedo screen left open (:func:`_screen_bound`;
+    none: cleared; all of them for a model the screen does not apply to), each lobe's largest share (K,)."""
+
+    albedo_open: tuple[float, ...]
+    lobe_shares: np.ndarray
+
+
+def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
+    """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples`` (one padded size), in one
+    program, stacked to ``stack`` datasets as the bucket's problems are (``problem.stacked_directions``): every
+    batch of a bucket runs the same program, which :func:`screen_program` compiles ahead."""
+    rows = [*params, *[params[0]] * (stack - len(params))]
+    stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *rows)
+    directions = stacked_directions(samples, "float64", stack)
+    bounds, shares = (np.asarray(out) for out in _bucket_screens(model, stacked, *directions))
+    opened = [_open_incidences(one) if _screenable(model) else ALBEDO_INCIDENCE for one in bounds]
+    return [Screened(opened[d], shares[d]) for d in range(len(params))]
+
+
+def screen_program(model: Model, samples: Sequence[Samples], stack: int) -> tuple:
+    """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for
+    ``samples`` stacked to ``stack`` datasets, to compile it ahead (``buckets.compile_in_background``)."""
+    n_channels, size = samples[0].n_channels, padded_size(samples[0].n_samples)
+    vector = np.zeros((stack, model.unconstrained.size(n_channels)))
+    params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)
+    directions = jax.ShapeDtypeStruct((stack, size, 3), np.float64)
+    return _bucket_screens, model, params, directions, directions, jax.ShapeDtypeStruct((stack, size), bool)
+
+
+@jit(static_argnums=0)
+def _bucket_screens(model: Model, stacked: Params, wi, wo, real):
+    """:func:`_screen_bound` (zeros where the screen does not apply) and :func:`_lobe_shares` of each of a stack of
+    fits (leading axis D), one after another."""
+
+    def one(arguments):
+        params, wi, wo, real = arguments
+        shares = _lobe_shares(model, params, wi, wo, real)
+        if not _screenable(model):
+            return jnp.zeros((len(ALBEDO_INCIDENCE), params.diffuse.shape[-1])), shares
+        return _screen_bound(model, params), shares
+
+    return jax.lax.map(one, (stacked, wi, wo, real))
+
+
+def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
+    """The incidences whose screen bound (incidences, C) reaches :data:`SCREEN_BELOW` in some channel."""
+    return tuple(theta for theta, bound in zip(ALBEDO_INCIDENCE, bounds, strict=True) if np.any(bound >= SCREEN_BELOW))
+
+
+def _screenable(model: Model) -> bool:
+    """Whether the screen applies: a model with lobes, each peaking at the mirror direction (not Lafortune's)."""
+    return bool(model.n_lobes) and not model.lobes_as_list
+
+
+@jit(static_argnums=0)
+def _screen_bound(model: Model, params: Params):
+    """A generous bound (incidences, C) on the directional albedo, from a :data:`SCREEN_GRID` × 2·SCREEN_GRID grid:
+    its estimate, plus three times its disagreement with its even points alone (the quadrature's error shrinks as
+    the grid refines; the even points err at least as much), plus the BRDF's peak (at the mirror direction, where
+    a lobe of these models peaks) times :data:`SCREEN_PEAK_CELLS` cells' ``d cos θo dφo`` (a lobe narrower than
+    4 × 4 cells, which the grid samples too sparsely to judge, adds at most about that). A heuristic, not a proof:
+    it is checked against the fine grid, incidence by incidence, on 750 random materials of the five models whose
+    lobes peak at the mirror direction (``tests/fitting/test_caveats.py``: 200 of them); Lafortune's lobes are
+    checked on the fine grid always."""
+    fine, coarse = _model_quadrature(model, params, SCREEN_GRID)
+    wi = spherical_to_direction(jnp.asarray(np.radians(ALBEDO_INCIDENCE)), jnp.zeros(len(ALBEDO_INCIDENCE)))
+    wo = mirror_direction(wi)
+    peak = model.brdf(params, wi, wo) * wo[:, 2:3]
+    # A cell's d cos θo dφo: π/n² on the grid; on the axial rule's rows of width h around the normal, π h².
+    axial = np.array([_is_axial(model, theta) for theta in ALBEDO_INCIDENCE])[:, None]
+    cell = np.where(axial, np.pi * _axial_row_width(SCREEN_GRID) ** 2, np.pi / SCREEN_GRID**2)
+    return fine + 3.0 * jnp.abs(fine - coarse) + SCREEN_PEAK_CELLS * peak * cell
+
+
+@jit(static_argnums=(0, 2, 3))
+def _albedo_estimates(model: Model, params: Params, n: int, incidences: tuple[float, ...] = ALBEDO_INCIDENCE):
+    """:func:`albedo_quadrature` of ``model`` with ``params`` on the n × 2n grid at ``incidences`` (degrees), in one
+    program (the directions are made inside it, so no array of 2n² directions crosses from the host)."""
+    return _model_quadrature(model, params, n, incidences)
+
+
+def _model_quadrature(model: Model, params: Params, n: int, incidences: tuple[float, ...] = ALBEDO_INCIDENCE):
+    """:func:`albedo_quadrature` of ``model`` (traced), (fine, coarse) each (incidences, C), with two symmetries of
+    an isotropic model used. Lit at azimuth 0 it is symmetric in ``φo → −φo``: it is evaluated on the half grid
+    ``φo < π`` alone, which gives the same sums for half the work. Lit along the normal it is symmetric about the
+    normal (rotating both directions about it changes nothing, and the normal does not move): its albedo there is
+    a one-dimensional integral over ``θo`` (:func:`_axial_quadrature`), whose rows resolve a lobe around the normal
+    that the grid's first row, ``θo`` up to ``acos(1 − 1/n)`` (10° for n = 64), would hold whole."""
+    half = model.isotropic
+    on_grid = tuple(theta for theta in incidences if not _is_axial(model, theta))
+    rows = {}
+    if on_grid:
+        directions = albedo_directions(n, jnp, half=half, incidences=on_grid)
+        fine, coarse = albedo_quadrature(model.brdf(params, *directions), n, half=half)
+        rows = {theta: (fine[i], coarse[i]) for i, theta in enumerate(on_grid)}
+    if len(on_grid) < len(incidences):
+        rows[0.0] = _axial_quadrature(model, params, n)
+    return tuple(jnp.stack([rows[theta][part] for theta in incidences]) for part in (0, 1))
+
+
+#: The axial rule's rows per row of the grid it stands in for (``_axial_quadrature``).
+AXIAL_ROWS = 16
+
+
+def _is_axial(model: Model, theta_i: float) -> bool:
+    """Whether the albedo at incidence ``theta_i`` (degrees) is the axial rule's: an isotropic model lit along the
+    normal."""
+    return model.isotropic and theta_i == 0.0
+
+
+def _axial_row_width(n: int) -> float:
+    """The width ``h = π/(2m)`` (radians of ``θo``) of the axial rule's ``m = AXIAL_ROWS · n`` rows, standing in for
+    a grid of ``n`` rows."""
+    return np.pi / (2 * AXIAL_ROWS * n)
+
+
+def _axial_quadrature(model: Model, params: Params, n: int):
+    """The directional albedo (C,) at normal incidence of an isotropic model, ``2π ∫ f(θo) cos θo sin θo dθo``
+    over ``[0, π/2]`` by the midpoint rule on ``AXIAL_ROWS · n`` rows of width ``h`` (:func:`_axial_row_width`),
+    and by its even rows alone (weighted twice), as :func:`albedo_quadrature`'s coarse estimate is."""
+    h = _axial_row_width(n)
+    theta_o = (jnp.arange(AXIAL_ROWS * n) + 0.5) * h
+    wo = spherical_to_direction(theta_o, jnp.zeros(len(theta_o)))
+    wi = jnp.broadcast_to(jnp.asarray(NORMAL), wo.shape)
+    weighted = model.brdf(params, wi, wo) * (2 * np.pi * h * jnp.cos(theta_o) * jnp.sin(theta_o))[:, None]
+    return weighted.sum(axis=0), 2.0 * weighted[::2].sum(axis=0)
+
+
+def albedo_directions(n: int, xp=np, *, half: bool = False, incidences: tuple[float, ...] = ALBEDO_INCIDENCE):
+    """The pairs ``wi``, ``wo`` (incidences · 2n², 3) the albedo quadrature evaluates a BRDF at: each incidence of
+    :data:`ALBEDO_INCIDENCE` (azimuth 0) with the viewer at the midpoints of an n × 2n grid in ``(cos θo, φo)``;
+    ``half``: the n × n midpoints with ``φo < π`` alone. ``xp``: numpy, or ``jax.numpy`` inside a program."""
+    cos_o = (xp.arange(n) + 0.5) / n
+    phi_o = (xp.arange(n if half else 2 * n) + 0.5) * np.pi / n
+    cos_grid, phi_grid = xp.meshgrid(cos_o, phi_o, indexing="ij")
+    wo = spherical_to_direction(xp.arccos(cos_grid.ravel()), phi_grid.ravel())
+    wi = spherical_to_direction(xp.asarray(np.radians(incidences)), xp.zeros(len(incidences)))
+    return xp.repeat(wi, wo.shape[0], axis=0), xp.tile(wo, (len(incidences), 1))
+
+
+def albedo_quadrature(values, n: int, *, half: bool = False):
+    """The directional albedos (incidences, C) of BRDF ``values`` at :func:`albedo_directions`, by the midpoint rule
+    in ``(cos θo, φo)`` (``dω cos θo = d cos θo dφo``), on the whole grid and on its even rows and columns alone.
+    ``values``: a numpy or a JAX array. ``half``: values on the half grid of a BRDF symmetric in ``φo → −φo``
+    (n even): column ``j`` stands for ``2n − 1 − j`` as well, which is odd where ``j`` is even, so the whole
+    grid's sum is twice the half's and its even columns sum to all the half's columns."""
+    cos_grid = ((np.arange(n) + 0.5) / n)[:, None]
+    weighted = values.reshape(-1, n, n if half else 2 * n, values.shape[-1]) * cos_grid[None, :, :, None]
+    fine = weighted.sum(axis=(1, 2)) * (2 if half else 1) / n * (np.pi / n)
+    coarse = weighted[:, ::2, :: 1 if half else 2].sum(axis=(1, 2)) * 4 / n * (np.pi / n)
+    return fine, coarse

@@ -1,0 +1,173 @@
+"""Fit a model to one set of samples: Levenberg-Marquardt (``solve.py``) from data-driven starts.
+
+A single fit is a bucket of one (``buckets.py``): its grid start search, its solves from the best starts and,
+on large data, the search on a subset (``starts.search_subset``) with only the winner refined on all samples,
+are the programs a batch of many datasets runs. Models with several lobes (Lafortune) are fitted lobe by
+lobe instead (``lobes.py``).
+"""
+
+from typing import Any
+
+import numpy as np
+
+from ..._jax import float64, jax
+from ...checks import choice, whole_number
+from ...data.samples import Samples
+from ...errors import Argument, BrdfInputError
+from ...physics.domains import START_FACTOR
+from ...physics.models.model import Model
+from ...physics.models.registry import MODELS, RECORDED_OPTIONS, get_model, model_option_names
+from ..objective.losses import Loss, get_loss
+from ..objective.problem import DTYPES, Problem, build_problem
+from ..solver.compiled import best, compiled_solver
+from ..solver.hold import Hold
+from ..starts.grid import search_subset
+from ..starts.lobes import lobe_by_lobe
+from .caveats import screen_program
+from .constraints import Constraints, constraints_for
+from .defaults import MAX_STEPS, N_STARTS
+from .outcome import result_of
+from .result import FitResult
+from .stacked import compile_in_background, default_strategy, onto_bounds, solve_bucket
+
+
+@float64
+def fit_one(
+    samples: Samples,
+    model: str | Model = "ward",
+    loss: str = "log",
+    *,
+    max_theta: float | None = None,
+    start: dict[str, Any] | None = None,
+    n_starts: int = N_STARTS,
+    max_steps: int = MAX_STEPS,
+    dtype: str = "float64",
+    seed: int = 0,
+    fixed: dict[str, Any] | None = None,
+    bounds: dict[str, Any] | None = None,
+    **model_options: Any,
+) -> FitResult:
+    """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
+    model, loss, samples, constraints = checked(
+        samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
+    )
+    hold = None if constraints is None else constraints.hold()
+    n_starts = whole_number("n_starts", n_starts)
+    max_steps = whole_number("max_steps", max_steps)
+    if model.own_fit:  # the data-driven model: a ridge start and its own solve (``pca.py``)
+        from ...datadriven.fit import fit_pca
+
+        if dtype != "float64":
+            raise BrdfInputError(Argument("dtype", dtype), f" does not apply to model {model.name}; it fits in float64")
+        return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
+    if start is None and model.n_lobes > 1:
+        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed, hold)
+        return result_of(
+            model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
+        )
+    starts = None if start is None else start_vector(model, start, samples.n_channels)[None]
+    options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=default_strategy())
+    compiling = compile_in_background(*screen_program(model, [samples], 1))
+    solved = jax.tree.map(lambda leaf: leaf[0], solve_bucket(model, loss, [samples], starts, hold=hold, **options))
+    compiling.join()
+    return result_of(model, loss, samples, solved, max_steps, dtype, max_theta=max_theta, constraints=constraints)
+
+
+def _lobe_by_lobe(
+    model: Model, loss: Loss, samples: Samples, n_starts: int, max_steps: int, dtype: str, seed: int, hold: Hold | None
+):
+    """The best solve of a model of several lobes and the cost with one lobe less (``lobes.py``), searched on the
+    search subset when there is one and refined on every sample; every solve respects ``hold``."""
+    full = build_problem(samples, dtype)
+    compiled = compiled_solver(model, loss, max_steps, dtype)
+    solve = lambda theta, problem: compiled(theta, problem, hold)
+    search = search_problem(samples, full, dtype, seed)
+    compiling = None
+    if search is not full:
+        theta = jax.ShapeDtypeStruct((model.unconstrained.size(samples.n_channels),), np.float64)
+        compiling = compile_in_background(compiled, theta, full, hold)
+    by_lobe = lobe_by_lobe(model, loss, search, solve, n_starts, best, hold)
+    solved = by_lobe.best  # solved on every sample, unless searched on a subset
+    if compiling is not None:
+        compiling.join()
+        solved = solve(by_lobe.best.theta, full)
+    if dtype == "float32":
+        refined = compiled_solver(model, loss, max_steps)(solved.theta, build_problem(samples), hold)
+        solved = refined._replace(n_steps=solved.n_steps + refined.n_steps)
+    if hold is not None and np.any(hold.bounded):
+        one = compiled_solver(model, loss, max_steps)
+        full64 = full if dtype == "float64" else build_problem(samples)
+        batched = lambda thetas, holds: jax.tree.map(lambda leaf: leaf[None, None], one(thetas[0], full64, _row(holds)))
+        stacked = jax.tree.map(lambda leaf: np.asarray(leaf)[None], solved)
+        solved = jax.tree.map(
+            lambda leaf: leaf[0], onto_bounds(batched, stacked, jax.tree.map(lambda a: a[None], hold))
+        )
+    return solved, by_lobe.fewer_lobes_cost if search is full else None
+
+
+def _row(holds: Hold) -> Hold:
+    return jax.tree.map(lambda leaf: leaf[0], holds)
+
+
+def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
+    """The problem the starts are searched on: ``full``, or that of the subset ``starts.search_subset`` picks."""
+    subset = search_subset(samples, seed)
+    return full if subset is None else build_problem(samples.select(subset), dtype)
+
+
+def checked(
+    samples, model, loss, max_theta, dtype, *, fixed=None, bounds=None, **model_options
+) -> tuple[Model, Loss, Samples, Constraints | None]:
+    """The model, the loss, the samples kept by ``max_theta`` and what the fit holds (``constraints.py``; None
+    for nothing), after every check of the arguments."""
+    _check_option_names(model_options)
+    model = get_model(model, **model_options)
+    loss = get_loss(loss)
+    if not isinstance(samples, Samples):
+        raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
+    choice("dtype", dtype, DTYPES)
+    samples = samples.within(max_theta)
+    constraints = constraints_for(model, samples.n_channels, fixed, bounds)
+    n_parameters = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
+    free = "" if constraints is None else "free "
+    if samples.values.size < n_parameters and not model.prior_weight > 0:  # a prior determines what data cannot
+        raise BrdfInputError(
+            f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
+            f" the {n_parameters} {free}parameters of {model.name}; give at least {n_parameters} values"
+        )
+    return model, loss, samples, constraints
+
+
+def _check_option_names(options: dict[str, Any]) -> None:
+    """A keyword no model takes is a misspelt argument, not a model option (``max_step`` for ``max_steps``)."""
+    known = {name for each in MODELS for name in model_option_names(each)}
+    for key in options:
+        if key not in known:
+            listed = ", ".join(sorted(known - RECORDED_OPTIONS))  # a result's recorded options are taken, not offered
+            raise BrdfInputError(
+                Argument(key), f" is not an argument of the fit, nor an option of any model ({listed})"
+            )
+
+
+def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.ndarray:
+    """The unconstrained vector of the parameter dictionary ``start``, checked against the samples' channels and
+    each lobe-shape parameter's plausible range: beyond :data:`~brdffit.physics.domains.START_FACTOR` times its
+    upper end a fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report
+    a converged fit that never moved. An albedo can start anywhere: the fit moves its logarithm."""
+    params = model.dictionary.to_params(start)
+    if params.diffuse.size != n_channels:
+        raise BrdfInputError(
+            Argument("start"), f" parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"
+        )
+    if model.n_lobes:
+        for k in range(model.n_lobes):
+            for name, domain in model.lobe.parameters:
+                value, limit = float(params.shape[name][k]), START_FACTOR * domain.plausible[1]
+                if value > limit:
+                    where = f"lobes[{k}].{name}" if model.lobes_as_list else name
+                    raise BrdfInputError(
+                        Argument("start"),
+                        f": {where} = {value:g} is far beyond its plausible range"
+                        f" (≤ {domain.plausible[1]:g}), where a fit cannot move; give at most {limit:g}",
+                    )
+    return model.unconstrained.from_params(params)

@@ -1,0 +1,78 @@
+"""A solve as a :class:`FitResult`: its parameters moved onto their domains, its caveats, how it ended.
+
+Every fit ends here, whichever way it was solved: one dataset (``fit.py``), a bucket of many (``batch.py``), the
+data-driven model's own solve (``pca.py``).
+"""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..._jax import jax
+from ...data.samples import Samples
+from ...physics.models.model import Model
+from ...physics.models.params import Params
+from ..objective.losses import Loss
+from ..solver.compiled import Solved, failure_message
+from .caveats import Screened, caveats
+from .constraints import Constraints
+from .result import FitResult
+
+
+def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
+    """A solve's parameters (numpy), each moved onto its domain where the solver's coordinates reached its edge
+    only in the limit."""
+    physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
+    domains = model.physical.domains(n_channels)
+    low, high = np.array([domain.bounds for domain in domains]).T
+    if not np.all(np.isfinite(physical) & (physical > low) & (physical < high)):  # else every domain holds it
+        physical = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
+    return model.physical.to_params(physical, n_channels)
+
+
+def result_of(
+    model: Model,
+    loss: Loss,
+    samples: Samples,
+    solved: Solved,
+    max_steps: int,
+    dtype: str,
+    fewer_lobes_cost: float | None = None,
+    max_theta: float | None = None,
+    screened: Screened | None = None,
+    more_caveats: Sequence[str] = (),
+    constraints: Constraints | None = None,
+    params: Params | None = None,
+) -> FitResult:
+    """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
+    ``samples`` are those fitted, selected by ``max_theta``. ``screened``: what the caveats' screens found for this fit,
+    when the caller screened many fits at once (``caveats.screen_bucket``). ``constraints``: what the fit
+    held; its fixed values are written exactly, and a parameter that ended on a bound is said. ``params``: the
+    solve's :func:`final_params`, when the caller has them."""
+    converged = bool(solved.converged)
+    params = final_params(model, solved, samples.n_channels) if params is None else params
+    if constraints is not None:
+        params = constraints.with_fixed(params)
+        more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]
+    return FitResult(
+        model=model.name,
+        model_options=model.model_options,
+        channels=samples.channels,
+        params=model.dictionary.from_params(params),
+        loss=loss.name,
+        cost=float(solved.cost),
+        rmse=float(solved.rmse),
+        n_samples=samples.n_samples,
+        n_steps=int(solved.n_steps),
+        converged=converged,
+        message="" if converged else failure_message(int(solved.result), max_steps),
+        dtype=dtype,
+        warnings=[
+            *caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, screened=screened),
+            *more_caveats,
+        ],
+        quantity=samples.provenance.quantity if samples.provenance else None,
+        max_theta=max_theta,
+        fixed={} if constraints is None else dict(constraints.fixed),
+        bounds={} if constraints is None else dict(constraints.bounds),
+    )

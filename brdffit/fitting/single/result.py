@@ -1,0 +1,382 @@
+"""The result of a fit: :class:`FitResult` and its :class:`Uncertainty`, the result file and the printed table.
+
+The file is JSON (``docs/results.md``): the model, its options and channels, the fitted ``params``, how the
+fit went (``fit``: loss, cost, rmse, counts, convergence) and, when asked for, the ``uncertainty`` block.
+``cost`` is the sum of squared residuals ``Σ r²`` (scipy's ``least_squares`` and optimistix report ``½ Σ r²``).
+"""
+
+import json
+import math
+import os
+from collections.abc import Iterator, Mapping
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..._files import write_text_atomic
+from ..._version import __version__
+from ...errors import BrdfInputError
+from ...physics.evaluate import evaluate
+
+
+@dataclass(frozen=True)
+class Uncertainty(Mapping[str, Any]):
+    """The uncertainty of a fit's parameters, by one ``method`` (``laplace`` or ``mcmc``), as the result file holds it.
+
+    ``stderr`` and ``quantiles`` (0.025, 0.16, 0.5, 0.84, 0.975) take the layout of ``params`` (an undetermined
+    value is None); ``covariance`` and ``correlation`` are ``{"names": [...], "matrix": [[...]]}`` over the flat
+    physical parameters (``rho_d[r]``, ``lobes[0].cxy``); ``diagnostics`` depend on the method; ``warnings`` say
+    what a user must know about the estimate, and ``warning_codes`` (``brdffit/uncertainty/findings.py``) which
+    finding each is, for programs. Also a read-only mapping of those names, as the JSON has them
+    (``result.uncertainty["stderr"]``).
+    """
+
+    method: str
+    stderr: dict[str, Any]
+    quantiles: dict[str, Any]
+    covariance: dict[str, Any]
+    correlation: dict[str, Any]
+    diagnostics: dict[str, Any]
+    warnings: list[str]
+    warning_codes: list[str]
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, content: Any, source: str = "result") -> "Uncertainty":
+        """The ``uncertainty`` block of a result file, checked; an entry an older file lacks is empty."""
+        if not isinstance(content, Mapping) or not isinstance(content.get("method"), str):
+            raise BrdfInputError(f"{source}: 'uncertainty' must be an object with a 'method'")
+        values = {}
+        for item in fields(cls):
+            empty = {} if item.type is dict[str, Any] else [] if item.type is list[str] else None
+            value = content.get(item.name, empty)
+            if empty is not None and not isinstance(value, type(empty)):
+                raise BrdfInputError(f"{source}: uncertainty.{item.name} must be a JSON {type(empty).__name__}")
+            values[item.name] = value
+        return cls(**values)
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self.__dataclass_fields__:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.__dataclass_fields__)
+
+    def __len__(self) -> int:
+        return len(self.__dataclass_fields__)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted parameters and how the fit went.
+
+    ``params`` is the model's parameter dictionary (per-channel albedos as lists in
+    ``channels`` order). ``cost`` is the sum of squared residuals of ``loss``, ``Σ r²``;
+    ``rmse`` the root-mean-square of ``f - y`` over the fitted samples and
+    channels, in 1/sr, whatever the loss. ``n_steps`` counts Levenberg-Marquardt
+    steps of the winning start; ``converged`` is False when the solver stopped
+    without meeting its tolerances, and ``message`` then says why. ``dtype`` is
+    the precision the model was evaluated in (``float32``: solved in single
+    precision, then refined in double, so the optimum is float64's). ``warnings``
+    say what a user must know before trusting the fit (a dead lobe, a parameter
+    at a plausible bound, data that are not reciprocal), one line each.
+    ``quantity`` and ``max_theta`` say how the samples were read and selected
+    (what their values were taken as, ``docs/quantities.md``; None for samples
+    made from arrays), so that they can be read the same way again. ``fixed``
+    and ``bounds`` are the parameters the fit held (``fitting/constraints.py``):
+    name → value (a list per channel for an albedo), and name → ``[lo, hi]``.
+    ``uncertainty`` is the :class:`Uncertainty` when one was asked for
+    (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
+    parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
+    kept in memory only.
+    """
+
+    model: str
+    model_options: dict[str, Any]
+    channels: tuple[str, ...]
+    params: dict[str, Any]
+    loss: str
+    cost: float
+    rmse: float
+    n_samples: int
+    n_steps: int
+    converged: bool
+    message: str = ""
+    dtype: str = "float64"
+    warnings: list[str] = field(default_factory=list)
+    quantity: str | None = None
+    max_theta: float | None = None
+    fixed: dict[str, Any] = field(default_factory=dict)
+    bounds: dict[str, Any] = field(default_factory=dict)
+    uncertainty: Uncertainty | None = None
+    brdffit_version: str = field(default=__version__)
+    draws: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def with_estimate(self, uncertainty: Uncertainty, draws: np.ndarray | None = None) -> "FitResult":
+        """This result carrying an ``uncertainty`` estimate (and the MCMC ``draws`` (S, p) it came from)."""
+        return replace(self, uncertainty=uncertainty, draws=draws)
+
+    def predict(self, wi, wo) -> np.ndarray:
+        """The fitted model's BRDF (N, C) in 1/sr at directions ``wi``, ``wo`` (N, 3)."""
+        return evaluate(self.model, self.params, wi, wo, **self.model_options)
+
+    def residuals(self, samples) -> np.ndarray:
+        """The fit's residuals (N, C) on ``samples`` (a :class:`~brdffit.Samples` with this result's channels), in
+        the units of its loss: ``sqrt(weight)·(T(f) − T(y))``, divided by ``sigma·|T'(y)|`` where the samples have
+        sigma (``docs/losses.md``). Their sum of squares over the fitted samples is ``cost``."""
+        from ...physics.models.registry import get_model
+        from ..objective.losses import get_loss
+        from ..objective.problem import sample_residuals
+
+        if tuple(samples.channels) != tuple(self.channels):
+            raise BrdfInputError(
+                f"{samples.source}: channels {', '.join(samples.channels)} are not the result's"
+                f" ({', '.join(self.channels)})"
+            )
+        model = get_model(self.model, **self.model_options)
+        return sample_residuals(model, get_loss(self.loss), model.dictionary.to_params(self.params), samples)
+
+    # ------------------------------------------------------------------ JSON
+    def to_dict(self) -> dict[str, Any]:
+        """The result file's content as plain Python objects."""
+        result = {
+            "brdffit_version": self.brdffit_version,
+            "model": self.model,
+            "model_options": dict(self.model_options),
+            "channels": list(self.channels),
+            "params": self.params,
+            "fit": {
+                "loss": self.loss,
+                "cost": self.cost,
+                "rmse": self.rmse,
+                "n_samples": self.n_samples,
+                "n_steps": self.n_steps,
+                "converged": self.converged,
+                "message": self.message,
+                "dtype": self.dtype,
+                "warnings": list(self.warnings),
+                "quantity": self.quantity,
+                "max_theta": self.max_theta,
+                "fixed": dict(self.fixed),
+                "bounds": dict(self.bounds),
+            },
+        }
+        if self.uncertainty is not None:
+            result["uncertainty"] = self.uncertainty.to_dict()
+        return result
+
+    def to_json(self) -> str:
+        """The result file's text: indented objects, lists of numbers on one line."""
+        return json_text(self.to_dict()) + "\n"
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the result file atomically (:func:`save_result`)."""
+        save_result(self, path)
+
+    @classmethod
+    def from_dict(cls, content: dict[str, Any], source: str = "result") -> "FitResult":
+        try:
+            fit = content["fit"]
+            return cls(
+                model=content["model"],
+                model_options=dict(content.get("model_options", {})),
+                channels=tuple(content["channels"]),
+                params=content["params"],
+                loss=fit["loss"],
+                cost=float(fit["cost"]),
+                rmse=float(fit["rmse"]),
+                n_samples=int(fit["n_samples"]),
+                n_steps=int(fit["n_steps"]),
+                converged=bool(fit["converged"]),
+                message=str(fit.get("message", "")),
+                dtype=str(fit.get("dtype", "float64")),
+                warnings=list(fit.get("warnings", [])),
+                quantity=None if fit.get("quantity") is None else str(fit["quantity"]),
+                max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
+                fixed=_object(fit.get("fixed", {}), "fit.fixed"),
+                bounds=_object(fit.get("bounds", {}), "fit.bounds"),
+                uncertainty=None
+                if content.get("uncertainty") is None
+                else Uncertainty.from_dict(content["uncertainty"], source),
+                brdffit_version=str(content.get("brdffit_version", "")),
+            )
+        except (KeyError, TypeError, ValueError) as error:
+            raise BrdfInputError(f"{source}: not a brdffit result file (missing or bad {error})") from None
+
+    # ------------------------------------------------------------ the table
+    def table(self, source: str | None = None) -> str:
+        """The printed report (:func:`result_table`): one row per parameter, one column per channel, and the fit's
+        figures."""
+        return result_table(self, source)
+
+    def __str__(self) -> str:
+        return self.table()
+
+
+def _object(value: Any, name: str) -> dict[str, Any]:
+    """A JSON object of the result file, as a dict (a missing entry of an older file is empty)."""
+    if not isinstance(value, dict):
+        raise TypeError(f"{name} must be a JSON object")
+    return dict(value)
+
+
+def save_result(result: FitResult, path: str | os.PathLike) -> None:
+    """Write ``result``'s file atomically (a temporary file renamed into place); :func:`load_result` reads it."""
+    write_text_atomic(path, result.to_json())
+
+
+def load_result(path: str | os.PathLike) -> FitResult:
+    """Read a result file written by :func:`save_result` or ``brdffit fit``."""
+    return FitResult.from_dict(read_json_object(path, "brdffit result file"), str(path))
+
+
+def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
+    """The JSON object in the file ``path``, or a one-line error naming the file and ``what`` it should be."""
+    path = Path(path)
+    try:
+        content = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise BrdfInputError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise BrdfInputError(f"{path}: not a readable JSON file ({error})") from None
+    if not isinstance(content, dict):
+        raise BrdfInputError(f"{path}: not a {what} (not a JSON object)")
+    return content
+
+
+def json_text(value: Any, indent: str = "") -> str:
+    """``value`` as brdffit's files write JSON: objects indented, lists of numbers on one line; strict (a NaN or
+    infinity never reaches a file that claims to be JSON: ``allow_nan=False``)."""
+    if isinstance(value, dict) and value:
+        inner = indent + "  "
+        items = [
+            f"{inner}{json.dumps(str(key), ensure_ascii=False)}: {json_text(item, inner)}"
+            for key, item in value.items()
+        ]
+        return "{\n" + ",\n".join(items) + "\n" + indent + "}"
+    if isinstance(value, list) and any(isinstance(item, dict | list) for item in value):
+        inner = indent + "  "
+        return "[\n" + ",\n".join(inner + json_text(item, inner) for item in value) + "\n" + indent + "]"
+    return json.dumps(value, allow_nan=False, ensure_ascii=False)
+
+
+# ---------------------------------------------------------------------- the printed table
+def result_table(result: FitResult, source: str | None = None) -> str:
+    """A readable report of ``result``; ``source`` names the samples in its first line."""
+    what = f" of {source}" if source else ""
+    options = ", ".join(f"{key} {_shown(key, value)}" for key, value in result.model_options.items())
+    options = f" ({options})" if options else ""
+    size = f"{result.n_samples} samples × {len(result.channels)} channel(s)"
+    lines = [f"{result.model}{options} fit{what}: {size}, loss {result.loss}"]
+    rows = list(parameter_rows(result.params))
+    errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
+    fixed = {label for label, _ in parameter_rows(_nested(result.fixed))}
+    label_width = max(len("parameter"), *(len(label) for label, _ in rows))
+    columns = [str(c) for c in result.channels]
+    cells = {
+        label: [
+            f"= {v:.10g}" if label in fixed else value_with_error(v, e, bool(errors))
+            for v, e in zip(_as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True)
+        ]
+        for label, value in rows
+    }
+    cell = max(12, *(len(c) + 2 for c in columns), *(len(text) + 2 for texts in cells.values() for text in texts))
+    lines.append("  " + "parameter".ljust(label_width) + "".join(c.rjust(cell) for c in columns))
+    for label, texts in cells.items():
+        lines.append("  " + label.ljust(label_width) + "".join(text.rjust(cell) for text in texts))
+    status = "converged" if result.converged else f"NOT converged: {result.message}"
+    precision = " · float32, refined in float64" if result.dtype == "float32" else ""
+    figures = f"cost {result.cost:.6g} · rmse {result.rmse:.4g} 1/sr · {result.n_steps} steps"
+    lines.append(f"  {figures}{precision} · {status}")
+    if result.bounds:
+        bounds = ", ".join(f"{name} in [{low:g}, {high:g}]" for name, (low, high) in result.bounds.items())
+        lines.append(f"  bounds: {bounds}")
+    if result.uncertainty:
+        held = "; fixed parameters (= value) have no error" if result.fixed else ""
+        lines.append("  " + _uncertainty_line(result.uncertainty) + held)
+    lines += [f"  warning: {caveat}" for caveat in result.warnings]
+    return "\n".join(lines)
+
+
+def parameter_rows(params: dict[str, Any]):
+    """(label, value) pairs in file order; Lafortune lobes become ``lobe 1 rho_s`` and so on, pca's coefficients
+    ``coefficients[0]`` and so on."""
+    for name, value in params.items():
+        if name == "lobes":
+            for index, lobe in enumerate(value, start=1):
+                for lobe_name, lobe_value in lobe.items():
+                    yield f"lobe {index} {lobe_name}", lobe_value
+        elif isinstance(value, list) and value and isinstance(value[0], list):  # pca's coefficients, one row each
+            for index, row in enumerate(value):
+                yield f"{name}[{index}]", row
+        else:
+            yield name, value
+
+
+def _nested(names: dict[str, Any]) -> dict[str, Any]:
+    """Held parameters by name (``lobes[1].cxy``) nested as ``params`` is, for :func:`parameter_rows`' labels."""
+    nested: dict[str, Any] = {}
+    for name, value in names.items():
+        lobe, dot, inner = name.partition("].")
+        if name.startswith("lobes[") and dot:
+            index = int(lobe[len("lobes[") :])
+            lobes = nested.setdefault("lobes", [])
+            lobes += [{} for _ in range(index + 1 - len(lobes))]
+            lobes[index][inner] = value
+        else:
+            nested[name] = value
+    return nested
+
+
+def _shown(key: str, value) -> str:
+    """A model option as the table's first line shows it: a file's digest by its first 12 digits."""
+    return f"{value[:12]}…" if key.endswith("_sha256") and isinstance(value, str) else str(value)
+
+
+def _as_list(value) -> list:
+    return value if isinstance(value, list) else [value]
+
+
+def value_with_error(value: float, error: float | None = None, has_error: bool = False) -> str:
+    """``value`` to 6 significant digits, or ``value ± error`` with the error to 2 digits and the value to match.
+
+    ``has_error`` with ``error`` None (undetermined) gives ``value ± ?``.
+    """
+    if not math.isfinite(value):
+        return str(value)
+    if error is None or not math.isfinite(error) or error <= 0:
+        return f"{value:.6g}" + (" ± ?" if has_error and error is None else "")
+    decimals = max(0, 1 - math.floor(math.log10(error)))
+    if decimals > 7 or abs(value) >= 1e6:  # fixed point would be long: the value to its error's digits, in e-form
+        digits = max(0, math.floor(math.log10(abs(value))) - math.floor(math.log10(error))) + 1 if value else 1
+        return f"{value:.{min(digits, 12)}e} ± {error:.1e}"
+    return f"{value:.{decimals}f} ± {error:.{decimals}f}"
+
+
+def _uncertainty_line(block) -> str:
+    """One line on how the errors were found."""
+    diagnostics = block.get("diagnostics", {})
+    if block.get("method") == "mcmc":
+        tau = max((t for t in diagnostics.get("autocorr_time", []) if t is not None), default=float("nan"))
+        ess = min((e for e in diagnostics.get("effective_samples", []) if e is not None), default=float("nan"))
+        return (
+            f"± posterior standard deviation (emcee: {diagnostics.get('n_walkers')} walkers × "
+            f"{diagnostics.get('n_steps')} steps, {diagnostics.get('burn')} burn-in; acceptance "
+            f"{diagnostics.get('acceptance', float('nan')):.2f}, τ ≤ {tau:.0f} steps, ≥ {ess:.0f} effective samples)"
+        )
+    noise, chi2 = diagnostics.get("noise_scale"), diagnostics.get("reduced_chi2")
+    if block.get("method") == "laplace-robust":
+        return (
+            "± Laplace standard error, heteroscedasticity-robust (sandwich A⁻¹BA⁻¹ at the optimum: the residuals'"
+            " scatter varies, so the Gauss-Newton errors would be too small)"
+        )
+    if noise is not None:
+        how = f"no sigma: scaled by the residuals' scatter, {noise:.3g} in the loss's units"
+    else:
+        how = f"sigma given; reduced χ² {chi2:.4g}" if isinstance(chi2, float) else "sigma given"
+    return f"± Laplace standard error (Gauss-Newton covariance at the optimum; {how})"

@@ -1,0 +1,242 @@
+"""Data-driven starting points for the fit, by variable projection over a grid of lobe shapes.
+
+Every model is linear in its albedos (``physics/models/model.py``). For a fixed lobe
+shape, the albedos that minimise the loss *linearised about the data*,
+``Σ w (f - y)²`` with ``w = (scale · T'(y))²`` (``losses.linearised_weight``), are
+a small non-negative least-squares problem per channel (Golub & Pereyra 1973,
+variable projection), solved exactly by :func:`nonnegative_least_squares`. Every
+shape of the lobe family's coarse grid gets its best albedos and is scored by
+the true loss, all shapes at once; the best few become the Levenberg-Marquardt
+starts. The whole search is one compiled program, over every dataset of a batch
+at once (:func:`grid_starts`). Models with several lobes (Lafortune) place their
+lobes one at a time (:class:`LobeSearch`; ``lobes.py`` fits them lobe by lobe).
+"""
+
+import itertools
+
+import numpy as np
+
+from ..._jax import float64, jax, jnp
+from ..._programs import jit
+from ...data.samples import Samples
+from ...physics.domains import ALBEDO
+from ...physics.models.model import Model
+from ...physics.models.params import Params
+from ..objective.losses import Loss, linearised_weight
+from ..objective.problem import Problem, prepared, residuals
+from ..solver.hold import Hold, respected
+
+#: No albedo starts more than this factor below the largest one of its solution (the fit moves log-albedos).
+ALBEDO_FLOOR = 1e-3
+#: Starts are searched on at most this many samples; the winner is then refined on all of them.
+SEARCH_SAMPLES = 2**14
+#: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
+#: that a few samples see is still seen.
+BRIGHT_SHARE = 0.25
+
+
+def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
+    """Indices of the samples the starts are searched on, or None for all of them.
+
+    Above :data:`SEARCH_SAMPLES` samples: the brightest quarter of the subset
+    (by each sample's largest value relative to its channel's median, so a
+    specular peak is kept) and the rest drawn at random with ``seed``. An
+    all-zero channel would overflow the ratio; each channel's scale is at
+    least a thousandth of its largest value.
+    """
+    n = samples.n_samples
+    if n <= SEARCH_SAMPLES:
+        return None
+    # A channel that is 0 almost everywhere (an albedo of 0) is scaled by a thousandth of its largest value.
+    # Channel by channel, in rows (C, N): numpy reduces a contiguous row ~10× faster than a column of (N, C).
+    channels = np.ascontiguousarray(samples.values.T)
+    scale = np.maximum(np.median(channels, axis=1), 1e-3 * np.max(channels, axis=1))
+    brightness = np.max(channels / np.maximum(scale, np.finfo(float).tiny)[:, None], axis=0)
+    n_bright = int(SEARCH_SAMPLES * BRIGHT_SHARE)
+    bright = np.argpartition(-brightness, n_bright)[:n_bright]
+    others = np.ones(n, bool)
+    others[bright] = False
+    others = np.flatnonzero(others)
+    rest = np.random.default_rng(seed).choice(others, SEARCH_SAMPLES - n_bright, replace=False)
+    return np.sort(np.concatenate([bright, rest]))
+
+
+@float64
+def starting_points(
+    model: Model, loss: Loss, problem: Problem, n_starts: int, hold: Hold | None = None
+) -> list[np.ndarray]:
+    """Up to ``n_starts`` unconstrained start vectors of one problem, best first: lobes placed greedily on the grid;
+    every start respects ``hold`` (``hold.py``)."""
+    if model.n_lobes <= 1:
+        stacked = jax.tree.map(lambda leaf: leaf[None], (problem, hold))
+        return list(np.asarray(grid_starts(model, loss, min(n_starts, len(_grid(model))), *stacked))[0])
+    search = LobeSearch(model, loss, problem, hold)
+    chosen: list[dict[str, float]] = []
+    for _ in range(model.n_lobes):
+        costs, thetas = search.candidates(chosen)
+        order = np.argsort(costs, kind="stable")
+        chosen.append(search.grid[order[0]])
+    return [thetas[index] for index in order[:n_starts]]
+
+
+@jit(static_argnums=(0, 1, 2))
+def grid_starts(model: Model, loss: Loss, n_starts: int, problems: Problem, holds: Hold | None = None):
+    """The ``n_starts`` best grid starts (D, n_starts, k) of each of the stacked problems (D, N, …), best first
+    (ties to the earlier grid shape), for models of at most one lobe: one program for every dataset of a batch.
+    ``holds`` (arrays (D, k)): what each dataset's fit holds (``hold.py``), or None.
+
+    The datasets are searched one after another inside the program (``lax.map``): the grid's lobe values are
+    (G, N) per dataset, and all of them at once could outgrow memory where one at a time is small.
+    """
+
+    def best_of_one(pair):
+        costs, thetas = _candidates(model, loss, *pair, {})
+        order = jnp.argsort(costs, stable=True)[:n_starts]
+        return thetas[order]
+
+    return jax.lax.map(best_of_one, (problems, holds))
+
+
+class LobeSearch:
+    """The grid of a model's lobe shapes on one problem, for placing its lobes one at a time.
+
+    :meth:`candidates` places the next lobe beside lobes whose shapes are fixed (grid shapes or fitted ones):
+    for every grid shape, the best albedos of all lobes so far (variable projection), scored by the true loss
+    of the whole model with the lobes not yet placed switched off (albedo 0, which the solver's dead-column rule
+    then leaves alone: the fit of fewer lobes runs in the compiled solver of all of them).
+    """
+
+    def __init__(self, model: Model, loss: Loss, problem: Problem, hold: Hold | None = None):
+        self.model, self.loss, self.problem, self.hold = model, loss, problem, hold
+        self.grid = model.lobe.grid
+
+    @float64
+    def candidates(self, chosen: list[dict[str, float]]) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Costs (G,) and unconstrained vectors of the whole model with lobe ``len(chosen) + 1`` at each grid shape."""
+        shapes = {name: np.array([shape[name] for shape in chosen], float) for name in self.model.lobe.names}
+        costs, thetas = _lobe_candidates(self.model, self.loss, self.problem, self.hold, shapes if chosen else {})
+        return np.asarray(costs), list(np.asarray(thetas))
+
+
+def _grid(model: Model) -> tuple[dict[str, float], ...]:
+    """The lobe family's grid of shapes; one empty shape for a model without lobes (its one start)."""
+    return model.lobe.grid if model.n_lobes else ({},)
+
+
+@jit(static_argnums=(0, 1))
+def _lobe_candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict):
+    return _candidates(model, loss, problem, hold, chosen)
+
+
+def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict):
+    """Costs (G,) and unconstrained vectors (G, k) of the model with its next lobe at each grid shape (JAX).
+
+    ``chosen``: the shapes (K₀,) of the lobes already placed, {} for none. Each candidate's albedos are the
+    non-negative least-squares ones of the linearised loss, floored at :data:`ALBEDO_FLOOR` of their largest
+    (the fit moves log-albedos); the lobes after the new one are off (albedo 0, any shape: the grid's first).
+    With a ``hold``, the grid's shapes are moved onto what it allows, the albedos it fixes are held in the least
+    squares, and every vector respects it.
+    """
+    problem = prepared(loss, problem)
+    n, n_channels = problem.measured.shape
+    weight = linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
+    grid = _grid(model)
+    n_placed = len(next(iter(chosen.values()), ()))
+    fixed = jnp.full((1, n), 1.0 / np.pi, problem.wi.dtype)
+    if chosen:
+        fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
+    if model.n_lobes:
+        stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
+        if hold is not None:
+            stacked = _held_shapes(model, stacked, hold, n_placed, n_channels)
+        lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
+        bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
+    else:
+        bases = fixed[None]
+    grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
+    held = None if hold is None else _held_albedos(hold, bases.shape[1], n_channels)
+    albedos = jnp.swapaxes(nonnegative_least_squares(grams, rhs, held), 1, 2)  # (G, B, C)
+    largest = jnp.maximum(jnp.max(albedos, axis=(1, 2), keepdims=True), 1e-6)
+    albedos = jnp.maximum(albedos, ALBEDO_FLOOR * largest)
+    n_off = model.n_lobes - n_placed - 1 if model.n_lobes else 0
+
+    def theta_of(index, albedo):
+        specular = jnp.concatenate([albedo[1:], jnp.zeros((n_off, n_channels))])
+        shape = (
+            {
+                name: jnp.concatenate(
+                    [
+                        jnp.asarray(chosen.get(name, jnp.zeros(0))),
+                        jnp.asarray(stacked[name])[index][None],
+                        jnp.full(n_off, grid[0][name]),
+                    ]
+                )
+                for name in model.lobe.names
+            }
+            if model.n_lobes
+            else {}
+        )
+        return respected(model.unconstrained.from_params(Params(albedo[0], specular, shape)), hold)
+
+    thetas = jax.vmap(theta_of)(jnp.arange(len(grid)), albedos)
+    costs = jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
+    return costs, thetas
+
+
+def _held_shapes(model: Model, stacked: dict, hold: Hold, lobe: int, n_channels: int) -> dict:
+    """The grid's shapes (G,) for lobe ``lobe``, each moved onto what ``hold`` allows (its fixed values, inside its
+    bounds), through the solver's coordinates."""
+    coordinates = model.lobe.unconstrained
+    s = len(coordinates.names)
+    first = (1 + model.n_lobes) * n_channels + lobe * s
+    own = jax.tree.map(lambda leaf: leaf[first : first + s, None], hold)  # (S, 1): broadcast over the grid
+    return coordinates.from_vector(respected(coordinates.to_vector(stacked), own))
+
+
+def _held_albedos(hold: Hold, n_basis: int, n_channels: int):
+    """Which albedos (C, B) of the least squares' basis (diffuse, then the lobes in order) ``hold`` fixes, and at
+    what values: a mask and the values, for :func:`nonnegative_least_squares`."""
+    entries = jnp.arange(n_basis)[None, :] * n_channels + jnp.arange(n_channels)[:, None]  # (C, B) into θ
+    return 1.0 - hold.free[entries], ALBEDO.to_physical(hold.value[entries])
+
+
+def _normal_equations(basis, weight, measured):
+    """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
+    weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
+    return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
+
+
+def nonnegative_least_squares(gram, rhs, held=None):
+    """``argmin_{x ≥ 0} xᵀ G x − 2 bᵀ x`` for small systems (B ≤ 9), batched over leading axes (JAX).
+
+    ``held``: a mask and values (…, B) of entries of ``x`` fixed at those values (their part of ``Gx`` moves to
+    the right-hand side), or None.
+
+    The minimiser is the unconstrained one on its support (the KKT conditions), so it is found by trying
+    every support: each of the ``2^B`` subsets solves its own equations, and the best of the feasible
+    solutions (x = 0 always is one) wins. Exact, branch-free and cheap for the few albedos of a model, where
+    Lawson & Hanson's active-set NNLS would loop on the host. A relative ridge ``1e-12·trace`` keeps the
+    system of a lobe no sample sees (a zero row) solvable.
+    """
+    n_basis = rhs.shape[-1]
+    held_mask, held_values = (jnp.zeros(n_basis), jnp.zeros(n_basis)) if held is None else held
+    x_held = held_mask * held_values
+    rhs = rhs - jnp.einsum("...ij,...j->...i", gram, jnp.broadcast_to(x_held, rhs.shape))
+    eye = jnp.eye(n_basis, dtype=gram.dtype)
+    trace = jnp.trace(gram, axis1=-2, axis2=-1)[..., None, None]
+    gram = gram + (1e-12 * trace + jnp.finfo(gram.dtype).tiny) * eye
+    supports = jnp.asarray(list(itertools.product((0.0, 1.0), repeat=n_basis))[1:], gram.dtype)  # (S, B)
+
+    def on_support(mask):
+        mask = mask * (1.0 - held_mask)  # (…, B): a held entry is never in a support
+        pair = mask[..., :, None] * mask[..., None, :]
+        restricted = gram * pair + eye * (1.0 - mask)[..., None, :]  # the support's equations, identity off it
+        x = jnp.linalg.solve(restricted, (rhs * mask)[..., None])[..., 0]
+        objective = jnp.einsum("...i,...ij,...j->...", x, gram, x) - 2.0 * jnp.sum(rhs * x, axis=-1)
+        feasible = jnp.all(x >= 0.0, axis=-1)
+        return x, jnp.where(feasible, objective, jnp.inf)
+
+    solutions, objectives = jax.vmap(on_support)(supports)  # (S, …, B), (S, …)
+    best = jnp.argmin(objectives, axis=0)  # (…)
+    chosen = jnp.take_along_axis(solutions, best[None, ..., None], axis=0)[0]
+    return jnp.where(jnp.min(objectives, axis=0)[..., None] < 0.0, chosen, 0.0) + x_held

@@ -1,0 +1,79 @@
+"""Several lobes, fitted one at a time: each new lobe placed on what the lobes so far leave unexplained.
+
+A model of several lobes (Lafortune's) has many local minima: a lobe can settle where it explains nothing
+and stay there, dead, while the fit reports convergence. Started from grid shapes alone, the real
+retro-reflective tape's 3-lobe log-loss fit stopped at twice the cost that 30 starts find. So the fit goes
+lobe by lobe:
+
+1. the first lobe at the grid's best shapes, fitted alone (the other lobes switched off: albedo 0, which
+   the solver's dead-column rule leaves alone, so every fit runs in the one compiled solver of the model);
+2. each next lobe placed beside the lobes fitted so far (variable projection over the grid, ``starts.py``)
+   at the best shape of every family of directions (forward, retro, normal, flatter, steeper), and the
+   whole model refitted from each; the best goes on to the next lobe;
+3. at the end the greedy grid starts of the whole model compete too.
+
+The cost of each level is kept: a fit with more lobes must not end worse than one with fewer (a caveat
+says so when it does, ``caveats.py``).
+"""
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from ...physics.models.model import Model
+from ..objective.losses import Loss
+from ..objective.problem import Problem
+from ..solver.hold import Hold
+from .grid import LobeSearch, starting_points
+
+
+class LobeFit(NamedTuple):
+    """The best run of a lobe-by-lobe fit (a ``fit.Solved``) and the cost with one lobe less."""
+
+    best: object
+    fewer_lobes_cost: float
+
+
+def lobe_by_lobe(
+    model: Model, loss: Loss, problem: Problem, solve: Callable, n_starts: int, best: Callable, hold: Hold | None = None
+) -> LobeFit:
+    """Fit ``model``'s lobes one at a time on ``problem`` with the compiled ``solve``; ``best`` picks among runs.
+    Every start respects ``hold``, which ``solve`` applies (``hold.py``)."""
+    search = LobeSearch(model, loss, problem, hold)
+    n_channels = problem.measured.shape[1]
+    level_costs = []
+    fitted = None
+    for placed in range(model.n_lobes):
+        chosen = [] if fitted is None else _shapes(model, fitted.theta, n_channels, placed)
+        costs, thetas = search.candidates(chosen)
+        starts = _each_family(search.grid, costs, extra=n_starts if placed == 0 else 0)
+        runs = [solve(thetas[index], problem) for index in starts]
+        if placed == model.n_lobes - 1:
+            runs += [solve(theta, problem) for theta in starting_points(model, loss, problem, n_starts, hold)]
+        if fitted is not None:
+            runs.append(fitted)  # the lobes so far with the new one off: never worse than one lobe less
+        fitted = best(runs)
+        level_costs.append(float(fitted.cost))
+    fewer = level_costs[-2] if len(level_costs) > 1 else float("nan")
+    return LobeFit(fitted, fewer)
+
+
+def _shapes(model: Model, theta, n_channels: int, count: int) -> list[dict[str, float]]:
+    """The shapes of the first ``count`` lobes at the unconstrained ``theta``."""
+    shape = model.unconstrained.to_params(np.asarray(theta), n_channels).shape
+    return [{name: float(shape[name][k]) for name in model.lobe.names} for k in range(count)]
+
+
+def _each_family(grid: tuple[dict[str, float], ...], costs: np.ndarray, extra: int) -> list[int]:
+    """Grid indices: the cheapest shape of each family (shapes alike but for their last parameter, the lobe's
+    width: a Lafortune direction, a roughness's Fresnel term), then the ``extra`` cheapest others, best first."""
+    order = np.argsort(costs, kind="stable")
+    chosen, families = [], set()
+    for index in order:
+        family = tuple(list(grid[index].values())[:-1])
+        if family not in families:
+            families.add(family)
+            chosen.append(int(index))
+    chosen += [int(index) for index in order if int(index) not in chosen][:extra]
+    return sorted(chosen, key=lambda index: costs[index])
