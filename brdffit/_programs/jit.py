@@ -13,6 +13,7 @@ from collections.abc import Callable
 from .._jax import float64, jax
 from . import stored
 from .first_calls import FirstCalls
+from .keys import key_of
 
 #: XLA options for the CPU backend, measured on the MERL-size Cook-Torrance solver (2-core Xeon, jax 0.10.2):
 #: XLA's newer CPU "fusion emitters" (the default) compile it in 1.3–1.4 s, the classic loop emitters in 0.5–0.6 s,
@@ -46,7 +47,7 @@ def compiler_options() -> dict | None:
     return CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
 
 
-def jit(fun=None, *, name: str | None = None, **jit_arguments):
+def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arguments):
     """``jax.jit`` in :func:`float64` with :func:`compiler_options`, chosen at the first call (importing does no work).
 
     Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
@@ -55,13 +56,20 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
 
     While the compilation cache is on, a call at the top level runs the program stored for its signature
     (``stored.py``): a later process then neither traces nor lowers it. A module-level function is stored
-    under its module and name; a closure only under the ``name`` its caller gives, which must name everything
-    it closes over (``solve[model, loss, max_steps, dtype]``).
+    under its module and name, a ``functools.partial`` of one under that name and the cache keys of its bound
+    arguments (``keys.py``); a closure only under the ``name`` its caller gives together with every value it
+    closes over (``closes_over``, each named by its cache key).
     """
     if fun is None:
-        return functools.partial(jit, name=name, **jit_arguments)
-    if name is None and "<" not in getattr(fun, "__qualname__", "<"):  # not a lambda, a closure or a partial
+        return functools.partial(jit, name=name, closes_over=closes_over, **jit_arguments)
+    if name is None and isinstance(fun, functools.partial) and _module_level(fun.func):
+        name = f"{fun.func.__module__}.{fun.func.__qualname__}"
+        closes_over = (*fun.args, *sorted(fun.keywords.items()))
+    elif name is None and _module_level(fun):
         name = f"{fun.__module__}.{fun.__qualname__}"
+    identity = None if name is None else [name, key_of(tuple(closes_over))]
+    if identity is not None and identity[1] is None:  # something it closes over has no key: never stored
+        identity = None
     static_argnums = jit_arguments.get("static_argnums", ())
     static_argnums = (static_argnums,) if isinstance(static_argnums, int) else tuple(static_argnums)
 
@@ -75,9 +83,9 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
 
     def stored_for(args, kwargs):
         """The stored program for a top-level call, or None (``stored.stored_program``)."""
-        if name is None or kwargs:
+        if identity is None or kwargs:
             return None
-        return stored.stored_program(name, top_level(), args, static_argnums, compiler_options())
+        return stored.stored_program(identity, top_level(), args, static_argnums, compiler_options())
 
     first_calls = FirstCalls()
 
@@ -109,6 +117,11 @@ def jit(fun=None, *, name: str | None = None, **jit_arguments):
 
     call.precompile = precompile
     return call
+
+
+def _module_level(function) -> bool:
+    """Whether ``function`` is defined at the top of a module (not a lambda, a closure or a partial)."""
+    return "<" not in getattr(function, "__qualname__", "<")
 
 
 def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tuple:

@@ -4,16 +4,16 @@ JAX's persistent compilation cache (``cache.py``) keeps XLA's executables, but J
 computes by tracing the Python function and lowering it to StableHLO: for the shipped example's fit that was
 0.7 s of a 2 s command, in every run. Here a function compiled by ``_jax.jit`` is stored once per *signature*
 as a serialized ``jax.export.Exported`` (its StableHLO and its argument and result trees). A later process
-computes the signature from the call alone, without tracing: the function's name, the ``repr`` of its static
-arguments (brdffit's models and losses are frozen dataclasses whose repr is their whole definition), and the
-tree, shapes and dtypes of its array arguments. It deserializes the program (a few ms) and compiles it, which
-the compilation cache answers.
+computes the signature from the call alone, without tracing: the function's identity (its name, and the cache
+keys of what a closure closes over), the cache keys of its static arguments (``keys.py``), and the tree, shapes and
+dtypes of its array arguments. It deserializes the program (a few ms) and compiles it, which the compilation cache
+answers.
 
-A stored program belongs to this brdffit source (every ``.py`` file of the package is hashed), this JAX and
-jaxlib, this backend and device kind: a change of any of them gives new signatures, and stale files are never
-read. Programs are stored only while the compilation cache is on, in its folder's ``programs/``. A call that
-cannot be stored (a static argument whose repr is an address or that says ``storable = False``, an argument that
-is not an array, keyword arguments, a program ``jax.export`` refuses) is compiled by ``jax.jit`` as before.
+A stored program belongs to this brdffit version and source (every ``.py`` file of the package is hashed), this JAX
+and jaxlib, this backend and device kind: a change of any of them gives new signatures, and stale files are never
+read. Programs are stored only while the compilation cache is on, in its folder's ``programs/``. A call that cannot
+be stored (a static argument without a cache key, an argument that is not an array, keyword arguments, a program
+``jax.export`` refuses) is compiled by ``jax.jit`` as before.
 """
 
 import hashlib
@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .._jax import jax
+from .keys import key_of
 
 #: A stored program's file: one line of JSON (the named tuples its trees hold) and the serialized program.
 SUFFIX = ".jaxprogram"
@@ -53,20 +54,20 @@ def count_trace() -> None:
 
 
 def stored_program(
-    name: str, jitted, args: Sequence, static_argnums: Sequence[int], compile_options: dict | None
+    identity: list, jitted, args: Sequence, static_argnums: Sequence[int], compile_options: dict | None
 ) -> Callable | None:
     """A compiled call of the stored program for ``jitted(*args)`` (of the dynamic arguments only), or None.
 
-    ``name`` identifies the function (its module and qualified name, or a key its caller gives), ``jitted`` is
-    its ``jax.jit``, used to export it the first time. None when programs are not being stored or the call
-    cannot be.
+    ``identity`` names the function (its module and qualified name, and the cache keys of what it closes over:
+    ``jit.jit``), ``jitted`` is its ``jax.jit``, used to export it the first time. None when programs are not being
+    stored or the call cannot be.
     """
     from .cache import programs_folder
 
     folder = programs_folder()
     if folder is None:
         return None
-    signature = _signature(name, args, static_argnums)
+    signature = _signature(identity, args, static_argnums)
     if signature is None:
         return None
     if signature in _loaded:
@@ -99,13 +100,11 @@ def array_description(leaf) -> tuple:
     )
 
 
-def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str | None:
-    """The hex digest that names the program of ``name`` called with ``args``; None if the call cannot be stored."""
-    static_args = static_arguments(args, static_argnums)
-    if any(getattr(arg, "storable", True) is False for arg in static_args):  # its programs call back into Python
-        return None
-    statics = [repr(arg) for arg in static_args]
-    if any(" at 0x" in text for text in [name, *statics]):  # an object whose repr is its address: no identity
+def _signature(identity: list, args: Sequence, static_argnums: Sequence[int]) -> str | None:
+    """The hex digest that names the program of the function ``identity`` names, called with ``args``; None if the
+    call cannot be stored (a static argument without a cache key, an argument that is not an array)."""
+    statics = [key_of(arg) for arg in static_arguments(args, static_argnums)]
+    if any(key is None for key in statics):
         return None
     leaves, tree = jax.tree.flatten(dynamic_arguments(args, static_argnums))
     described = []
@@ -113,14 +112,16 @@ def _signature(name: str, args: Sequence, static_argnums: Sequence[int]) -> str 
         if not isinstance(leaf, np.ndarray | jax.Array | jax.ShapeDtypeStruct) or isinstance(leaf, jax.core.Tracer):
             return None
         described.append(array_description(leaf))
-    text = json.dumps([_environment(), name, statics, str(tree), repr(described)])
+    text = json.dumps([_environment(), identity, statics, str(tree), repr(described)])
     return hashlib.sha256(text.encode()).hexdigest()[:40]
 
 
 @cache
 def _environment() -> list[str]:
-    """What a stored program depends on besides its signature: brdffit's source, JAX, the backend, float64."""
+    """What a stored program depends on besides its signature: brdffit's version and source, JAX, the backend."""
     import jaxlib
+
+    from .._version import __version__
 
     package = Path(__file__).parent.parent  # the whole brdffit package
     source = hashlib.sha256()
@@ -128,7 +129,7 @@ def _environment() -> list[str]:
         source.update(str(path.relative_to(package)).encode())
         source.update(path.read_bytes())
     device = jax.devices()[0]
-    return [source.hexdigest(), jax.__version__, jaxlib.__version__, device.platform, device.device_kind]
+    return [__version__, source.hexdigest(), jax.__version__, jaxlib.__version__, device.platform, device.device_kind]
 
 
 def _load_or_export(path: Path, jitted, args: Sequence, static_argnums: Sequence[int]):

@@ -11,41 +11,46 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..physics.fresnel import FRESNEL
-    from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
-    from ..physics.models.registry import MODELS, get_model, model_option_names
+    from ..physics.models.registry import MODELS, recorded_options
 
-    for name in MODELS:
-        if name == "pca":  # its model needs a basis file: described, not built
-            print(f"{name}\n  data-driven: principal components of a library of measured tables (brdffit basis build)")
-            print(f"  options: {', '.join(flag(option) for option in ('basis', 'ridge'))}")
-            print("  parameters: coefficients: [K][C] real, in library standard deviations (K: the basis's components)")
+    for name, entry in MODELS.items():
+        options = [option for option in entry.option_defaults if option not in recorded_options()]
+        if entry.listing:  # a model that needs a file to be built: described by its entry
+            summary, *details = entry.listing
+            print(f"{name}\n  {summary}")
+            if options:
+                print(f"  options: {', '.join(flag(option) for option in options)}")
+            for line in details:
+                print(f"  {line}")
             continue
-        model = get_model(name)
+        model = entry()
         summary = model.summary + (f": {model.lobe.summary}" if model.lobe else "")
         print(f"{name}\n  {summary}")
-        options = model_option_names(name)
         if options:
             print(f"  options: {', '.join(flag(option) for option in options)}")
-        if name == "cook-torrance":
-            for option, kinds in (("distribution", DISTRIBUTIONS), ("shadowing", SHADOWING)):
-                described = (getattr(kind, "summary", kind) for kind in kinds.values())
-                listed = ", ".join(f"{value} ({what})" for value, what in zip(kinds, described, strict=True))
+        shaping = [option for option in entry.choices if _changes_parameters(entry, option)]
+        for option, values in entry.choices.items():
+            if option not in shaping:
+                listed = ", ".join(f"{value} ({what})" for value, what in values.items())
                 print(f"  {flag(option)}: {listed}")
-            for fresnel, kind in FRESNEL.items():
-                lines = describe_parameters(get_model(name, fresnel=fresnel))
-                print(f"  {flag('fresnel')} {fresnel}: {'; '.join(lines)} ({kind.summary})")
-        else:
+        for option in shaping:
+            for value, what in entry.choices[option].items():
+                lines = describe_parameters(entry(**{option: value}))
+                print(f"  {flag(option)} {value}: {'; '.join(lines)} ({what})")
+        if not shaping:
             print("  parameters: " + "; ".join(describe_parameters(model)))
     return EXIT_OK
 
 
+def _changes_parameters(entry, option: str) -> bool:
+    """Whether the values of ``option`` give models of different parameters (Cook-Torrance's Fresnel term)."""
+    return len({tuple(describe_parameters(entry(**{option: value}))) for value in entry.choices[option]}) > 1
+
+
 def describe_parameters(model) -> list[str]:
     """One line per parameter: its name, shape ([C] for one value per channel) and domain."""
-    from ..physics.domains import ALBEDO
-
-    lines = [f"{model.diffuse_name}: [C] {ALBEDO.text}"]
+    lines = [f"{model.diffuse_name}: [C] {model.diffuse.albedo_domain.text}"]
     if model.n_lobes:
-        lines.append(f"{model.specular_name}: [C] {ALBEDO.text}")
+        lines.append(f"{model.specular_name}: [C] {model.lobe.albedo_domain.text}")
         lines += [f"{name}: {domain.text}" for name, domain in model.lobe.parameters]
     return lines

@@ -23,7 +23,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, final
 
 import numpy as np
 
@@ -31,7 +31,7 @@ from .._jax import jax, jnp, namespace
 from ..errors import Argument, BrdfInputError
 from ..physics.domains import Interval
 from ..physics.geometry import above_horizon
-from ..physics.models.model import Model
+from ..physics.models.model import Model, ModelEntry
 from ..physics.models.params import Params
 
 #: Default weight of the library prior, ``Σ r² + ridge·s·Σ c²``: coefficients in library standard deviations,
@@ -88,12 +88,23 @@ def pca(
     )
 
 
+@final
 @dataclass(frozen=True, eq=False)
 class PcaModel(Model):
-    """A :class:`Model` whose parameters are a basis's coefficients; ``basis`` (a
-    :class:`~brdffit.physics.pca.basis.Basis`) is left out of the repr. Its identity (equality, hash: what JAX
-    compiles a program for) is its basis file and that file's digest; pickled, it is its options, and the
-    unpickling process reads the basis again (a Dask worker gets a few bytes, not the basis)."""
+    """The data-driven kind of :class:`~brdffit.physics.models.model.Model`: its parameters are a basis's
+    coefficients; ``basis`` (a :class:`~brdffit.datadriven.basis.Basis`) is left out of the repr. Its identity
+    (equality, hash: what JAX compiles a program for) is its basis file and that file's digest; pickled, it is its
+    options, and the unpickling process reads the basis again (a Dask worker gets a few bytes, not the basis).
+
+    What sets it apart, each where the kind is asked: it is evaluated on the host (:meth:`host_brdf`: a table's
+    interpolation does not fit in one program's memory); it is fitted by a solve of its own, a ridge start in the
+    mapped space and then Levenberg-Marquardt (``datadriven/fit.py``); its programs call the host for the basis (a
+    callback), which a program stored on disk cannot carry to another process (``brdffit/_programs``)."""
+
+    name: str
+    summary: str
+    options: tuple[tuple[str, Any], ...] = ()
+    isotropic: bool = True
 
     def __eq__(self, other) -> bool:
         return isinstance(other, PcaModel) and self.identity == other.identity
@@ -110,14 +121,11 @@ class PcaModel(Model):
         return self.model_options["basis"], self.model_options["basis_sha256"]
 
     basis: Any = field(default=None, compare=False, repr=False)
-    #: Evaluated on the host by :func:`brdffit.evaluate` (block by block: a table's interpolation does not fit
-    #: in one program's memory).
-    on_host: ClassVar[bool] = True
-    #: Fitted by its own solve: a ridge start in the mapped space, then Levenberg-Marquardt (``fitting/pca.py``).
-    own_fit: ClassVar[bool] = True
-    #: Its programs call the host for the basis (a callback), which a program stored on disk (``_programs.py``)
-    #: cannot carry to another process, nor run outside float64: they are compiled in each process instead.
-    storable: ClassVar[bool] = False
+
+    def cache_key(self) -> None:
+        """None: its programs call the host for the basis (a callback), which a program stored on disk cannot carry
+        to another process, nor run outside float64; they are compiled in each process instead."""
+        return None
 
     @property
     def ridge(self) -> float:
@@ -177,6 +185,20 @@ class PcaModel(Model):
     @property
     def physical(self) -> "CoefficientVector":
         return CoefficientVector(self)
+
+
+#: The data-driven model in the registry: it needs a basis file to be built, so ``brdffit models`` describes it; a
+#: result records the basis file's digest and the ridge's scale its fit measured; no renderer has it (exports
+#: approximate it); ``compare`` tries it when given a basis (``brdffit compare --basis``).
+PCA = ModelEntry(
+    pca,
+    listing=(
+        "data-driven: principal components of a library of measured tables (brdffit basis build)",
+        "parameters: coefficients: [K][C] real, in library standard deviations (K: the basis's components)",
+    ),
+    recorded=frozenset({"basis_sha256", "ridge_scale"}),
+    files=frozenset({"basis"}),
+)
 
 
 def _split_shapes(n: int, k: int) -> list[tuple[int, ...]]:

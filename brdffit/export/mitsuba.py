@@ -36,7 +36,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
-from ..physics.models.registry import get_model
+from ..physics.models.registry import MODELS, get_model
 from ..physics.models.specs import spec_of
 
 if TYPE_CHECKING:
@@ -103,8 +103,9 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     maps parameters only (no JAX is imported); the others fit (``approximate.py``)."""
     source = spec_of(result.model, result.model_options)
     notes = _channel_notes(result)
-    if _is_exact(result):
-        bsdf, scale = _bsdf(result)
+    exact = _exact_bsdf(result)
+    if exact is not None:
+        bsdf, scale = exact
         if scale == 1.0:
             return MitsubaExport(bsdf, source, result, None, notes)
         from .approximate import approximation_error
@@ -118,7 +119,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
 
     candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
     exported, _ = min(candidates, key=lambda pair: pair[1].rmse)
-    bsdf, scale = _bsdf(exported)
+    bsdf, scale = cook_torrance_bsdf(exported)
     if scale != 1.0:
         notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
     approximation = approximation_error(result, _scaled(exported, scale))
@@ -126,15 +127,11 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     return MitsubaExport(bsdf, source, exported, approximation, notes, refitted=True)
 
 
-def _is_exact(result: FitResult) -> bool:
-    if result.model == "lambert":
-        return True
-    options = get_model(result.model, **result.model_options).model_options
-    return (
-        result.model == "cook-torrance"
-        and options["shadowing"] == "smith"
-        and options["fresnel"] in ("conductor", "dielectric", "none")
-    )
+def _exact_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:
+    """The BSDF of ``result`` by its model's exact mapping onto Mitsuba (its registry entry's ``exports``), with the
+    factor its albedos were scaled by; None where the model, or these options of it, have no exact counterpart."""
+    mapping = MODELS[result.model].exact_export("mitsuba") if result.model in MODELS else None
+    return None if mapping is None else mapping(result)
 
 
 def _rgb(values) -> list[float]:
@@ -162,14 +159,22 @@ def _channel_notes(result: FitResult) -> list[str]:
     return []
 
 
-def _bsdf(result: FitResult) -> tuple[dict[str, Any], float]:
-    """The Mitsuba dictionary of an exactly expressible ``result``, and the factor its albedos were scaled by
-    (1 unless Mitsuba's [0, 1] range forced it)."""
-    if result.model == "lambert":
-        diffuse = np.asarray(_rgb(result.params["rho_d"]))
-        scale = min(1.0, 1.0 / max(diffuse.max(), 1e-300))
-        return {"type": "diffuse", "reflectance": _rgb_value(diffuse * scale)}, scale
+def lambert_bsdf(result: FitResult) -> tuple[dict[str, Any], float]:
+    """The Mitsuba ``diffuse`` BSDF of a Lambertian ``result``, and the factor its albedo was scaled by (1 unless
+    Mitsuba's [0, 1] range forced it): the ``lambert`` model's exact export."""
+    diffuse = np.asarray(_rgb(result.params["rho_d"]))
+    scale = min(1.0, 1.0 / max(diffuse.max(), 1e-300))
+    return {"type": "diffuse", "reflectance": _rgb_value(diffuse * scale)}, scale
+
+
+def cook_torrance_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:
+    """The Mitsuba dictionary of a Cook-Torrance ``result`` with Smith shadowing and a conductor, dielectric or no
+    Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``), and the factor its albedos were scaled by
+    (1 unless Mitsuba's [0, 1] range forced it); None for other options (the ``cook-torrance`` model's exact
+    export)."""
     params, options = result.params, get_model(result.model, **result.model_options).model_options
+    if options["shadowing"] != "smith" or options["fresnel"] not in ("conductor", "dielectric", "none"):
+        return None
     kd, ks = np.asarray(_rgb(params["kd"])), np.asarray(_rgb(params["ks"]))
     specular: dict[str, Any] = {"type": "roughconductor", "distribution": options["distribution"]}
     specular["alpha"] = float(params["m"])

@@ -4,11 +4,9 @@ from typing import Any
 
 import numpy as np
 
-from .._programs import jit
 from ..errors import BrdfInputError
 from .geometry import UNIT_LENGTH_TOLERANCE, normalised
 from .models.model import Model
-from .models.params import Params
 from .models.registry import model_for
 
 
@@ -18,8 +16,8 @@ def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any)
     ``params`` is the result file's parameter dictionary; ``options`` are the model's options
     (``fresnel=``, ``lobes=``; Lafortune's number of lobes is that of ``params["lobes"]`` unless given).
     Directions are unit vectors in the local frame (within 1e-3, then normalised; any other length is an
-    error); pairs with either ``z ≤ 0`` give 0. Returns a float64 numpy array; :meth:`Model.brdf` is the JAX
-    computation behind it.
+    error); pairs with either ``z ≤ 0`` give 0. Returns a float64 numpy array (the model's ``host_brdf``, whose JAX
+    computation is :meth:`Model.brdf`).
     """
     model = model_for(model, params, **options)
     checked = model.dictionary.to_params(params)
@@ -27,14 +25,7 @@ def evaluate(model: str | Model, params: dict[str, Any], wi, wo, **options: Any)
     wo = _directions(wo, "wo")
     if wi.shape != wo.shape:
         raise BrdfInputError(f"wi and wo must have the same shape, got {wi.shape} and {wo.shape}")
-    if model.on_host:
-        return model.host_brdf(checked, wi, wo)
-    return np.asarray(_brdf(model, checked, wi, wo))
-
-
-@jit(static_argnums=0)
-def _brdf(model: Model, params: Params, wi, wo):
-    return model.brdf(params, wi, wo)
+    return model.host_brdf(checked, wi, wo)
 
 
 def _directions(value, name: str) -> np.ndarray:

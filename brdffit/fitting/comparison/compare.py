@@ -36,10 +36,10 @@ from ..._programs import built_once, jit
 from ..._version import __version__
 from ...data.load import as_samples
 from ...data.samples import Samples
+from ...datadriven.model import PcaModel
 from ...errors import Argument, BrdfInputError
-from ...physics.fresnel import FRESNEL
 from ...physics.models.model import Model
-from ...physics.models.registry import get_model
+from ...physics.models.registry import MODELS, get_model
 from ...physics.models.specs import model_of_spec, spec_of
 from ..objective.losses import Loss, get_loss
 from ..objective.problem import Problem, build_problem, cost, residuals, sample_residuals
@@ -57,11 +57,9 @@ DOMINANT_FOLD = 100.0
 
 
 def default_specs() -> list[str]:
-    """Every model: Lafortune with 1 to 3 lobes, Cook-Torrance with each Fresnel term."""
-    specs = ["lambert", "ward", "ward-aniso", "ward-duer"]
-    specs += [f"cook-torrance:fresnel={kind}" for kind in FRESNEL]
-    specs += ["blinn-phong", "phong"] + [f"lafortune:lobes={lobes}" for lobes in (1, 2, 3)]
-    return specs
+    """The specs every registered model says ``compare`` should try (its registry entry's ``compare``): each model,
+    Lafortune with 1 to 3 lobes, Cook-Torrance with each Fresnel term."""
+    return [spec for entry in MODELS.values() for spec in entry.compare]
 
 
 @dataclass(frozen=True)
@@ -336,7 +334,7 @@ def _cross_validated(
     """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples, and
     whether each refit converged."""
     counted = np.ones(samples.n_samples, bool) if samples.weight is None else samples.weight > 0
-    if model.own_fit:  # the data-driven model refits by its own solve, with the prior of the fit to all samples
+    if isinstance(model, PcaModel):  # the data-driven kind refits by its own solve, with the fit's prior
         refit_model = get_model(result.model, **result.model_options)
         held_out_cost = None
     else:

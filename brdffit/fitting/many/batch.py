@@ -28,17 +28,15 @@ from typing import Any
 
 import numpy as np
 
-from ..._jax import float64, jax
+from ..._jax import float64
 from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...errors import BrdfInputError
-from ..single.caveats import screen_bucket, screen_program
 from ..single.defaults import MAX_STEPS, N_STARTS
 from ..single.fit import checked, fit_one, start_vector
-from ..single.outcome import final_params, result_of
 from ..single.result import FitResult
-from ..single.stacked import compile_in_background, default_strategy, solve_bucket
-from .buckets import WorkUnit, work_units
+from ..single.stacked import StackedFit, default_strategy
+from .buckets import WorkUnit, fitted_alone, work_units
 from .threads import run_units, usable_cores
 
 STRATEGIES = ("auto", "loop", "vmap")
@@ -88,38 +86,20 @@ def fit_many(
 
     def fit_unit(unit: WorkUnit, on_stage: Callable[[str], None] | None) -> int:
         """Fit the datasets of ``unit`` into ``results``; how many they were."""
-        if built.own_fit or (built.n_lobes > 1 and not unit.given):  # pca; lobe by lobe
+        if fitted_alone(built, unit.given):
             (index,) = unit.indices
             one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
-            given = starts[index] if built.own_fit else None
-            results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=given, **held, **one)
+            results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=starts[index], **held, **one)
             return 1
-        thetas = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
+        given = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
         constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
         hold = None if constraints is None else constraints.hold()
         unit_samples = [kept[i] for i in unit.indices]
-        n_channels = unit_samples[0].n_channels
-        compiling = compile_in_background(*screen_program(built, unit_samples, unit.stack))
-        solved = solve_bucket(
-            built, built_loss, unit_samples, thetas, hold=hold, stack=unit.stack, on_stage=on_stage, **options
-        )
-        each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(unit.indices))]
-        compiling.join()
-        params = [final_params(built, one, n_channels) for one in each]
-        screens = screen_bucket(built, params, unit_samples, unit.stack)
-        for one, index, fitted, screened in zip(each, unit.indices, params, screens, strict=True):
-            results[index] = result_of(
-                built,
-                built_loss,
-                kept[index],
-                one,
-                max_steps,
-                dtype,
-                max_theta=max_theta,
-                screened=screened,
-                constraints=constraints,
-                params=fitted,
-            )
+        fit = StackedFit(built, built_loss, unit_samples, hold, stack=unit.stack, on_stage=on_stage, **options)
+        solved = fit.solve(fit.starts(given))
+        fitted = fit.results(solved, max_theta=max_theta, constraints=constraints)
+        for index, result in zip(unit.indices, fitted, strict=True):
+            results[index] = result
         return len(unit.indices)
 
     units = work_units(built, kept, [vector is not None for vector in vectors], threads)

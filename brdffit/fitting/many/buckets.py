@@ -10,7 +10,7 @@ from itertools import pairwise
 from typing import NamedTuple
 
 from ...data.samples import Samples
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ..objective.problem import padded_size
 from ..single.stacked import stack_size
 from ..starts.grid import SEARCH_SAMPLES
@@ -59,6 +59,13 @@ class WorkUnit(NamedTuple):
     size: int = 0  # samples of each stacked dataset (``problem.padded_size``)
 
 
+def fitted_alone(model: Model, given: bool) -> bool:
+    """Whether ``model`` fits each dataset alone rather than in a bucket's programs: the data-driven model (its own
+    solve, ``datadriven/fit.py``), and a lobe model of several lobes without a given start (lobe by lobe,
+    ``starts/lobes.py``)."""
+    return not isinstance(model, LobeModel) or (model.n_lobes > 1 and not given)
+
+
 def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], threads: int = 1) -> list[WorkUnit]:
     """How :func:`fit_many` cuts ``samples`` (as kept for the fit) into units: by bucket and by whether the start
     is given (a given start replaces the search), each bucket in batches for ``threads`` threads
@@ -69,8 +76,8 @@ def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], 
         groups.setdefault((bucket_key(one), has_start), []).append(index)
     units = []
     for (key, has_start), indices in groups.items():
-        if model.own_fit or (model.n_lobes > 1 and not has_start):
-            units += [WorkUnit([index], False, 1, key.padded_size) for index in indices]
+        if fitted_alone(model, has_start):
+            units += [WorkUnit([index], has_start, 1, key.padded_size) for index in indices]
         else:
             cut = batches(indices, key.padded_size, threads)
             stack = stack_size([len(batch) for batch in cut])

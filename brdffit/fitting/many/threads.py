@@ -8,7 +8,6 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
 
 from ..._jax import float64
-from ..._programs.stored import traced
 from .buckets import BATCH_SAMPLES, WorkUnit
 
 
@@ -16,9 +15,10 @@ def run_units(units: list["WorkUnit"], fit_unit: Callable, threads: int, bar) ->
     """``fit_unit(unit, on_stage)`` (how many datasets it fitted) for each of ``units``, on ``threads`` threads,
     each fitted count added to ``bar``.
 
-    The first unit starts alone, the others once its programs are compiled (its ``on_stage("compiled")``, from
-    ``buckets.solve_bucket``) or once its start search traced nothing new (every program was compiled before);
-    the units running at once hold at most :data:`~.buckets.BATCH_SAMPLES` samples (one larger unit runs alone).
+    The first unit starts alone, the others once its programs are compiled: the event its ``on_stage("compiled")``
+    sets (``single/stacked.StackedFit``: after the start search, when the solve's program is compiled too, or at
+    once when the starts are given), or its end. The units running at once hold at most
+    :data:`~.buckets.BATCH_SAMPLES` samples (one larger unit runs alone).
     A unit that fails stops those not yet started, and the failure is raised at once.
     """
     if threads == 1 or len(units) == 1:
@@ -37,10 +37,9 @@ def run_units(units: list["WorkUnit"], fit_unit: Callable, threads: int, bar) ->
         with budget.taken(unit.stack * unit.size):
             if not first:
                 return fit_unit(unit, None)
-            before = traced()
 
             def on_stage(stage: str) -> None:
-                if stage == "compiled" or traced() == before:
+                if stage == "compiled":
                     compiled.set()
 
             try:

@@ -1,12 +1,13 @@
 """The derivatives of a model in the solver's coordinates, factored as a per-sample basis times coefficients.
 
-A model is linear in its albedos (``physics/models/model.py``)::
+A lobe model is linear in its albedos (``physics/models/model.py``)::
 
-    f[n, c] = diffuse[c]/π + Σ_k specular[k, c] · lobe_k[n]
+    f[n, c] = diffuse[c] · d[n] + Σ_k specular[k, c] · lobe_k[n]
 
-so the derivative of every channel with respect to every unconstrained parameter ``θ`` (``ln`` of the
-albedos, the lobes' shape coordinates) is a combination of ``M = 1 + K + K·S`` functions per sample,
-the *basis* ``[1/π, lobe_k, ∂lobe_k/∂u_ks]``, with coefficients that do not depend on the sample::
+with ``d`` the diffuse term of unit albedo (Lambert's ``1/π``), so the derivative of every channel with respect to
+every unconstrained parameter ``θ`` (``ln`` of the albedos, the lobes' shape coordinates) is a combination of
+``M = 1 + K + K·S`` functions per sample, the *basis* ``[d, lobe_k, ∂lobe_k/∂u_ks]``, with coefficients that do not
+depend on the sample::
 
     ∂f[n, c]/∂θ_p = Σ_m basis[n, m] · A[c, m, p]
 
@@ -21,11 +22,11 @@ from jaxtyping import Array, Float
 
 from ...physics.domains import ALBEDO
 from ...physics.geometry import above_horizon
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel
 
 
 def value_and_basis(
-    model: Model,
+    model: LobeModel,
     theta: Float[Array, " k"],
     wi: Float[Array, "n 3"],
     wo: Float[Array, "n 3"],
@@ -37,8 +38,9 @@ def value_and_basis(
     visible, wi, wo = above_horizon(wi, wo)
     n, c = wi.shape[0], n_channels
     diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
-    values = jnp.broadcast_to(diffuse / jnp.pi, (n, c))
-    columns = [jnp.full((n, 1), 1.0 / jnp.pi, dtype=dtype)]
+    diffuse_term = model.diffuse({}, wi, wo).astype(dtype)[:, None]  # (N, 1): the diffuse term of unit albedo
+    values = diffuse_term * diffuse
+    columns = [diffuse_term]
     if model.n_lobes:
         k = model.n_lobes
         shape_coordinates = model.lobe.unconstrained
@@ -61,7 +63,7 @@ def value_and_basis(
     return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None], basis, 0.0)
 
 
-def jacobian_coefficients(model: Model, theta: Float[Array, " k"], n_channels: int) -> Float[Array, "C M k"]:
+def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channels: int) -> Float[Array, "C M k"]:
     """``A`` (C, M, k) with ``∂f[n, c]/∂θ = Σ_m basis[n, m] · A[c, m]`` (see :func:`value_and_basis`).
 
     Row 0 (the diffuse basis) carries ``d rho_d/du``; the lobe rows carry ``d rho_s/du``; the

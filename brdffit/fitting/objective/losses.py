@@ -35,9 +35,13 @@ class Loss:
 
     name: str
     summary: str
-    #: (values, measured, cos_i) -> transformed values. Left out of the repr, which is then the loss's identity
-    #: (``_programs.py`` stores compiled programs under it; a function's repr is its address in this process).
+    #: (values, measured, cos_i) -> transformed values.
     transform: Callable = field(repr=False)
+
+    def cache_key(self) -> list | None:
+        """A built-in loss by its name (``brdffit/_programs/keys.py``); None for a loss of one's own, whose transform
+        is a function no key names: its programs are compiled in each process."""
+        return [self.name] if LOSSES.get(self.name) is self else None
 
     def value_and_slope(self, values, measured, cos_i):
         """``T(values)`` and ``dT/dv`` at ``values``, elementwise (forward mode)."""

@@ -23,7 +23,7 @@ from ...data.reciprocity import reciprocity
 from ...data.samples import Samples
 from ...physics.domains import UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
 from ..objective.problem import padded_size, stacked_directions
 
@@ -57,7 +57,9 @@ def caveats(
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
     found = _not_reciprocal(samples)
-    if screened is None:
+    if not isinstance(model, LobeModel):  # no lobes to share the model, none peaked at the mirror to screen
+        screened = Screened(ALBEDO_INCIDENCE, np.zeros(0))
+    elif screened is None:
         (screened,) = screen_bucket(model, [params], [samples], 1)
     found += _dead_lobes(model, params, screened.lobe_shares)
     found += _implausible(model, params, samples.channels)
@@ -70,7 +72,7 @@ def caveats(
     return found
 
 
-def lobe_name(model: Model, params: Params, k: int) -> str:
+def lobe_name(model: LobeModel, params: Params, k: int) -> str:
     """How a message names lobe ``k``: ``lobe 2 (cxy +0.577, cz 0.577, n 1.8e+03)``, or the specular lobe."""
     if not model.lobes_as_list:
         return f"the specular lobe ({model.specular_name})"
@@ -89,7 +91,7 @@ def _not_reciprocal(samples: Samples) -> list[str]:
     ]
 
 
-def _dead_lobes(model: Model, params: Params, shares: np.ndarray) -> list[str]:
+def _dead_lobes(model: LobeModel, params: Params, shares: np.ndarray) -> list[str]:
     """The lobes whose largest ``shares`` (K,) of the model stay under :data:`DEAD_SHARE`."""
     return [
         f"{lobe_name(model, params, k)} contributes less than {DEAD_SHARE:.1%} of the model at every sample"
@@ -100,13 +102,13 @@ def _dead_lobes(model: Model, params: Params, shares: np.ndarray) -> list[str]:
 
 
 @jit(static_argnums=0)
-def _lobe_shares(model: Model, params: Params, wi, wo, real):
+def _lobe_shares(model: LobeModel, params: Params, wi, wo, real):
     """Each lobe's largest share of the model over the samples (those ``real``, (N,) bool) and channels, (K,)."""
     if not model.n_lobes:
         return jnp.zeros(0)
     visible, wi, wo = above_horizon(wi, wo)
     contributions = model.lobe_values(params.shape, wi, wo)[:, :, None] * params.specular[:, None, :]  # (K, N, C)
-    total = params.diffuse / jnp.pi + contributions.sum(axis=0)
+    total = model.diffuse({}, wi, wo)[:, None] * params.diffuse + contributions.sum(axis=0)
     share = contributions / jnp.maximum(total, jnp.finfo(total.dtype).tiny)
     return (share * (visible & real)[None, :, None]).max(axis=(1, 2))
 
@@ -166,7 +168,7 @@ class Screened(NamedTuple):
     lobe_shares: np.ndarray
 
 
-def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
+def screen_bucket(model: LobeModel, params: list[Params], samples: Sequence[Samples], stack: int) -> list[Screened]:
     """The screens of a whole bucket of fits, ``params`` (numpy, one shape) of ``samples`` (one padded size), in one
     program, stacked to ``stack`` datasets as the bucket's problems are (``problem.stacked_directions``): every
     batch of a bucket runs the same program, which :func:`screen_program` compiles ahead."""
@@ -178,7 +180,7 @@ def screen_bucket(model: Model, params: list[Params], samples: Sequence[Samples]
     return [Screened(opened[d], shares[d]) for d in range(len(params))]
 
 
-def screen_program(model: Model, samples: Sequence[Samples], stack: int) -> tuple:
+def screen_program(model: LobeModel, samples: Sequence[Samples], stack: int) -> tuple:
     """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for
     ``samples`` stacked to ``stack`` datasets, to compile it ahead (``buckets.compile_in_background``)."""
     n_channels, size = samples[0].n_channels, padded_size(samples[0].n_samples)
@@ -189,7 +191,7 @@ def screen_program(model: Model, samples: Sequence[Samples], stack: int) -> tupl
 
 
 @jit(static_argnums=0)
-def _bucket_screens(model: Model, stacked: Params, wi, wo, real):
+def _bucket_screens(model: LobeModel, stacked: Params, wi, wo, real):
     """:func:`_screen_bound` (zeros where the screen does not apply) and :func:`_lobe_shares` of each of a stack of
     fits (leading axis D), one after another."""
 
@@ -208,13 +210,13 @@ def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
     return tuple(theta for theta, bound in zip(ALBEDO_INCIDENCE, bounds, strict=True) if np.any(bound >= SCREEN_BELOW))
 
 
-def _screenable(model: Model) -> bool:
+def _screenable(model: LobeModel) -> bool:
     """Whether the screen applies: a model with lobes, each peaking at the mirror direction (not Lafortune's)."""
-    return bool(model.n_lobes) and not model.lobes_as_list
+    return bool(model.n_lobes) and model.lobe.peaks_at_mirror
 
 
 @jit(static_argnums=0)
-def _screen_bound(model: Model, params: Params):
+def _screen_bound(model: LobeModel, params: Params):
     """A generous bound (incidences, C) on the directional albedo, from a :data:`SCREEN_GRID` × 2·SCREEN_GRID grid:
     its estimate, plus three times its disagreement with its even points alone (the quadrature's error shrinks as
     the grid refines; the even points err at least as much), plus the BRDF's peak (at the mirror direction, where

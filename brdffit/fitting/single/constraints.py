@@ -22,7 +22,7 @@ import numpy as np
 
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import ALBEDO, Domain
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
 from ..solver.hold import Hold, on_bound
 
@@ -165,7 +165,7 @@ def constraints_for(
     fixed, bounds = _mapping(fixed, "fixed"), _mapping(bounds, "bounds")
     if not fixed and not bounds:
         return None
-    if model.own_fit:
+    if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
         raise BrdfInputError(
             Argument("fixed" if fixed else "bounds"),
             f": model {model.name} fits every coefficient, under its prior (ridge); it takes no fixed or bounded"
@@ -198,7 +198,7 @@ def constraints_for(
 
 def parameter_names(model: Model) -> list[str]:
     """The names :func:`constraints_for` takes for ``model``: ``kd, ks, m, f0``; ``rho_d, lobes[0].rho_s, …``."""
-    if model.own_fit:
+    if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
         return []
     names = [model.diffuse_name]
     for k in range(model.n_lobes):
@@ -232,7 +232,7 @@ def _target(model: Model, name: str, argument: str = "fixed") -> Target:
         if parameter == model.diffuse_name and name == model.diffuse_name:
             return Target(name, "diffuse", 0, parameter, ALBEDO)
         if parameter == model.specular_name:
-            return Target(name, "specular", lobe, parameter, model.lobe.specular_domain)
+            return Target(name, "specular", lobe, parameter, model.lobe.albedo_domain)
         return Target(name, "shape", lobe, parameter, dict(model.lobe.parameters)[parameter])
     raise _error(argument, f"{model.name} has no parameter {name!r}; its parameters are {', '.join(known)}")
 

@@ -1,9 +1,9 @@
-"""Fit a model to one set of samples: Levenberg-Marquardt (``solve.py``) from data-driven starts.
+"""Fit a model to one set of samples: start → solve → caveats → result (:func:`fit_one`).
 
-A single fit is a bucket of one (``buckets.py``): its grid start search, its solves from the best starts and,
-on large data, the search on a subset (``starts.search_subset``) with only the winner refined on all samples,
-are the programs a batch of many datasets runs. Models with several lobes (Lafortune) are fitted lobe by
-lobe instead (``lobes.py``).
+A lobe model starts from its grid's best shapes (``starts/grid.py``) and is solved by Levenberg-Marquardt
+(``solver/``) in the compiled programs a batch of many datasets also runs (``stacked.py``); its caveats and result
+come last (``caveats.py``, ``outcome.py``). A model of several lobes (Lafortune's) is placed and fitted lobe by
+lobe instead (``starts/lobes.py``); the data-driven kind fits by a solve of its own (``datadriven/fit.py``).
 """
 
 from typing import Any
@@ -13,22 +13,23 @@ import numpy as np
 from ..._jax import float64, jax
 from ...checks import choice, whole_number
 from ...data.samples import Samples
+from ...datadriven.fit import fit_pca
+from ...datadriven.model import PcaModel
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import START_FACTOR
 from ...physics.models.model import Model
-from ...physics.models.registry import MODELS, RECORDED_OPTIONS, get_model, model_option_names
+from ...physics.models.registry import MODELS, get_model, model_option_names, recorded_options
 from ..objective.losses import Loss, get_loss
 from ..objective.problem import DTYPES, Problem, build_problem
 from ..solver.compiled import best, compiled_solver
 from ..solver.hold import Hold
 from ..starts.grid import search_subset
 from ..starts.lobes import lobe_by_lobe
-from .caveats import screen_program
 from .constraints import Constraints, constraints_for
 from .defaults import MAX_STEPS, N_STARTS
 from .outcome import result_of
 from .result import FitResult
-from .stacked import compile_in_background, default_strategy, onto_bounds, solve_bucket
+from .stacked import StackedFit, compile_in_background, default_strategy, onto_bounds
 
 
 @float64
@@ -51,26 +52,25 @@ def fit_one(
     model, loss, samples, constraints = checked(
         samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
     )
-    hold = None if constraints is None else constraints.hold()
     n_starts = whole_number("n_starts", n_starts)
     max_steps = whole_number("max_steps", max_steps)
-    if model.own_fit:  # the data-driven model: a ridge start and its own solve (``pca.py``)
-        from ...datadriven.fit import fit_pca
-
+    if isinstance(model, PcaModel):  # the data-driven kind: a ridge start and a solve of its own
         if dtype != "float64":
             raise BrdfInputError(Argument("dtype", dtype), f" does not apply to model {model.name}; it fits in float64")
         return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
-    if start is None and model.n_lobes > 1:
+    hold = None if constraints is None else constraints.hold()
+    if start is None and model.n_lobes > 1:  # several lobes: placed and fitted one at a time
         solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed, hold)
         return result_of(
             model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
         )
-    starts = None if start is None else start_vector(model, start, samples.n_channels)[None]
     options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=default_strategy())
-    compiling = compile_in_background(*screen_program(model, [samples], 1))
-    solved = jax.tree.map(lambda leaf: leaf[0], solve_bucket(model, loss, [samples], starts, hold=hold, **options))
-    compiling.join()
-    return result_of(model, loss, samples, solved, max_steps, dtype, max_theta=max_theta, constraints=constraints)
+    fit = StackedFit(model, loss, [samples], hold, **options)  # the programs every fit runs, for one dataset
+    given = None if start is None else start_vector(model, start, samples.n_channels)[None]
+    thetas = fit.starts(given)  # start: the given one, or the grid's best shapes, raced
+    solved = fit.solve(thetas)  # solve: Levenberg-Marquardt
+    (result,) = fit.results(solved, max_theta=max_theta, constraints=constraints)  # caveats, result
+    return result
 
 
 def _lobe_by_lobe(
@@ -143,7 +143,7 @@ def _check_option_names(options: dict[str, Any]) -> None:
     known = {name for each in MODELS for name in model_option_names(each)}
     for key in options:
         if key not in known:
-            listed = ", ".join(sorted(known - RECORDED_OPTIONS))  # a result's recorded options are taken, not offered
+            listed = ", ".join(sorted(known - recorded_options()))  # a result's recorded options are taken, not offered
             raise BrdfInputError(
                 Argument(key), f" is not an argument of the fit, nor an option of any model ({listed})"
             )

@@ -1,18 +1,17 @@
-"""Many datasets of one shape fitted at once: the start search and every solve of a bucket in compiled programs.
+"""The compiled programs every fit of a lobe model runs, over datasets stacked as arrays (D, …): one dataset, or a
+batch of a bucket of many (``fitting/many/buckets.py``: datasets whose problems stack). A material library or the
+texels of a capture pay no Python per dataset and per solver step; a single fit runs the same computation:
 
-A *bucket* is a list of datasets whose problems stack: the same padded size (``problem.padded_size``), channel
-count and optional columns, all searched on a subset or none (:func:`bucket_key`). A bucket goes through the
-fit's steps as arrays (D, …) in a few compiled programs, so a material library or the texels of a capture pay
-no Python per dataset and per solver step:
-
-1. the grid start search of every dataset (``starts.grid_starts``), on its search subset when it has one;
-2. a race of each dataset's ``n_starts`` starts: on the subset, Levenberg-Marquardt to convergence; without one,
-   :data:`RACE_STEPS` steps on every sample, run by the program of step 3 with a smaller step budget;
-3. Levenberg-Marquardt from the winner on every sample (float32 fits: refined in float64 after).
+1. start (:meth:`StackedFit.starts`): the grid start search of every dataset (``starts/grid.py``), on its search
+   subset when it has one, then a race of each dataset's ``n_starts`` starts: on the subset, Levenberg-Marquardt to
+   convergence; without one, :data:`RACE_STEPS` steps on every sample, run by the program of step 2 with a smaller
+   step budget;
+2. solve (:meth:`StackedFit.solve`): Levenberg-Marquardt from the winner on every sample (float32 fits: refined in
+   float64 after; a parameter pulled beyond its bound: solved again on it);
+3. caveats and results (:meth:`StackedFit.results`): the caveats' screens of every dataset in one program.
 
 Inside a program the datasets are solved one after another (``lax.map``) on a CPU, where a vectorised
 while-loop would run every fit until the slowest ends; on a GPU all at once (``vmap``), which fills the device.
-A single fit is a bucket of one (``fit.py``), so both paths are the same computation.
 """
 
 import threading
@@ -24,12 +23,16 @@ import numpy as np
 from ..._jax import float64, jax
 from ..._programs import built_once, jit
 from ...data.samples import Samples
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ..objective.losses import Loss
 from ..objective.problem import Problem, build_problems, padded_size
 from ..solver.compiled import SAME_COST, best_index, solved_from
 from ..solver.hold import Hold, at_bounds
 from ..starts.grid import grid_starts, search_subset
+from .caveats import screen_bucket, screen_program
+from .constraints import Constraints
+from .outcome import final_params, result_of
+from .result import FitResult
 
 #: Steps of the race between the starts of a dataset searched on all its samples: the one of lowest cost after
 #: them goes on. Measured on 1,000 Ward and 300 Cook-Torrance fits of 500 samples: after 2 steps the race picked a
@@ -49,78 +52,126 @@ def default_strategy() -> str:
     return "vmap" if jax.default_backend() in ("gpu", "cuda", "rocm") else "loop"
 
 
-@float64
-def solve_bucket(
-    model: Model,
-    loss: Loss,
-    samples: Sequence[Samples],
-    starts: np.ndarray | None,
-    *,
-    n_starts: int,
-    max_steps: int,
-    dtype: str,
-    seed: int,
-    strategy: str,
-    hold: Hold | None = None,
-    stack: int | None = None,
-    on_stage: Callable[[str], None] | None = None,
-):
-    """The best solve (a ``fit.Solved`` of numpy arrays with a leading axis D) of each dataset of one bucket.
+class StackedFit:
+    """The fit of datasets of one bucket (one dataset, or a batch of many) in the compiled programs every fit shares:
+    built from the data, then :meth:`starts` → :meth:`solve` → :meth:`results`.
 
-    ``starts`` (D, k): the unconstrained start of each dataset, or None to search the grid for them. ``hold``:
-    what every dataset's fit holds (``hold.py``), or None. ``stack``: how many datasets to stack them to
-    (:func:`stack_size` of the bucket's batches; by default that of this one). ``on_stage``: called with
-    ``"searched"`` once the starts are searched, and ``"compiled"`` right before the final solve, when the programs
-    of the search and the race have run and that of the solve is compiled (with given starts, nothing has run yet;
-    a float32 fit's refinement and a bounded fit's second solve compile after it).
+    ``hold``: what every dataset's fit holds (``hold.py``), or None. ``stack``: how many datasets the programs stack
+    them to (:func:`stack_size` of the bucket's batches; by default that of these). ``on_stage``: called with
+    ``"searched"`` once the grid starts are searched and ``"compiled"`` once the programs of the search and of the
+    solve are compiled (with given starts, before anything has run; a float32 fit's refinement and a bounded fit's
+    second solve compile later): ``many/threads.py`` starts its other threads then. The caveats' screen program
+    compiles in the background meanwhile (``caveats.screen_program``).
     """
-    on_stage = on_stage or (lambda stage: None)
-    count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few compiled programs
-    full = build_problems(samples, dtype, count)
-    holds = None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (count, leaf.size)), hold)
-    solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
-    full_budget = step_budget(max_steps)
-    solve = lambda thetas, problems: solver(thetas, problems, holds, full_budget)
-    if starts is not None:
-        thetas = np.concatenate([starts, np.repeat(starts[:1], count - len(samples), axis=0)])[:, None]
-    else:
+
+    @float64
+    def __init__(
+        self,
+        model: LobeModel,
+        loss: Loss,
+        samples: Sequence[Samples],
+        hold: Hold | None = None,
+        *,
+        n_starts: int,
+        max_steps: int,
+        dtype: str,
+        seed: int,
+        strategy: str,
+        stack: int | None = None,
+        on_stage: Callable[[str], None] | None = None,
+    ):
+        self.model, self.loss, self.samples, self.hold = model, loss, list(samples), hold
+        self.n_starts, self.max_steps, self.dtype, self.seed, self.strategy = n_starts, max_steps, dtype, seed, strategy
+        self.on_stage = on_stage or (lambda stage: None)
+        self.count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few programs
+        self.problems = build_problems(samples, dtype, self.count)
+        self.holds = (
+            None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (self.count, leaf.size)), hold)
+        )
+        self.solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
+        self.budget = step_budget(max_steps)
+        self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count))
+
+    @float64
+    def starts(self, given: np.ndarray | None = None) -> np.ndarray:
+        """Each dataset's start (D, 1, k): ``given`` (D, k) as it is; else the best of the grid (``starts/grid.py``),
+        its ``n_starts`` best shapes raced: to convergence on the search subset of large datasets, a few steps
+        (:data:`RACE_STEPS`) on every sample of small ones."""
+        model, count, holds = self.model, self.count, self.holds
+        if given is not None:
+            self.on_stage("compiled")
+            return np.concatenate([given, np.repeat(given[:1], count - len(given), axis=0)])[:, None]
         # The program that solves the winners compiles in the background, during the grid search; but when the
         # starts race on a subset, only after it (the race's program compiles then, and three compilations at
         # once on 2 cores cost 20 × 100k Ward ~1 s).
-        one_start = jax.ShapeDtypeStruct((count, 1, model.unconstrained.size(samples[0].n_channels)), np.float64)
-        winners = lambda: compile_in_background(solver, one_start, full, holds, full_budget)
-        subsets = [search_subset(one, seed) for one in samples]
+        one_start = jax.ShapeDtypeStruct((count, 1, model.unconstrained.size(self.samples[0].n_channels)), np.float64)
+        winners = lambda: compile_in_background(self.solver, one_start, self.problems, holds, self.budget)
+        subsets = [search_subset(one, self.seed) for one in self.samples]
         search = None
         if subsets[0] is not None:
-            chosen = [one.select(subset) for one, subset in zip(samples, subsets, strict=True)]
-            search = build_problems(chosen, dtype, count)
-        subset_race = search is not None and n_starts > 1
+            chosen = [one.select(subset) for one, subset in zip(self.samples, subsets, strict=True)]
+            search = build_problems(chosen, self.dtype, count)
+        subset_race = search is not None and self.n_starts > 1
         compiling = None if subset_race else winners()
-        thetas = np.asarray(grid_starts(model, loss, n_starts, full if search is None else search, holds))
-        on_stage("searched")
+        thetas = np.asarray(
+            grid_starts(model, self.loss, self.n_starts, self.problems if search is None else search, holds)
+        )
+        self.on_stage("searched")
         if subset_race:
             compiling = winners()
             if thetas.shape[1] > 1:  # the starts race to convergence on the subset
-                thetas = _best(solve(thetas, search)).theta[:, None]
+                thetas = _best(self.solver(thetas, search, holds, self.budget)).theta[:, None]
         compiling.join()
+        self.on_stage("compiled")
         if thetas.shape[1] > 1:  # the starts race a few steps on every sample, one start at a time
-            budget = step_budget(min(RACE_STEPS, max_steps))
-            raced = [solver(thetas[:, [s]], full, holds, budget) for s in range(thetas.shape[1])]
+            budget = step_budget(min(RACE_STEPS, self.max_steps))
+            raced = [self.solver(thetas[:, [s]], self.problems, holds, budget) for s in range(thetas.shape[1])]
             thetas = _best(jax.tree.map(lambda *leaves: np.concatenate(leaves, axis=1), *raced)).theta[:, None]
-    on_stage("compiled")
-    solved = _best(solve(thetas, full))
-    if dtype == "float32":
-        refined = bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")(
-            solved.theta[:, None], build_problems(samples, "float64", count), holds, full_budget
-        )
-        solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
-    if holds is not None and np.any(hold.bounded):
-        solver64 = (
-            solver if dtype == "float64" else bucket_solver(model, loss, max_steps, "float64", strategy == "vmap")
-        )
-        problems64 = full if dtype == "float64" else build_problems(samples, "float64", count)
-        solved = onto_bounds(lambda theta, held: solver64(theta[:, None], problems64, held, full_budget), solved, holds)
-    return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
+        return thetas
+
+    @float64
+    def solve(self, thetas: np.ndarray):
+        """The best solve (``solver.compiled.Solved`` of numpy arrays with a leading axis D) of each dataset from its
+        start (:meth:`starts`): Levenberg-Marquardt on every sample, then a float32 fit refined in float64, and a
+        bounded parameter that ended near its bound solved again on it (:func:`onto_bounds`)."""
+        samples, count, holds = self.samples, self.count, self.holds
+        solved = _best(self.solver(thetas, self.problems, holds, self.budget))
+        solver64, problems64 = self.solver, self.problems
+        if self.dtype == "float32":
+            solver64 = bucket_solver(self.model, self.loss, self.max_steps, "float64", self.strategy == "vmap")
+            problems64 = build_problems(samples, "float64", count)
+            refined = solver64(solved.theta[:, None], problems64, holds, self.budget)
+            solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
+        if holds is not None and np.any(self.hold.bounded):
+            again = lambda theta, held: solver64(theta[:, None], problems64, held, self.budget)
+            solved = onto_bounds(again, solved, holds)
+        return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
+
+    def results(
+        self, solved, *, max_theta: float | None = None, constraints: Constraints | None = None
+    ) -> list[FitResult]:
+        """The :class:`FitResult` of each dataset's ``solved`` (:meth:`solve`), with its caveats: the screens of all
+        of them in one program, compiled while they were solved."""
+        each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(self.samples))]
+        n_channels = self.samples[0].n_channels
+        params = [final_params(self.model, one, n_channels) for one in each]
+        self._screen_compiling.join()
+        screens = screen_bucket(self.model, params, self.samples, self.count)
+        return [
+            result_of(
+                self.model,
+                self.loss,
+                samples,
+                one,
+                self.max_steps,
+                self.dtype,
+                max_theta=max_theta,
+                screened=screened,
+                constraints=constraints,
+                params=fitted,
+            )
+            for samples, one, fitted, screened in zip(self.samples, each, params, screens, strict=True)
+        ]
 
 
 def onto_bounds(solve, solved, holds):
@@ -196,4 +247,4 @@ def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectoris
 
         return jax.lax.map(each_dataset, (thetas, problems, holds))
 
-    return jit(solve, name=f"fitting.buckets.solve[{model!r}, {loss!r}, {max_steps}, {dtype!r}, {vectorise}]")
+    return jit(solve, name=f"{__name__}.bucket_solver", closes_over=(model, loss, max_steps, dtype, vectorise))

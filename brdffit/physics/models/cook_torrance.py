@@ -25,7 +25,7 @@ from ..geometry import half_vector
 from ..microfacet import DISTRIBUTIONS, SHADOWING, shadowing
 from .grids import ROUGHNESS_GRID
 from .lobe import MappedLobe
-from .model import Model
+from .model import LobeModel, ModelEntry
 
 
 @final
@@ -47,8 +47,10 @@ class CookTorranceLobe(MappedLobe):
         distribution = DISTRIBUTIONS[self.distribution].summary
         return f"{distribution} D, {SHADOWING[self.shadowing]} G, {self.fresnel} Fresnel, F·D·G/(4 ci co)"
 
+    peaks_at_mirror = True
+
     @property
-    def specular_domain(self) -> Domain:
+    def albedo_domain(self) -> Domain:
         """``ks`` is the lobe's albedo without a Fresnel term; with one, ``ks·F`` is (Ngan et al. 2005: ks to 1.25)."""
         return ALBEDO if self.fresnel == "none" else NON_NEGATIVE
 
@@ -74,9 +76,23 @@ class CookTorranceLobe(MappedLobe):
         return fresnel * distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
 
 
-def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shadowing: str = "v-groove") -> Model:
+def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shadowing: str = "v-groove") -> LobeModel:
     """``kd/π + ks · F·D·G/(4 ci co)``; ``fresnel`` one of schlick (default), dielectric, conductor, none;
     ``distribution`` beckmann (default) or ggx; ``shadowing`` v-groove (default), smith or smith-correlated."""
     lobe = CookTorranceLobe(fresnel, distribution, shadowing)
     options = (("fresnel", fresnel), ("distribution", distribution), ("shadowing", shadowing))
-    return Model("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", options)
+    return LobeModel("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", options)
+
+
+#: Cook-Torrance in the registry: compared with each Fresnel term; exact in Mitsuba with Smith shadowing and a
+#: conductor, dielectric or no Fresnel term (``brdffit/export/mitsuba.py``).
+COOK_TORRANCE = ModelEntry(
+    cook_torrance,
+    compare=tuple(f"cook-torrance:fresnel={kind}" for kind in FRESNEL),
+    choices={
+        "distribution": {name: kind.summary for name, kind in DISTRIBUTIONS.items()},
+        "shadowing": dict(SHADOWING),
+        "fresnel": {name: kind.summary for name, kind in FRESNEL.items()},
+    },
+    exports={"mitsuba": "brdffit.export.mitsuba:cook_torrance_bsdf"},
+)

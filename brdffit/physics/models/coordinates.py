@@ -18,22 +18,19 @@ reported in the *physical* one (labels ``rho_d[r]``, ``alpha``, ``lobes[0].cxy``
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, final
+from typing import final
 
 from ..._jax import namespace
 from ..domains import ALBEDO, Domain
 from .lobe import BoundedShapeCoordinates, ShapeCoordinates
-from .params import Params
-
-if TYPE_CHECKING:
-    from .model import Model
+from .params import Layout, Params
 
 
 @dataclass(frozen=True)
 class FlatCoordinates(ABC):
     """``model``'s parameters as one flat vector in one coordinate system."""
 
-    model: "Model"
+    model: Layout
 
     @property
     @abstractmethod
@@ -98,11 +95,11 @@ class BoundedFlatCoordinates(FlatCoordinates):
 
     def domains(self, n_channels: int) -> list[Domain]:
         """The domain of each entry, in :meth:`labels` order."""
-        k = self.model.n_lobes
+        k, diffuse = self.model.n_lobes, [self.model.diffuse.albedo_domain] * n_channels
         if not k:
-            return [ALBEDO] * n_channels
-        specular = [self.model.lobe.specular_domain] * (k * n_channels)
-        return [ALBEDO] * n_channels + specular + list(self.shape.domains) * k
+            return diffuse
+        specular = [self.model.lobe.albedo_domain] * (k * n_channels)
+        return diffuse + specular + list(self.shape.domains) * k
 
 
 @final

@@ -7,23 +7,20 @@ order (a single number is one channel), lobe shapes as numbers; models whose lob
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ...errors import BrdfInputError
 from ..domains import ALBEDO
-from .params import Params
-
-if TYPE_CHECKING:
-    from .model import Model
+from .params import Layout, Params
 
 
 @dataclass(frozen=True)
 class ParameterDictionary:
     """``model``'s parameters as a dictionary: checked on the way in, plain floats and lists on the way out."""
 
-    model: "Model"
+    model: Layout
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -26,7 +26,7 @@ from ..domains import EXPONENT, Domain, Interval, Positive
 from ..geometry import safe_power
 from .grids import EXPONENT_GRID
 from .lobe import BoundedShapeCoordinates, Lobe, ShapeCoordinates
-from .model import Model
+from .model import LobeModel, ModelEntry
 
 #: The most lobes the ``lobes`` option accepts; more than a handful cannot be told apart by any measurement.
 MAX_LOBES = 8
@@ -101,7 +101,9 @@ class LafortuneLobe(Lobe):
     #: The normalisation (n+2)/(2π) is exact only for cz = 1, so rho_s may exceed 1: published fits reach 1.71 (Ngan
     #: et al. 2005). Far beyond (the real tape's l2 fit put 8·10⁸ on a lobe whose peak no sample saw, fitting its
     #: tail) the lobe is degenerate: its albedo and exponent trade off, and the fit says so.
-    specular_domain = Positive(allow_zero=True, plausible_max=10.0)
+    albedo_domain = Positive(allow_zero=True, plausible_max=10.0)
+    #: A lobe may point anywhere (forward, retro-reflective, towards the normal).
+    peaks_at_mirror = False
 
     @property
     def parameters(self):
@@ -188,10 +190,10 @@ class DirectionComponent(Domain):
         return jnp.where(jnp.abs(x) <= 1.0, 0.0, -jnp.inf)
 
 
-def lafortune(lobes: int = 1) -> Model:
+def lafortune(lobes: int = 1) -> LobeModel:
     """``rho_d/π`` plus ``lobes`` generalised cosine lobes (default 1)."""
     lobes = whole_number("lobes", lobes, 1, MAX_LOBES)
-    return Model(
+    return LobeModel(
         "lafortune",
         "Lafortune 1997 generalised cosine lobes",
         LafortuneLobe(),
@@ -199,3 +201,7 @@ def lafortune(lobes: int = 1) -> Model:
         options=(("lobes", lobes),),
         lobes_as_list=True,
     )
+
+
+#: Compared with one to three lobes.
+LAFORTUNE = ModelEntry(lafortune, compare=tuple(f"lafortune:lobes={lobes}" for lobes in (1, 2, 3)))

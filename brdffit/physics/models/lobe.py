@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, final
 import numpy as np
 
 from ..._jax import namespace
+from ..._programs.keys import dataclass_key
 from ...errors import BrdfInputError
 from ..domains import Domain, MappedDomain
 
@@ -122,9 +123,16 @@ class Lobe(ABC):
 
     @property
     @abstractmethod
-    def specular_domain(self) -> Domain:
+    def albedo_domain(self) -> Domain:
         """The domain of the lobe's albedo: ``ALBEDO`` (at most 1 is plausible) where the albedo is the lobe's
         reflectance, a plain non-negative scale where a Fresnel term or an approximate normalisation also scales it."""
+
+    @property
+    @abstractmethod
+    def peaks_at_mirror(self) -> bool:
+        """Whether the lobe is largest at the mirror direction of the incidence, for every incidence: then a coarse
+        grid with the value there added bounds its directional albedo (``fitting/single/caveats.py``'s screen);
+        Lafortune's lobes, which may point anywhere, are not."""
 
     @property
     @abstractmethod
@@ -166,6 +174,11 @@ class Lobe(ABC):
     @property
     def physical(self) -> BoundedShapeCoordinates:
         return PhysicalShape(self.parameters)
+
+    def cache_key(self) -> list | None:
+        """What the lobe's programs depend on (``brdffit/_programs/keys.py``): its fields (a lobe family is a frozen
+        dataclass; its class, and that class's source if it is not brdffit's, are added by ``key_of``)."""
+        return dataclass_key(self)
 
 
 class MappedLobe(Lobe):

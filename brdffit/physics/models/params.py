@@ -1,10 +1,12 @@
-"""A model's parameters as arrays, the form every computation takes."""
+"""A model's parameters as arrays, the form every computation takes, and the layout of a lobe model's parameters."""
 
 from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
+
+from .lobe import Lobe
 
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
@@ -21,3 +23,16 @@ class Params(NamedTuple):
     diffuse: Float[Array, "*batch C"] | Float[np.ndarray, "*batch C"]
     specular: Float[Array, "*batch K C"] | Float[np.ndarray, "*batch K C"]
     shape: dict[str, Float[Array, "*batch K"] | Float[np.ndarray, "*batch K"]]
+
+
+class Layout(Protocol):
+    """How a lobe model's parameters are laid out, which is all its parameter forms (``dictionary.py``,
+    ``coordinates.py``) need of it: a :class:`~brdffit.physics.models.model.LobeModel` is one."""
+
+    name: str
+    diffuse: Lobe
+    lobe: Lobe | None
+    n_lobes: int
+    diffuse_name: str
+    specular_name: str
+    lobes_as_list: bool

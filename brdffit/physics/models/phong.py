@@ -18,7 +18,7 @@ from ..domains import ALBEDO, EXPONENT
 from ..geometry import half_vector, mirror_direction, safe_power
 from .grids import EXPONENT_GRID
 from .lobe import MappedLobe
-from .model import Model
+from .model import LobeModel, ModelEntry
 
 
 @final
@@ -28,7 +28,8 @@ class PhongLobe(MappedLobe):
 
     summary = "(n+2)/(2π) · max(0, r·wo)^n around the mirror direction r"
 
-    specular_domain = ALBEDO
+    albedo_domain = ALBEDO
+    peaks_at_mirror = True
 
     @property
     def parameters(self):
@@ -51,7 +52,8 @@ class BlinnPhongLobe(MappedLobe):
 
     summary = "(n+8)/(8π) · ch^n around the normal, in the half vector"
 
-    specular_domain = ALBEDO
+    albedo_domain = ALBEDO
+    peaks_at_mirror = True
 
     @property
     def parameters(self):
@@ -66,9 +68,13 @@ class BlinnPhongLobe(MappedLobe):
         return (n + 8.0) / (8.0 * jnp.pi) * safe_power(half_vector(wi, wo)[:, 2], n)
 
 
-def phong() -> Model:
-    return Model("phong", "modified Phong (Lewis 1994), mirror-direction lobe", PhongLobe(), 1)
+def phong() -> LobeModel:
+    return LobeModel("phong", "modified Phong (Lewis 1994), mirror-direction lobe", PhongLobe(), 1)
 
 
-def blinn_phong() -> Model:
-    return Model("blinn-phong", "normalised Blinn-Phong (Blinn 1977), half-vector lobe", BlinnPhongLobe(), 1)
+def blinn_phong() -> LobeModel:
+    return LobeModel("blinn-phong", "normalised Blinn-Phong (Blinn 1977), half-vector lobe", BlinnPhongLobe(), 1)
+
+
+PHONG = ModelEntry(phong, compare=("phong",))
+BLINN_PHONG = ModelEntry(blinn_phong, compare=("blinn-phong",))

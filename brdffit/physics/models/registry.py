@@ -1,53 +1,68 @@
-"""The reflectance models, one module per lobe family, and the registry that names them.
+"""The registry of models: ``MODELS``, each name's :class:`~brdffit.physics.models.model.ModelEntry`, and
+:func:`get_model`, which builds a model from its name and options with one-line errors.
 
-``MODELS[name](**options)`` builds a :class:`~brdffit.physics.models.model.Model`; :func:`get_model`
-does the same with one-line errors for unknown names and options. The parts every model shares:
-``model.py`` (the model: diffuse plus lobes), ``lobe.py`` (a lobe family and its shape's coordinates),
-``params.py``, ``dictionary.py`` and ``coordinates.py`` (the forms its parameters take), ``grids.py``
-(the shapes the fit starts from).
+``MODELS[name](**options)`` builds a model; the entry also says what ``brdffit compare`` tries, what ``brdffit
+models`` lists and how a fit reaches a renderer. :func:`register_model` adds a model of one's own
+(``docs/adding-a-model.md``).
 """
 
-import inspect
 from functools import cache
 from typing import Any
 
-from ...datadriven.model import pca
+from ...datadriven.model import PCA
 from ...errors import Argument, BrdfInputError
-from .cook_torrance import cook_torrance
-from .lafortune import lafortune
-from .lambert import lambert
-from .model import Model
-from .phong import blinn_phong, phong
-from .ward import ward, ward_aniso, ward_duer
+from .cook_torrance import COOK_TORRANCE
+from .lafortune import LAFORTUNE
+from .lambert import LAMBERT
+from .model import Model, ModelEntry
+from .phong import BLINN_PHONG, PHONG
+from .ward import WARD, WARD_ANISO, WARD_DUER
 
-#: The models by name: each builds a :class:`Model` from its options (``fresnel``, ``lobes``).
-MODELS = {
-    "lambert": lambert,
-    "ward": ward,
-    "ward-aniso": ward_aniso,
-    "ward-duer": ward_duer,
-    "cook-torrance": cook_torrance,
-    "blinn-phong": blinn_phong,
-    "phong": phong,
-    "lafortune": lafortune,
-    "pca": pca,
+#: The models by name, in the order ``brdffit models`` lists and ``brdffit compare`` fits them.
+MODELS: dict[str, ModelEntry] = {
+    "lambert": LAMBERT,
+    "ward": WARD,
+    "ward-aniso": WARD_ANISO,
+    "ward-duer": WARD_DUER,
+    "cook-torrance": COOK_TORRANCE,
+    "blinn-phong": BLINN_PHONG,
+    "phong": PHONG,
+    "lafortune": LAFORTUNE,
+    "pca": PCA,
 }
 
-#: Options a result records that a user never gives: a basis file's digest, the ridge's scale a fit measured.
-RECORDED_OPTIONS = frozenset({"basis_sha256", "ridge_scale"})
-#: Options that name a file: a spec (a label) shows the file's name, not its whole path; a default file name, neither.
-FILE_OPTIONS = frozenset({"basis"})
+
+def register_model(name: str, entry: ModelEntry) -> None:
+    """Add a model to the registry under ``name`` (``--model NAME``, ``get_model(NAME)``, ``compare``'s specs):
+    ``entry.build(**options)`` must build a :class:`Model` whose ``name`` is ``name``. A name is registered once."""
+    if not isinstance(name, str) or not name or any(character in name for character in ":,= "):
+        raise BrdfInputError(Argument.given("name", name), " must be a word without ':', ',', '=' or spaces")
+    if name in MODELS:
+        raise BrdfInputError(f"a model {name!r} is registered already; choose another name")
+    if not isinstance(entry, ModelEntry):
+        raise BrdfInputError(Argument("entry"), f" must be a ModelEntry, got {type(entry).__name__}")
+    MODELS[name] = entry
 
 
 @cache
 def model_option_names(name: str) -> tuple[str, ...]:
     """The options (``fresnel``, ``lobes``) that model ``name`` takes (asked once per fit: kept)."""
-    return tuple(inspect.signature(MODELS[name]).parameters)
+    return tuple(MODELS[name].option_defaults)
 
 
 def model_option_defaults(name: str) -> dict[str, Any]:
     """Each option of model ``name`` with its default (``{"fresnel": "schlick", …}``)."""
-    return {key: parameter.default for key, parameter in inspect.signature(MODELS[name]).parameters.items()}
+    return MODELS[name].option_defaults
+
+
+def recorded_options() -> frozenset[str]:
+    """Options a result records that a user never gives (a basis file's digest, the ridge's scale a fit measured)."""
+    return frozenset().union(*(entry.recorded for entry in MODELS.values()))
+
+
+def file_options() -> frozenset[str]:
+    """Options that name a file: a spec (a label) shows the file's name, not its whole path."""
+    return frozenset().union(*(entry.files for entry in MODELS.values()))
 
 
 def chosen_options(model: Model) -> dict[str, Any]:
@@ -55,7 +70,7 @@ def chosen_options(model: Model) -> dict[str, Any]:
     (``{"fresnel": "conductor"}``; ``{}`` for Cook-Torrance with Beckmann, V-groove and Schlick). A file an option
     names (pca's basis) and what a result only records (its digest, the ridge's scale) name nothing apart."""
     defaults = model_option_defaults(model.name)
-    unnamed = RECORDED_OPTIONS | FILE_OPTIONS
+    unnamed = recorded_options() | file_options()
     return {key: value for key, value in model.options if defaults.get(key) != value and key not in unnamed}
 
 

@@ -11,7 +11,7 @@ from typing import Any
 
 from ...errors import BrdfInputError
 from .model import Model
-from .registry import FILE_OPTIONS, MODELS, RECORDED_OPTIONS, get_model, model_option_defaults, model_option_names
+from .registry import MODELS, file_options, get_model, model_option_defaults, model_option_names, recorded_options
 
 
 def spec_of(name: str, options: dict[str, Any]) -> str:
@@ -20,14 +20,14 @@ def spec_of(name: str, options: dict[str, Any]) -> str:
     written = ",".join(
         f"{key}={_shown(key, value)}"
         for key, value in options.items()
-        if defaults.get(key) != value and key not in RECORDED_OPTIONS
+        if defaults.get(key) != value and key not in recorded_options()
     )
     return f"{name}:{written}" if written else name
 
 
 def _shown(key: str, value: Any) -> Any:
     """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it."""
-    return os.path.basename(str(value)) if key in FILE_OPTIONS else value
+    return os.path.basename(str(value)) if key in file_options() else value
 
 
 def model_of_spec(spec: str) -> Model:

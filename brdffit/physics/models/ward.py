@@ -17,7 +17,7 @@ from ..domains import ALBEDO, ROUGHNESS
 from ..geometry import half_vector, tan2_from_cos
 from .grids import ROUGHNESS_GRID
 from .lobe import MappedLobe
-from .model import Model
+from .model import LobeModel, ModelEntry
 
 
 @final
@@ -31,7 +31,8 @@ class WardLobe(MappedLobe):
     def summary(self) -> str:
         return "Dür's normalisation 4π α² ci co" if self.duer else "Gaussian in tan θh, 4π α² sqrt(ci co)"
 
-    specular_domain = ALBEDO
+    albedo_domain = ALBEDO
+    peaks_at_mirror = True
 
     @property
     def parameters(self):
@@ -56,7 +57,8 @@ class AnisotropicWardLobe(MappedLobe):
 
     summary = "anisotropic Gaussian, α_x along the tangent x, α_y along y"
 
-    specular_domain = ALBEDO
+    albedo_domain = ALBEDO
+    peaks_at_mirror = True
 
     @property
     def parameters(self):
@@ -75,13 +77,18 @@ class AnisotropicWardLobe(MappedLobe):
         return jnp.exp(-exponent) / (4.0 * jnp.pi * alpha_x * alpha_y * jnp.sqrt(cos_i * cos_o))
 
 
-def ward() -> Model:
-    return Model("ward", "Ward 1992, isotropic", WardLobe(), 1)
+def ward() -> LobeModel:
+    return LobeModel("ward", "Ward 1992, isotropic", WardLobe(), 1)
 
 
-def ward_aniso() -> Model:
-    return Model("ward-aniso", "Ward 1992, anisotropic", AnisotropicWardLobe(), 1, isotropic=False)
+def ward_aniso() -> LobeModel:
+    return LobeModel("ward-aniso", "Ward 1992, anisotropic", AnisotropicWardLobe(), 1, isotropic=False)
 
 
-def ward_duer() -> Model:
-    return Model("ward-duer", "Ward with Dür's 2006 normalisation", WardLobe(duer=True), 1)
+def ward_duer() -> LobeModel:
+    return LobeModel("ward-duer", "Ward with Dür's 2006 normalisation", WardLobe(duer=True), 1)
+
+
+WARD = ModelEntry(ward, compare=("ward",))
+WARD_ANISO = ModelEntry(ward_aniso, compare=("ward-aniso",))
+WARD_DUER = ModelEntry(ward_duer, compare=("ward-duer",))
