@@ -18,10 +18,11 @@ The public API::
     brdffit.save_basis(brdffit.build_basis(merl_files), "basis.npz")  # a data-driven basis (docs/data-driven.md)
     brdffit.write_directions(brdffit.choose_directions("basis.npz", 20).angles, "directions.csv")
     result = brdffit.fit("sparse.csv", model="pca", basis="basis.npz")
+    brdffit.register_model("gauss", brdffit.ModelEntry(build))  # a model of one's own (docs/adding-a-model.md)
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
 below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
-for the rest of a program (``_jax.py``).
+for the rest of a program (``_jax/precision.py``).
 """
 
 import importlib
@@ -36,7 +37,13 @@ _EXPORTS = {
     "InputWarning": ".errors",
     "MODELS": ".physics.models.registry",
     "Model": ".physics.models.model",
+    "LobeModel": ".physics.models.model",
+    "ModelEntry": ".physics.models.model",
+    "Lobe": ".physics.models.lobe",
+    "MappedLobe": ".physics.models.lobe",
+    "Params": ".physics.models.params",
     "get_model": ".physics.models.registry",
+    "register_model": ".physics.models.registry",
     "evaluate": ".physics.evaluate",
     "Samples": ".data.samples",
     "load_samples": ".data.load",
@@ -50,6 +57,7 @@ _EXPORTS = {
     "fit_batch": ".api",
     "compare": ".fitting.comparison.compare",
     "Comparison": ".fitting.comparison.compare",
+    "load_comparison": ".fitting.comparison.compare",
     "MCMC": ".uncertainty.mcmc",
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
@@ -84,14 +92,21 @@ if TYPE_CHECKING:
     from .errors import UncertaintyWarning as UncertaintyWarning
     from .fitting.comparison.compare import Comparison as Comparison
     from .fitting.comparison.compare import compare as compare
+    from .fitting.comparison.compare import load_comparison as load_comparison
     from .fitting.objective.losses import LOSSES as LOSSES
     from .fitting.single.result import FitResult as FitResult
     from .fitting.single.result import load_result as load_result
     from .fitting.single.result import save_result as save_result
     from .physics.evaluate import evaluate as evaluate
+    from .physics.models.lobe import Lobe as Lobe
+    from .physics.models.lobe import MappedLobe as MappedLobe
+    from .physics.models.model import LobeModel as LobeModel
     from .physics.models.model import Model as Model
+    from .physics.models.model import ModelEntry as ModelEntry
+    from .physics.models.params import Params as Params
     from .physics.models.registry import MODELS as MODELS
     from .physics.models.registry import get_model as get_model
+    from .physics.models.registry import register_model as register_model
     from .uncertainty.laplace import laplace_uncertainty as laplace_uncertainty
     from .uncertainty.mcmc import MCMC as MCMC
     from .uncertainty.mcmc import sample_posterior as sample_posterior

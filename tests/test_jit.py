@@ -40,11 +40,11 @@ def test_first_calls_of_one_signature_run_one_at_a_time():
 
 
 def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(monkeypatch):
-    """``solve_bucket``'s stages, which ``fit_batch`` uses to start its other threads: once the first batch's
+    """``StackedFit``'s stages, which ``fit_batch`` uses to start its other threads: once the first batch's
     programs are compiled, or after its search when that traced nothing (every program was compiled before)."""
     from brdffit._programs.stored import traced
     from brdffit.fitting.objective.losses import get_loss
-    from brdffit.fitting.single.stacked import solve_bucket
+    from brdffit.fitting.single.stacked import StackedFit
     from brdffit.physics.models.registry import get_model
 
     monkeypatch.setattr(cache, "_enabled", None)
@@ -54,13 +54,13 @@ def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(mo
     for compiles in (True, False):
         stages = []
         before = traced()
-        solve_bucket(
+        fit = StackedFit(
             get_model("ward"),
             get_loss("log"),
             samples,
-            None,
             on_stage=lambda s, stages=stages: stages.append((s, traced())),
             **options,
         )
+        fit.solve(fit.starts())
         assert [stage for stage, _ in stages] == ["searched", "compiled"]
         assert (stages[0][1] > before) == compiles  # the first call traced its programs, the second nothing

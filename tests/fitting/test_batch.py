@@ -60,7 +60,7 @@ def test_threads_change_no_result(model, options):
 
 def test_a_failed_batch_stops_the_others(monkeypatch):
     """The first batch fails: its error comes out, and the batches waiting for its programs never start."""
-    from brdffit.fitting.many import batch
+    from brdffit.fitting.single.stacked import StackedFit
 
     calls = []
 
@@ -68,7 +68,7 @@ def test_a_failed_batch_stops_the_others(monkeypatch):
         calls.append(1)
         raise RuntimeError("the solver broke")
 
-    monkeypatch.setattr(batch, "solve_bucket", failing)
+    monkeypatch.setattr(StackedFit, "solve", failing)
     with pytest.raises(RuntimeError, match="the solver broke"):
         fit_batch(datasets()[:2] + datasets()[3:], "ward", threads=3)  # one bucket of 3, cut in 3 batches
     assert len(calls) == 1

@@ -347,7 +347,7 @@ def test_structured_jacobian_equals_forward_mode(model, options, params, rng):
 def test_models_jit_and_vmap(rng):
     built = get_model("cook-torrance")
     wi, wo = jnp.asarray(random_directions(rng, 100)), jnp.asarray(random_directions(rng, 100))
-    batch = brdffit.physics.models.Params(
+    batch = brdffit.Params(
         diffuse=jnp.array([[0.1], [0.2]]),
         specular=jnp.array([[[0.3]], [[0.4]]]),
         shape={"m": jnp.array([[0.1], [0.3]]), "f0": jnp.array([[0.04], [0.9]])},
