@@ -58,6 +58,8 @@ _EXPORTS = {
     "compare": ".fitting.comparison.compare",
     "Comparison": ".fitting.comparison.compare",
     "load_comparison": ".fitting.comparison.compare",
+    "Solving": ".fitting.options",
+    "Holding": ".fitting.options",
     "MCMC": ".uncertainty.mcmc",
     "laplace_uncertainty": ".uncertainty.laplace",
     "sample_posterior": ".uncertainty.mcmc",
@@ -94,6 +96,8 @@ if TYPE_CHECKING:
     from .fitting.comparison.compare import compare as compare
     from .fitting.comparison.compare import load_comparison as load_comparison
     from .fitting.objective.losses import LOSSES as LOSSES
+    from .fitting.options import Holding as Holding
+    from .fitting.options import Solving as Solving
     from .fitting.single.result import FitResult as FitResult
     from .fitting.single.result import load_result as load_result
     from .fitting.single.result import save_result as save_result

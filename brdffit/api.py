@@ -17,8 +17,8 @@ from .data.samples import Samples
 from .errors import FitWarning
 from .fitting.many.cluster import fit_here, fit_on_cluster
 from .fitting.objective.losses import get_loss
-from .fitting.single.defaults import MAX_STEPS, N_STARTS
-from .fitting.single.fit import checked, fit_one
+from .fitting.options import Holding, Solving, holding_of, solving_of
+from .fitting.single.fit import checked, fit_checked
 from .fitting.single.result import FitResult
 from .physics.models.model import Model
 from .physics.models.registry import model_for
@@ -34,12 +34,14 @@ def fit(
     *,
     max_theta: float | None = None,
     start: dict[str, Any] | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
-    dtype: str = "float64",
-    seed: int = 0,
+    n_starts: int | None = None,
+    max_steps: int | None = None,
+    dtype: str | None = None,
+    seed: int | None = None,
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
+    solving: Solving | None = None,
+    holding: Holding | None = None,
     uncertainty: str | None = None,
     mcmc: MCMC | None = None,
     chain: str | os.PathLike | None = None,
@@ -51,15 +53,16 @@ def fit(
 
     ``max_theta``: drop samples with θi or θo above this many degrees.
     ``start``: parameters (the result file's dictionary) to start from instead of
-    the data-driven starts. ``n_starts``: how many of the best grid starts to
-    run Levenberg-Marquardt from; the lowest cost wins. ``dtype``: ``float32``
-    runs the solve with the model in single precision (sums stay float64) and
+    the data-driven starts. How the fit is solved, :class:`brdffit.Solving` (``solving=``) or its fields as
+    keywords, each None for its default: ``n_starts`` (3), how many of the best grid starts to
+    run Levenberg-Marquardt from, the lowest cost winning; ``max_steps`` (256) per start; ``dtype``
+    (``float64``): ``float32`` runs the solve with the model in single precision (sums stay float64) and
     then refines the optimum in float64 (mixed-precision iterative refinement,
-    usually one or two steps), so the result is float64's.
-    ``seed``: the random part of the subset the starts are searched on (above
-    16,384 samples). ``fixed``: parameters held at values, by the result
+    usually one or two steps), so the result is float64's; ``seed`` (0): the random part of the subset the starts
+    are searched on (above 16,384 samples). What the fit holds, :class:`brdffit.Holding` (``holding=``) or its
+    fields as keywords: ``fixed``, parameters held at values, by the result
     file's names (``{"eta": 1.5, "kd": 0, "lobes[1].cxy": 0.577}``; an albedo
-    takes one value for every channel or a list); ``bounds``: parameters held
+    takes one value for every channel or a list); ``bounds``, parameters held
     within ranges (``{"m": (0.05, 0.3)}``); ``docs/holding.md``. Both are
     written to the result (``fit.fixed``, ``fit.bounds``), and the uncertainty
     covers the free parameters only. ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds the
@@ -68,33 +71,20 @@ def fit(
     ``progress`` (a progress bar) apply to ``"mcmc"``. ``model_options``:
     ``fresnel=`` for cook-torrance, ``lobes=`` for lafortune.
     """
+    solving = solving_of(solving, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
+    holding = holding_of(holding, fixed=fixed, bounds=bounds)
     check_options(uncertainty, mcmc, chain)
     samples = as_samples(samples)
     if start is not None and isinstance(model, str):  # Lafortune's number of lobes may come from the start
         model, model_options = model_for(model, start, **model_options), {}
+    setup = checked(samples, model, loss, max_theta, solving, holding, **model_options)
     if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
-        built, _, kept, constraints = checked(
-            samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
-        )
-        check_walkers(mcmc or MCMC(), built, kept, constraints)
-    result = fit_one(
-        samples,
-        model,
-        loss,
-        max_theta=max_theta,
-        start=start,
-        n_starts=n_starts,
-        max_steps=max_steps,
-        dtype=dtype,
-        seed=seed,
-        fixed=fixed,
-        bounds=bounds,
-        **model_options,
-    )
+        check_walkers(mcmc or MCMC(), setup.model, setup.samples, setup.constraints)
+    result = fit_checked(setup, solving, start)
     warn_about(result)
     if uncertainty is None:
         return result
-    return with_uncertainty(result, samples.within(max_theta), uncertainty, mcmc=mcmc, chain=chain, progress=progress)
+    return with_uncertainty(result, setup.samples, uncertainty, mcmc=mcmc, chain=chain, progress=progress)
 
 
 @float64
@@ -107,12 +97,14 @@ def fit_batch(
     progress: bool | None = None,
     max_theta: float | None = None,
     start: dict[str, Any] | Sequence[dict[str, Any]] | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
-    dtype: str = "float64",
-    seed: int = 0,
+    n_starts: int | None = None,
+    max_steps: int | None = None,
+    dtype: str | None = None,
+    seed: int | None = None,
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
+    solving: Solving | None = None,
+    holding: Holding | None = None,
     uncertainty: str | None = None,
     mcmc: MCMC | None = None,
     client=None,
@@ -136,18 +128,16 @@ def fit_batch(
     cluster, 1 in each task, whose workers are the parallelism); the results
     do not depend on it.
     """
+    solving = solving_of(solving, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
+    holding = holding_of(holding, fixed=fixed, bounds=bounds)
     check_options(uncertainty, mcmc)
     read_options = dict(read_options or {})
     check_read_options(read_options)
     options = dict(
         strategy=strategy,
         max_theta=max_theta,
-        n_starts=n_starts,
-        max_steps=max_steps,
-        dtype=dtype,
-        seed=seed,
-        fixed=fixed,
-        bounds=bounds,
+        solving=solving,
+        holding=holding,
         threads=threads,
         then=None if uncertainty is None else partial(with_uncertainty, method=uncertainty, mcmc=mcmc),
     )
@@ -161,10 +151,8 @@ def fit_batch(
         samples = [as_samples(one, **read_options) for one in samples]
         if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
             for one in samples:
-                built, _, kept, constraints = checked(
-                    one, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
-                )
-                check_walkers(mcmc or MCMC(), built, kept, constraints)
+                setup = checked(one, model, loss, max_theta, solving, holding, **model_options)
+                check_walkers(mcmc or MCMC(), setup.model, setup.samples, setup.constraints)
         results = fit_here(samples, model, loss, start=start, progress=progress, **options, **model_options)
     for result in results:
         warn_about(result)

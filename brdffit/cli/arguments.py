@@ -152,7 +152,7 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
     """The options of a model comparison (``compare`` and ``report``): the samples, the models, the loss, the folds,
     the solver's settings, the seed and the reading options."""
     from ..fitting.objective.losses import LOSSES
-    from ..fitting.single.defaults import MAX_STEPS, N_STARTS
+    from ..fitting.options import MAX_STEPS, N_STARTS
 
     command.add_argument("samples", metavar="SAMPLES", help="samples file: CSV, MERL, ALTA, ASTM")
     command.add_argument(

@@ -27,7 +27,7 @@ from .cluster import cluster_client
 
 def configure(parser: argparse.ArgumentParser) -> None:
     from ..fitting.objective.losses import LOSSES
-    from ..fitting.single.defaults import MAX_STEPS, N_STARTS
+    from ..fitting.options import MAX_STEPS, N_STARTS
 
     parser.add_argument("samples", metavar="SAMPLES", nargs="+", help="samples file(s): CSV, MERL, ALTA, ASTM")
     add_model_options(parser, "ward")

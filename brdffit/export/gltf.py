@@ -76,7 +76,7 @@ from .._programs import jit
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
 from ..fitting.objective.losses import get_loss
-from ..fitting.single.defaults import MAX_STEPS
+from ..fitting.options import MAX_STEPS
 from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
 from ..fitting.solver.levenberg_marquardt import OnePassLevenbergMarquardt, ScaledTrustRegionDescent

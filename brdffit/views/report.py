@@ -28,7 +28,7 @@ from ..data.samples import Samples
 from ..data.summary import describe
 from ..errors import Argument, BrdfInputError, UncertaintyWarning
 from ..fitting.comparison.compare import Comparison, compare
-from ..fitting.single.defaults import MAX_STEPS, N_STARTS
+from ..fitting.options import Holding, Solving
 from ..fitting.single.result import FitResult, parameter_rows, value_with_error
 from ..physics.models.model import Model
 from ..uncertainty.methods import check_options, with_uncertainty
@@ -69,19 +69,21 @@ def report(
     seed: int = 0,
     uncertainty: str | None = None,
     max_theta: float | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
+    n_starts: int | None = None,
+    max_steps: int | None = None,
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
+    solving: Solving | None = None,
+    holding: Holding | None = None,
     comparison: Comparison | None = None,
     path: str | os.PathLike | None = None,
     progress: bool | None = False,
 ) -> str:
     """The HTML report of ``samples`` (module docstring); also written to ``path`` (atomically) when given.
 
-    ``models``, ``loss``, ``folds``, ``seed``, ``max_theta``, ``n_starts``, ``max_steps``, ``fixed`` and
-    ``bounds`` are those of :func:`brdffit.compare`, which the report runs unless a ``comparison`` of these
-    samples is given.
+    ``models``, ``loss``, ``folds``, ``seed``, ``max_theta``, ``n_starts``, ``max_steps``, ``fixed``,
+    ``bounds``, ``solving`` and ``holding`` are those of :func:`brdffit.compare`, which the report runs unless a
+    ``comparison`` of these samples is given.
     ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds error bars to the parameter tables of the models shown.
     """
     check_options(uncertainty)
@@ -99,6 +101,8 @@ def report(
             max_steps=max_steps,
             fixed=fixed,
             bounds=bounds,
+            solving=solving,
+            holding=holding,
             progress=progress,
         )
     shown = [score.result for score in comparison.models[:DETAILED]]

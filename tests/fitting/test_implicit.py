@@ -10,7 +10,7 @@ import data_synth
 from brdffit import get_model
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problem, cost, normal_equations, prepared, residuals
-from brdffit.fitting.single.defaults import MAX_STEPS
+from brdffit.fitting.options import MAX_STEPS
 from brdffit.fitting.solver.compiled import compiled_solver
 
 MODEL, OPTIONS, PARAMS = CASES[1]  # Ward, pickled oak (Ngan et al. 2005)

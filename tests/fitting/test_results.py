@@ -14,7 +14,7 @@ import data_synth
 from brdffit import FitWarning, UncertaintyWarning, evaluate, fit, get_model, laplace_uncertainty, load_result
 from brdffit.cli import main
 from brdffit.fitting.objective.losses import get_loss
-from brdffit.fitting.single.defaults import MAX_STEPS
+from brdffit.fitting.options import MAX_STEPS
 from brdffit.fitting.single.outcome import result_of
 from brdffit.fitting.solver.compiled import Solved
 

@@ -43,9 +43,9 @@ from ...physics.models.registry import MODELS, get_model
 from ...physics.models.specs import model_of_spec, spec_of
 from ..objective.losses import Loss, get_loss
 from ..objective.problem import Problem, build_problem, cost, residuals, sample_residuals
+from ..options import Holding, Solving, holding_of, solving_of
 from ..single.constraints import constraints_for, parameter_names
-from ..single.defaults import MAX_STEPS, N_STARTS
-from ..single.fit import checked, fit_one
+from ..single.fit import checked, fit_checked, fit_one
 from ..single.result import FitResult, json_text, read_json_object
 from ..solver.compiled import compiled_solver
 from .folds import Folds, make_folds
@@ -225,30 +225,36 @@ def compare(
     folds: int = 5,
     seed: int = 0,
     max_theta: float | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
+    n_starts: int | None = None,
+    max_steps: int | None = None,
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
+    solving: Solving | None = None,
+    holding: Holding | None = None,
     progress: bool | None = False,
 ) -> Comparison:
     """Fit every model of ``models`` (specs such as ``"lafortune:lobes=2"``, or :class:`Model` objects; default
     :func:`default_specs`) to ``samples`` by ``loss`` and rank them by their ``folds``-fold cross-validated loss.
 
-    ``seed`` makes the folds (and the start search's subset); ``max_theta``, ``n_starts`` and ``max_steps`` are
-    those of :func:`brdffit.fit`. ``fixed`` and ``bounds`` (those of :func:`brdffit.fit`) apply to each model that
-    has the parameter named (``eta`` to Cook-Torrance's dielectric Fresnel only); a name no model has is refused.
+    ``seed`` makes the folds (and, unless ``solving`` is given, the start search's subset); ``max_theta``,
+    ``n_starts``, ``max_steps`` and ``solving`` are those of :func:`brdffit.fit` (every fit is float64's). ``fixed``
+    and ``bounds`` (or ``holding``: those of :func:`brdffit.fit`) apply to each model that has the parameter named
+    (``eta`` to Cook-Torrance's dielectric Fresnel only); a name no model has is refused.
     A fixed parameter is not counted in ``k``. ``progress``: a progress bar on stderr (None: when stderr is a
     terminal). Returns a :class:`Comparison`, best first.
     """
+    solving = solving_of(solving, n_starts=n_starts, max_steps=max_steps, seed=None if solving else seed)
+    if solving.dtype != "float64":
+        raise BrdfInputError(Argument("solving"), ": compare fits in float64; give dtype='float64'")
+    holding = holding_of(holding, fixed=fixed, bounds=bounds)
     samples = as_samples(samples).within(max_theta)
     loss_kind = get_loss(loss)
     chosen = [_model(one) for one in (default_specs() if models is None else models)]
     if not chosen:
         raise BrdfInputError(Argument("models"), ": give at least one model to compare")
-    held = [_held_by(model, fixed, bounds) for model in chosen]
-    _check_every_name_used(chosen, fixed, bounds)
-    for model, one in zip(chosen, held, strict=True):
-        checked(samples, model, loss, None, "float64", **one)  # every model's values and bounds before any fit
+    _check_every_name_used(chosen, holding)
+    # Every model's values and bounds, checked before any fit.
+    setups = [checked(samples, model, loss, max_theta, solving, _held_by(model, holding)) for model in chosen]
     split = make_folds(samples, folds, seed)
     problem = build_problem(samples)
     from tqdm.auto import tqdm
@@ -256,11 +262,10 @@ def compare(
     bar = tqdm(total=len(chosen), unit="model", disable=None if progress is None else not progress, leave=False)
     scores = []
     try:
-        for model, one in zip(chosen, held, strict=True):
+        for model, setup in zip(chosen, setups, strict=True):
             bar.set_description(spec_of(model.name, model.model_options))
-            options = dict(max_theta=max_theta, n_starts=n_starts, max_steps=max_steps, seed=seed)
-            result = fit_one(samples, model, loss, **options, **one)
-            fold_losses, fold_converged = _cross_validated(model, loss_kind, result, samples, problem, split, max_steps)
+            result = fit_checked(setup, solving)
+            fold_losses, fold_converged = _cross_validated(model, loss_kind, result, samples, problem, split, solving)
             score = _score(model, result, samples, fold_losses)
             notes = _fold_notes(fold_losses, fold_converged, split, samples)
             scores.append(replace(score, fold_converged=fold_converged, notes=notes))
@@ -297,20 +302,20 @@ def _nulls(value: Any) -> Any:
     return value
 
 
-def _held_by(model: Model, fixed, bounds) -> dict[str, dict[str, Any]]:
-    """The part of ``fixed`` and ``bounds`` that names parameters of ``model``."""
+def _held_by(model: Model, holding: Holding) -> Holding:
+    """The part of ``holding`` that names parameters of ``model``."""
     names = set(parameter_names(model))
-    return {
-        "fixed": {name: value for name, value in (fixed or {}).items() if name in names},
-        "bounds": {name: value for name, value in (bounds or {}).items() if name in names},
-    }
+    return Holding(
+        {name: value for name, value in holding.fixed.items() if name in names},
+        {name: value for name, value in holding.bounds.items() if name in names},
+    )
 
 
-def _check_every_name_used(models: list[Model], fixed, bounds) -> None:
+def _check_every_name_used(models: list[Model], holding: Holding) -> None:
     """A held name that no compared model has is a mistake (a misspelt name would otherwise hold nothing)."""
     names = {name for model in models for name in parameter_names(model)}
-    for argument, given in (("fixed", fixed), ("bounds", bounds)):
-        for name in given or {}:
+    for argument, given in (("fixed", holding.fixed), ("bounds", holding.bounds)):
+        for name in given:
             if name not in names:
                 raise BrdfInputError(
                     Argument(argument),
@@ -329,7 +334,7 @@ def _model(one: str | Model) -> Model:
 
 
 def _cross_validated(
-    model: Model, loss: Loss, result: FitResult, samples: Samples, problem: Problem, split: Folds, max_steps: int
+    model: Model, loss: Loss, result: FitResult, samples: Samples, problem: Problem, split: Folds, solving: Solving
 ) -> tuple[list[float], list[bool]]:
     """The held-out loss per residual of each fold, each fold refitted from the optimum on all the samples, and
     whether each refit converged."""
@@ -338,7 +343,7 @@ def _cross_validated(
         refit_model = get_model(result.model, **result.model_options)
         held_out_cost = None
     else:
-        solve = compiled_solver(model, loss, max_steps, "float64")  # the one fit_one compiled
+        solve = compiled_solver(model, loss, solving.max_steps, "float64")  # the one fit_one compiled
         held_out_cost = _held_out_cost(model, loss)
         theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
         constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds)
@@ -348,9 +353,7 @@ def _cross_validated(
         held = split.held_out(k)
         n_held = int(np.sum(held & counted)) * samples.n_channels
         if held_out_cost is None:
-            refit = fit_one(
-                samples.select(~held), refit_model, loss, start=result.params, max_steps=max_steps
-            )  # no hold
+            refit = fit_one(samples.select(~held), refit_model, loss, start=result.params, solving=solving)  # no hold
             params = refit_model.dictionary.to_params(refit.params)
             total = np.sum(sample_residuals(refit_model, loss, params, samples.select(held))[counted[held]] ** 2)
             fold_converged = refit.converged

@@ -32,8 +32,8 @@ from ..._jax import float64
 from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...errors import BrdfInputError
-from ..single.defaults import MAX_STEPS, N_STARTS
-from ..single.fit import checked, fit_one, start_vector
+from ..options import HOLDING_NOTHING, SOLVING, Holding, Solving
+from ..single.fit import checked, fit_checked, start_vector
 from ..single.result import FitResult
 from ..single.stacked import StackedFit, default_strategy
 from .buckets import WorkUnit, fitted_alone, work_units
@@ -52,16 +52,13 @@ def fit_many(
     progress: bool | None = None,
     max_theta: float | None = None,
     start: dict[str, Any] | Sequence[dict[str, Any]] | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
-    dtype: str = "float64",
-    seed: int = 0,
-    fixed: dict[str, Any] | None = None,
-    bounds: dict[str, Any] | None = None,
+    solving: Solving = SOLVING,
+    holding: Holding = HOLDING_NOTHING,
     threads: int | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
-    """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch`."""
+    """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch` (``solving`` and
+    ``holding`` the objects its keywords make, ``fitting/options.py``)."""
     choice("strategy", strategy, STRATEGIES)
     strategy = default_strategy() if strategy == "auto" else strategy
     if threads is None:  # one thread per core; on a GPU one, whose programs fill the device
@@ -71,31 +68,27 @@ def fit_many(
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
     starts = starts_per_dataset(start, len(samples))
-    held = dict(fixed=fixed, bounds=bounds)
-    kept_by_check = [checked(one, model, loss, max_theta, dtype, **held, **model_options) for one in samples]
-    built, built_loss = kept_by_check[0][0], kept_by_check[0][1]
-    kept = [one for _, _, one, _ in kept_by_check]
-    n_starts = whole_number("n_starts", n_starts)
-    max_steps = whole_number("max_steps", max_steps)
+    setups = [checked(one, model, loss, max_theta, solving, holding, **model_options) for one in samples]
+    built, built_loss = setups[0].model, setups[0].loss
+    kept = [setup.samples for setup in setups]
     vectors = [
         None if one is None else start_vector(built, one, data.n_channels)
         for one, data in zip(starts, kept, strict=True)
     ]
-    options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=strategy)
     results: list[FitResult | None] = [None] * len(kept)
 
     def fit_unit(unit: WorkUnit, on_stage: Callable[[str], None] | None) -> int:
         """Fit the datasets of ``unit`` into ``results``; how many they were."""
         if fitted_alone(built, unit.given):
             (index,) = unit.indices
-            one = {"max_theta": max_theta, "n_starts": n_starts, "max_steps": max_steps, "seed": seed}
-            results[index] = fit_one(kept[index], built, built_loss, dtype=dtype, start=starts[index], **held, **one)
+            results[index] = fit_checked(setups[index], solving, starts[index])
             return 1
         given = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
-        constraints = kept_by_check[unit.indices[0]][3]  # one per channel count; a bucket has one
+        constraints = setups[unit.indices[0]].constraints  # one per channel count; a bucket has one
         hold = None if constraints is None else constraints.hold()
         unit_samples = [kept[i] for i in unit.indices]
-        fit = StackedFit(built, built_loss, unit_samples, hold, stack=unit.stack, on_stage=on_stage, **options)
+        options = dict(solving=solving, strategy=strategy, stack=unit.stack, on_stage=on_stage)
+        fit = StackedFit(built, built_loss, unit_samples, hold, **options)
         solved = fit.solve(fit.starts(given))
         fitted = fit.results(solved, max_theta=max_theta, constraints=constraints)
         for index, result in zip(unit.indices, fitted, strict=True):

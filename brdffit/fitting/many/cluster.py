@@ -27,6 +27,7 @@ from ...data.load import load_samples
 from ...data.samples import Samples
 from ...errors import BrdfInputError
 from ...physics.models.model import Model
+from ..options import Holding
 from ..single.fit import checked
 from ..single.result import FitResult
 from .batch import fit_many, progress_bar, starts_per_dataset
@@ -115,14 +116,8 @@ def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, w
     units (one bucket's batch, whose programs stack the datasets and treat each alone), paths in runs of
     consecutive ones."""
     in_memory = [index for index, item in enumerate(items) if isinstance(item, Samples)]
-    checks = {name: options.get(name) for name in ("max_theta", "fixed", "bounds")}
-    dtype = options.get("dtype", "float64")
-    kept = [
-        checked(items[index], model, loss, checks["max_theta"], dtype, fixed=checks["fixed"], bounds=checks["bounds"])[
-            2
-        ]
-        for index in in_memory
-    ]
+    held = options.get("holding", Holding())
+    kept = [checked(items[index], model, loss, options.get("max_theta"), holding=held).samples for index in in_memory]
     units = [
         [in_memory[position] for position in unit.indices]
         for unit in work_units(model, kept, [starts[index] is not None for index in in_memory])

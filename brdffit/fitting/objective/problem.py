@@ -32,7 +32,6 @@ from .losses import Loss, residual_scale
 
 #: Most samples per chunk of the normal-equation pass: 2¹⁴ × 3 channels × 8 parameters is a 3 MB Jacobian block.
 CHUNK = 2**14
-DTYPES = ("float64", "float32")
 
 
 class Problem(NamedTuple):

@@ -6,30 +6,40 @@ come last (``caveats.py``, ``outcome.py``). A model of several lobes (Lafortune'
 lobe instead (``starts/lobes.py``); the data-driven kind fits by a solve of its own (``datadriven/fit.py``).
 """
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..._jax import float64, jax
-from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...datadriven.fit import fit_pca
 from ...datadriven.model import PcaModel
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import START_FACTOR
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ...physics.models.registry import MODELS, get_model, model_option_names, recorded_options
 from ..objective.losses import Loss, get_loss
-from ..objective.problem import DTYPES, Problem, build_problem
+from ..objective.problem import Problem, build_problem
+from ..options import HOLDING_NOTHING, SOLVING, Holding, Solving
 from ..solver.compiled import best, compiled_solver
 from ..solver.hold import Hold
 from ..starts.grid import search_subset
 from ..starts.lobes import lobe_by_lobe
 from .constraints import Constraints, constraints_for
-from .defaults import MAX_STEPS, N_STARTS
 from .outcome import result_of
 from .result import FitResult
 from .stacked import StackedFit, compile_in_background, default_strategy, onto_bounds
+
+
+class Setup(NamedTuple):
+    """What a fit is given, checked once (:func:`checked`): the model, the loss, the samples kept by ``max_theta``
+    and what the fit holds (``constraints.py``; None for nothing)."""
+
+    model: Model
+    loss: Loss
+    samples: Samples
+    constraints: Constraints | None
+    max_theta: float | None
 
 
 @float64
@@ -40,32 +50,32 @@ def fit_one(
     *,
     max_theta: float | None = None,
     start: dict[str, Any] | None = None,
-    n_starts: int = N_STARTS,
-    max_steps: int = MAX_STEPS,
-    dtype: str = "float64",
-    seed: int = 0,
-    fixed: dict[str, Any] | None = None,
-    bounds: dict[str, Any] | None = None,
+    solving: Solving = SOLVING,
+    holding: Holding = HOLDING_NOTHING,
     **model_options: Any,
 ) -> FitResult:
     """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
-    model, loss, samples, constraints = checked(
-        samples, model, loss, max_theta, dtype, fixed=fixed, bounds=bounds, **model_options
-    )
-    n_starts = whole_number("n_starts", n_starts)
-    max_steps = whole_number("max_steps", max_steps)
+    return fit_checked(checked(samples, model, loss, max_theta, solving, holding, **model_options), solving, start)
+
+
+@float64
+def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = None) -> FitResult:
+    """The fit of what :func:`checked` passed, from ``start`` (a parameter dictionary) or the data's own starts."""
+    model, loss, samples, constraints, max_theta = setup
     if isinstance(model, PcaModel):  # the data-driven kind: a ridge start and a solve of its own
-        if dtype != "float64":
-            raise BrdfInputError(Argument("dtype", dtype), f" does not apply to model {model.name}; it fits in float64")
-        return fit_pca(samples, model, loss, start=start, max_steps=max_steps, max_theta=max_theta)
+        if solving.dtype != "float64":
+            raise BrdfInputError(
+                Argument("dtype", solving.dtype), f" does not apply to model {model.name}; it fits in float64"
+            )
+        return fit_pca(samples, model, loss, start=start, max_steps=solving.max_steps, max_theta=max_theta)
     hold = None if constraints is None else constraints.hold()
     if start is None and model.n_lobes > 1:  # several lobes: placed and fitted one at a time
-        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, n_starts, max_steps, dtype, seed, hold)
+        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, solving, hold)
+        steps, dtype = solving.max_steps, solving.dtype
         return result_of(
-            model, loss, samples, solved, max_steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
+            model, loss, samples, solved, steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
         )
-    options = dict(n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed, strategy=default_strategy())
-    fit = StackedFit(model, loss, [samples], hold, **options)  # the programs every fit runs, for one dataset
+    fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=default_strategy())  # for one dataset
     given = None if start is None else start_vector(model, start, samples.n_channels)[None]
     thetas = fit.starts(given)  # start: the given one, or the grid's best shapes, raced
     solved = fit.solve(thetas)  # solve: Levenberg-Marquardt
@@ -73,11 +83,10 @@ def fit_one(
     return result
 
 
-def _lobe_by_lobe(
-    model: Model, loss: Loss, samples: Samples, n_starts: int, max_steps: int, dtype: str, seed: int, hold: Hold | None
-):
+def _lobe_by_lobe(model: LobeModel, loss: Loss, samples: Samples, solving: Solving, hold: Hold | None):
     """The best solve of a model of several lobes and the cost with one lobe less (``lobes.py``), searched on the
     search subset when there is one and refined on every sample; every solve respects ``hold``."""
+    n_starts, max_steps, dtype, seed = solving.n_starts, solving.max_steps, solving.dtype, solving.seed
     full = build_problem(samples, dtype)
     compiled = compiled_solver(model, loss, max_steps, dtype)
     solve = lambda theta, problem: compiled(theta, problem, hold)
@@ -116,18 +125,17 @@ def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Pr
 
 
 def checked(
-    samples, model, loss, max_theta, dtype, *, fixed=None, bounds=None, **model_options
-) -> tuple[Model, Loss, Samples, Constraints | None]:
-    """The model, the loss, the samples kept by ``max_theta`` and what the fit holds (``constraints.py``; None
-    for nothing), after every check of the arguments."""
+    samples, model, loss, max_theta, solving: Solving = SOLVING, holding: Holding = HOLDING_NOTHING, **model_options
+) -> Setup:
+    """What a fit of ``samples`` is given, after every check of the arguments (:class:`Setup`); ``solving`` was
+    checked when it was made."""
     _check_option_names(model_options)
     model = get_model(model, **model_options)
     loss = get_loss(loss)
     if not isinstance(samples, Samples):
         raise BrdfInputError(f"fit takes Samples (from brdffit.load_samples), got {type(samples).__name__}")
-    choice("dtype", dtype, DTYPES)
     samples = samples.within(max_theta)
-    constraints = constraints_for(model, samples.n_channels, fixed, bounds)
+    constraints = constraints_for(model, samples.n_channels, holding.fixed, holding.bounds)
     n_parameters = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
     free = "" if constraints is None else "free "
     if samples.values.size < n_parameters and not model.prior_weight > 0:  # a prior determines what data cannot
@@ -135,7 +143,7 @@ def checked(
             f"{samples.source}: {samples.n_samples} sample(s) × {samples.n_channels} channel(s) cannot determine"
             f" the {n_parameters} {free}parameters of {model.name}; give at least {n_parameters} values"
         )
-    return model, loss, samples, constraints
+    return Setup(model, loss, samples, constraints, max_theta)
 
 
 def _check_option_names(options: dict[str, Any]) -> None:

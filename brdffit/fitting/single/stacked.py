@@ -26,6 +26,7 @@ from ...data.samples import Samples
 from ...physics.models.model import LobeModel, Model
 from ..objective.losses import Loss
 from ..objective.problem import Problem, build_problems, padded_size
+from ..options import Solving
 from ..solver.compiled import SAME_COST, best_index, solved_from
 from ..solver.hold import Hold, at_bounds
 from ..starts.grid import grid_starts, search_subset
@@ -56,12 +57,13 @@ class StackedFit:
     """The fit of datasets of one bucket (one dataset, or a batch of many) in the compiled programs every fit shares:
     built from the data, then :meth:`starts` → :meth:`solve` → :meth:`results`.
 
-    ``hold``: what every dataset's fit holds (``hold.py``), or None. ``stack``: how many datasets the programs stack
-    them to (:func:`stack_size` of the bucket's batches; by default that of these). ``on_stage``: called with
-    ``"searched"`` once the grid starts are searched and ``"compiled"`` once the programs of the search and of the
-    solve are compiled (with given starts, before anything has run; a float32 fit's refinement and a bounded fit's
-    second solve compile later): ``many/threads.py`` starts its other threads then. The caveats' screen program
-    compiles in the background meanwhile (``caveats.screen_program``).
+    ``hold``: what every dataset's fit holds (``hold.py``), or None. ``solving``: the starts, steps, dtype and seed
+    (``fitting/options.py``). ``strategy``: ``loop`` or ``vmap`` (:func:`default_strategy`). ``stack``: how many
+    datasets the programs stack them to (:func:`stack_size` of the bucket's batches; by default that of these).
+    ``on_stage``: called with ``"searched"`` once the grid starts are searched and ``"compiled"`` once the programs
+    of the search and of the solve are compiled (with given starts, before anything has run; a float32 fit's
+    refinement and a bounded fit's second solve compile later): ``many/threads.py`` starts its other threads then.
+    The caveats' screen program compiles in the background meanwhile (``caveats.screen_program``).
     """
 
     @float64
@@ -72,16 +74,15 @@ class StackedFit:
         samples: Sequence[Samples],
         hold: Hold | None = None,
         *,
-        n_starts: int,
-        max_steps: int,
-        dtype: str,
-        seed: int,
+        solving: Solving,
         strategy: str,
         stack: int | None = None,
         on_stage: Callable[[str], None] | None = None,
     ):
         self.model, self.loss, self.samples, self.hold = model, loss, list(samples), hold
-        self.n_starts, self.max_steps, self.dtype, self.seed, self.strategy = n_starts, max_steps, dtype, seed, strategy
+        max_steps, dtype = solving.max_steps, solving.dtype
+        self.n_starts, self.max_steps, self.dtype, self.seed = solving.n_starts, max_steps, dtype, solving.seed
+        self.strategy = strategy
         self.on_stage = on_stage or (lambda stage: None)
         self.count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few programs
         self.problems = build_problems(samples, dtype, self.count)
