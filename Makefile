@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca lint format examples clean
+.PHONY: demo test test-heavy bench bench-pca lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -42,6 +42,10 @@ lint: $(STAMP)
 format: $(STAMP)
 	$(BIN)/ruff format .
 	$(BIN)/ruff check --fix .
+
+# Regenerates docs/reference.md, the API reference, from the code (a test fails while it is out of date).
+docs: $(STAMP)
+	$(BIN)/python docs/reference.py
 
 # Regenerates the shipped example from its parameters (Ngan et al. 2005's Ward fit of pickled-oak-260).
 examples: $(STAMP)

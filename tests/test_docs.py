@@ -4,6 +4,7 @@ import re
 import subprocess
 import sys
 
+import pytest
 from paths import ROOT
 
 
@@ -18,3 +19,57 @@ def test_adding_a_model_defines_registers_and_fits_a_model_that_is_not_built_in(
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     assert "gaussian fit" in run.stdout and "converged" in run.stdout
+
+
+def test_the_api_reference_is_the_codes():
+    """``docs/reference.md`` is written from the code (``docs/reference.py``): it cannot drift from the signatures."""
+    run = subprocess.run([sys.executable, "docs/reference.py", "--check"], cwd=ROOT, capture_output=True, text=True)
+    assert run.returncode == 0, "docs/reference.md is out of date: run `make docs` (python docs/reference.py)"
+
+
+def documented_calls(page: str) -> list[tuple[str, str]]:
+    """``name(arguments)`` of every public function the page's tables show with its arguments."""
+    import brdffit
+
+    text = (ROOT / "docs" / page).read_text()
+    calls = re.findall(r"^\| `(?:brdffit\.)?(\w+)\(((?:[^()]|\([^()]*\))*)\)`", text, re.M)
+    # A call that starts with … is an example of use (``fit(…, uncertainty="laplace")``), not a signature.
+    return [(name, arguments) for name, arguments in calls if name in brdffit.__all__ and arguments[:1] not in "…"]
+
+
+def top_level_parts(arguments: str) -> list[str]:
+    """``arguments`` split at the commas outside brackets."""
+    parts, depth, current = [], 0, ""
+    for character in arguments:
+        depth += (character in "([{" and 1) or 0
+        depth -= (character in ")]}" and 1) or 0
+        if character == "," and depth == 0:
+            parts.append(current.strip())
+            current = ""
+        else:
+            current += character
+    return [*parts, current.strip()]
+
+
+@pytest.mark.parametrize("name, arguments", documented_calls("python.md"), ids=lambda value: str(value)[:30])
+def test_the_guides_signatures_are_the_codes(name, arguments):
+    """Each call the Python guide writes out names the function's parameters in order, with their defaults; one
+    written with ``…`` may leave some out."""
+    import inspect
+
+    import brdffit
+
+    parameters = inspect.signature(getattr(brdffit, name)).parameters
+    written = [part for part in top_level_parts(arguments) if part not in ("*", "…", "")]
+    names = [part.split("=")[0].lstrip("*") for part in written]
+    real = [key for key in parameters if key in names]
+    assert real == names, f"{name}: the guide writes {names}, the code takes {list(parameters)}"
+    if "…" not in arguments:
+        assert names == list(parameters), f"{name}: the guide leaves out {sorted(set(parameters) - set(names))}"
+    for part in written:
+        key, equals, default = part.partition("=")
+        if not equals or default == "…":
+            continue
+        code_default = parameters[key].default
+        if code_default is not inspect.Parameter.empty and repr(code_default) != "<factory>":
+            assert default.replace('"', "'") == repr(code_default), f"{name}: {key}'s default"

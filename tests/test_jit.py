@@ -44,13 +44,14 @@ def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(mo
     programs are compiled, or after its search when that traced nothing (every program was compiled before)."""
     from brdffit._programs.stored import traced
     from brdffit.fitting.objective.losses import get_loss
+    from brdffit.fitting.options import Solving
     from brdffit.fitting.single.stacked import StackedFit
     from brdffit.physics.models.registry import get_model
 
     monkeypatch.setattr(cache, "_enabled", None)
     params = {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.2}
     samples = [data_synth.synthesize("ward", params, *data_synth.uniform_random(200, seed=k)) for k in range(2)]
-    options = dict(n_starts=3, max_steps=93, dtype="float64", seed=0, strategy="loop")
+    options = dict(solving=Solving(n_starts=3, max_steps=93, dtype="float64", seed=0), strategy="loop")
     for compiles in (True, False):
         stages = []
         before = traced()

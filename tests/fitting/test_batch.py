@@ -76,7 +76,7 @@ def test_a_failed_batch_stops_the_others(monkeypatch):
 
 def test_the_batches_running_at_once_hold_at_most_the_budget():
     """Units of 3, 2, 2, 5 (alone: beyond the budget) and 1 samples on 4 threads, a budget of 4."""
-    from brdffit.fitting.many.batch import SampleBudget
+    from brdffit.fitting.many.threads import SampleBudget
 
     budget, lock = SampleBudget(4), threading.Lock()
     held, largest = [0], []
@@ -214,7 +214,7 @@ def test_batch_fits_are_deterministic_and_sizes_share_compiles():
 @pytest.mark.parametrize("count", [1, 19, 20, 39, 40, 41, 100])
 def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
     """20 datasets of which 19 fit in a batch go as 10 + 10 (one stacked shape, one compiled program), not 19 + 1."""
-    from brdffit.fitting.single.stacked import BATCH_SAMPLES, batches
+    from brdffit.fitting.many.buckets import BATCH_SAMPLES, batches
 
     size = BATCH_SAMPLES // 19  # 19 datasets to a batch
     cut = batches(list(range(count)), size)
@@ -229,7 +229,7 @@ def test_a_bucket_is_cut_into_as_few_batches_as_memory_allows_and_even(count):
 def test_a_bucket_is_cut_for_its_threads(count, parts):
     """For ``parts`` threads: a multiple of ``parts`` batches (or one a dataset), even, and the ``parts`` that run
     at once hold at most BATCH_SAMPLES samples together."""
-    from brdffit.fitting.single.stacked import BATCH_SAMPLES, batches
+    from brdffit.fitting.many.buckets import BATCH_SAMPLES, batches
 
     size = BATCH_SAMPLES // 19  # 19 datasets at a time in all
     cut = batches(list(range(count)), size, parts)

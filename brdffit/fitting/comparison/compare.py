@@ -455,7 +455,7 @@ def comparison_table(comparison) -> str:
         lines.append(
             f"  {rank:>4} {mark}  {score.spec.ljust(width)} {score.k:>3}  {score.result.cost:11.5g}"
             f"  {score.result.rmse:11.4g}  {score.aic:11.5g}  {score.bic:11.5g}"
-            f"  {_number(score.cv_loss):>10} ± {_number(score.cv_stderr):<9} {len(score.result.warnings):>8}{status}"
+            f"  {_figure(score.cv_loss):>10} ± {_figure(score.cv_stderr):<9} {len(score.result.warnings):>8}{status}"
         )
     lines.append("  * best   = within one standard error of the best")
     for score in comparison.models:
@@ -483,5 +483,6 @@ def _shown(value) -> str:
     return f"{values[0]:.10g}" if len(set(values)) == 1 else "[" + ", ".join(f"{one:.10g}" for one in values) + "]"
 
 
-def _number(value: float) -> str:
+def _figure(value: float) -> str:
+    """A held-out loss as the ranking shows it: 4 digits, or — where a fold held nothing out."""
     return "—" if math.isnan(value) else f"{value:.4g}"

@@ -1,0 +1,54 @@
+"""Write docs/reference.md, the API reference, from the code: every public name's signature and docstring.
+
+Run ``python docs/reference.py`` (``make docs``) after changing a public signature or docstring;
+``tests/test_docs.py`` fails while the page and the code disagree, so the reference cannot drift.
+"""
+
+import inspect
+import sys
+from pathlib import Path
+
+import brdffit
+
+PAGE = Path(__file__).with_name("reference.md")
+HEADER = """# API reference
+
+Generated from the code by `docs/reference.py` (`make docs`): every name `import brdffit` offers, with its signature
+and docstring. [python.md](python.md) is the guide to them.
+"""
+
+
+def entry(name: str) -> str:
+    """One public name's section: its signature and its docstring (a class's with its fields and methods)."""
+    value = getattr(brdffit, name)
+    if inspect.ismodule(value):
+        names = [member for member in getattr(value, "__all__", dir(value)) if not member.startswith("_")]
+        return f"## `brdffit.{name}`\n\n{inspect.getdoc(value) or ''}\n\nMembers: {', '.join(f'`{n}`' for n in names)}."
+    if inspect.isclass(value) or inspect.isfunction(value):
+        try:
+            signature = str(inspect.signature(value))
+        except (TypeError, ValueError):
+            signature = "(…)"
+        kind = "class" if inspect.isclass(value) else "def"
+        text = f"## `brdffit.{name}`\n\n```python\n{kind} {name}{signature}\n```\n\n{inspect.getdoc(value) or ''}"
+        if inspect.isclass(value):
+            for member, attribute in vars(value).items():
+                if member.startswith("_") or not callable(getattr(attribute, "__func__", attribute)):
+                    continue
+                function = getattr(attribute, "__func__", attribute)
+                doc = inspect.getdoc(function)
+                if doc and inspect.isfunction(function):
+                    text += f"\n\n### `{name}.{member}{inspect.signature(function)}`\n\n{doc}"
+        return text
+    return f"## `brdffit.{name}`\n\n`{type(value).__name__}`: {', '.join(map(str, value)) if isinstance(value, dict) else value!r}"
+
+
+def reference() -> str:
+    names = sorted((name for name in brdffit.__all__ if name != "__version__"), key=str.lower)
+    return HEADER + "\n" + "\n\n".join(entry(name) for name in names) + "\n"
+
+
+if __name__ == "__main__":
+    if "--check" in sys.argv:
+        sys.exit(0 if PAGE.read_text() == reference() else 1)
+    PAGE.write_text(reference())
