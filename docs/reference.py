@@ -40,7 +40,8 @@ def entry(name: str) -> str:
                 if doc and inspect.isfunction(function):
                     text += f"\n\n### `{name}.{member}{inspect.signature(function)}`\n\n{doc}"
         return text
-    return f"## `brdffit.{name}`\n\n`{type(value).__name__}`: {', '.join(map(str, value)) if isinstance(value, dict) else value!r}"
+    shown = ", ".join(map(str, value)) if isinstance(value, dict) else repr(value)
+    return f"## `brdffit.{name}`\n\n`{type(value).__name__}`: {shown}"
 
 
 def reference() -> str:
