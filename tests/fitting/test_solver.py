@@ -12,7 +12,8 @@ import data_synth
 from brdffit import fit, get_model
 from brdffit.fitting.losses import get_loss
 from brdffit.fitting.problem import build_problem, residuals
-from brdffit.fitting.solver import MAX_COORDINATE_STEP, ScaledTrustRegionDescent
+from brdffit.fitting.solve import MAX_COORDINATE_STEP
+from brdffit.fitting.solver import ScaledTrustRegionDescent
 from brdffit.fitting.starts import starting_points
 
 LOG = get_loss("log")
@@ -27,7 +28,7 @@ def descent_state(rng, k=6, residual_scale=1e-3):
     info = optx.FunctionInfo.EvalGradHessian(
         0.5 * residual @ residual, jnp.asarray(gradient), lx.MatrixLinearOperator(jnp.asarray(gram))
     )
-    descent = ScaledTrustRegionDescent()
+    descent = ScaledTrustRegionDescent(max_coordinate_step=MAX_COORDINATE_STEP)  # the BRDF fit's descent
     return descent, descent.query(None, info, descent.init(jnp.zeros(k), info)), gram, gradient
 
 
