@@ -79,7 +79,7 @@ from ..fitting.defaults import MAX_STEPS
 from ..fitting.losses import get_loss
 from ..fitting.results import FitResult, json_text
 from ..fitting.solve import TOLERANCES
-from ..fitting.solver import least_squares
+from ..fitting.solver import ScaledTrustRegionDescent, least_squares
 from ..physics.geometry import above_horizon, half_vector, mirror_direction, spherical_to_direction
 from ..physics.microfacet import ggx_distribution, ggx_lambda
 from ..views.render import display_rgb
@@ -361,11 +361,11 @@ def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended
         atol=atol,
         gtol=gtol,
         max_steps=MAX_STEPS,
-        # The descent's guards off: a colour whose logistic coordinate must travel far, to saturate at 0 or 1,
-        # reaches it. With the fit's guards, the coloured coat of the recovery tests stopped at a cost of 2e-5
+        # The fit's descent without its guards: a colour whose logistic coordinate must travel far, to saturate
+        # at 0 or 1, reaches it. With them, the coloured coat of the recovery tests stopped at a cost of 2e-5
         # (1e-16 without) and the flat-Fresnel material at 0.045 (2e-16); with MINPACK's running scale alone,
         # the coat's extended starts ran out of steps.
-        running_scale=False,
+        descent=ScaledTrustRegionDescent(drop_negligible_columns=True, running_scale=False),
     )
     return (
         solution.value,

@@ -28,7 +28,7 @@ from .losses import Loss
 from .outcome import result_of
 from .problem import Sums, build_problem, chunk_size, target_and_scale
 from .results import FitResult
-from .solve import MAX_COORDINATE_STEP, TOLERANCES, Solved, outcome_of
+from .solve import TOLERANCES, Solved, fit_descent, outcome_of
 
 #: A fitted coefficient this many library standard deviations from the library's mean gets a warning: the
 #: material lies outside the library, where the basis extrapolates.
@@ -194,7 +194,7 @@ def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, channel: Channe
         max_steps=max_steps,
         has_aux=True,
         normal_equations=partial(channel_sums, loss, mapping),
-        max_coordinate_step=MAX_COORDINATE_STEP,
+        descent=fit_descent(),
     )
     return solution.value, outcome_of(solution.result), solution.stats["num_steps"]
 

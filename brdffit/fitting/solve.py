@@ -33,13 +33,19 @@ from .problem import Problem, Sums, chunks, cost, normal_equations, prepared, re
 #: pass; the float32 stage merely has to land near the optimum, which float64 then refines.
 TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
 
-#: The largest change of any unconstrained coordinate in one step (a log-albedo or log-roughness by a factor
-#: e² ≈ 7.4): the descent's ``max_coordinate_step`` guard (``solver.ScaledTrustRegionDescent``), with its other
-#: guard, MINPACK's running column scale. Without them, brdffit's grid starts ended in a false optimum on 2 of
-#: 300 small Ward fits and 3 of 200 Cook-Torrance ones (an albedo collapsed to 3e-10, a Fresnel f0 saturated at
-#: 1) that MINPACK from the same starts did not; with them, none. A log-albedo that Gauss-Newton would send
-#: from 0.2 to 3e-10 in one step, where its column vanishes and the step test freezes it, goes by e² at most.
+#: The largest change of any unconstrained coordinate in one step: a log-albedo or log-roughness by a factor e² ≈ 7.4.
 MAX_COORDINATE_STEP = 2.0
+
+
+def fit_descent():
+    """The descent of the BRDF fits (``solver.ScaledTrustRegionDescent``): MINPACK's, with columns below ``ε`` of
+    the largest left out (an albedo at 0 in log space, a lobe switched off) and at most :data:`MAX_COORDINATE_STEP`
+    per coordinate per step. A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one step, where its
+    column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says what it
+    changed)."""
+    from .solver import ScaledTrustRegionDescent
+
+    return ScaledTrustRegionDescent(drop_negligible_columns=True, max_coordinate_step=MAX_COORDINATE_STEP)
 
 
 class Solved(NamedTuple):
@@ -151,7 +157,7 @@ def solved_from(
         has_aux=True,
         normal_equations=equations,
         budget=budget,
-        max_coordinate_step=MAX_COORDINATE_STEP,
+        descent=fit_descent(),
     )
     theta = solution.value if hold is None else theta_of(solution.value, hold)
     n_channels = problem.measured.shape[1]
