@@ -41,8 +41,8 @@ def fit_descent():
     """The descent of the BRDF fits (``solver.ScaledTrustRegionDescent``): MINPACK's, with columns below ``ε`` of
     the largest left out (an albedo at 0 in log space, a lobe switched off) and at most :data:`MAX_COORDINATE_STEP`
     per coordinate per step. A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one step, where its
-    column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says what it
-    changed)."""
+    column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says what these
+    guards changed on brdffit's starts)."""
     from .solver import ScaledTrustRegionDescent
 
     return ScaledTrustRegionDescent(drop_negligible_columns=True, max_coordinate_step=MAX_COORDINATE_STEP)

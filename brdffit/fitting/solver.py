@@ -1,7 +1,7 @@
-"""Levenberg-Marquardt as MINPACK's ``lmder`` does it, as an optimistix least-squares solver, for any residuals.
+"""Levenberg-Marquardt after MINPACK's ``lmder``, as an optimistix least-squares solver, for any residuals.
 
 :func:`least_squares` solves ``min_y |fn(y, args)|²`` for a vector ``y`` by ``optimistix.least_squares`` with
-:class:`MinpackLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the
+:class:`ScaledLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the
 residuals' shape, the solver differentiates it (or takes an equivalent pass, below), and optimistix's
 ``ImplicitAdjoint`` differentiates the solution through it. Nothing here knows about BRDFs; the BRDF fit
 (``solve.py``), the data-driven fit (``pca.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
@@ -23,10 +23,12 @@ MINPACK's ``lmder``). optimistix's ``LevenbergMarquardt`` cannot be configured i
   ``z = D δ`` (``D² = diag JᵀJ``, Marquardt 1963) with its length a fraction of the Gauss-Newton step.
   optimistix damps with ``λ I`` (Levenberg 1944), which is not invariant to a parameter's scale: a column that
   vanishes (a log-albedo whose albedo tends to 0) gets a vanishing step and crawls for hundreds of steps.
-* **The trust-region update** (:class:`MinpackTrustRegion`): optimistix's ``ClassicalTrustRegion`` with
+* **The trust-region update** (:class:`CappedTrustRegion`): optimistix's ``ClassicalTrustRegion`` with
   MINPACK's thresholds makes the same accept/grow/shrink decisions but lets the step size grow without bound,
   and a step size beyond the Gauss-Newton step only costs extra rejections to come back; MINPACK bounds its
-  radius by the step taken. The search here holds the step size at 1, in its own state.
+  radius by the step taken. The search here holds the step size at 1, in its own state. (MINPACK's radius is
+  a length in the scaled variables, kept from step to step; here it is a fraction of each point's Gauss-Newton
+  step, which is what makes NIST's MGH10 from its far start end elsewhere: ``tests/fitting/test_nist.py``.)
 * **The stopping tests**: MINPACK's ``ftol`` (relative reduction of the sum of squares, actual and predicted),
   ``gtol`` (cosine between the residuals and every Jacobian column) and an exact fit (``|r| ≤ atol``), where
   optimistix's Cauchy test asks every parameter step and residual change to be small, which a parameter heading
@@ -155,7 +157,7 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         return jnp.where(finite, delta, 0.0), RESULTS.where(finite, RESULTS.successful, RESULTS.singular)
 
 
-#: The descent as MINPACK's ``lmder`` steps: running column scale, no column dropped, no bound on a coordinate's step.
+#: The default descent: MINPACK's scale (each column's largest norm so far), no column dropped, no step bounded.
 MINPACK_DESCENT = ScaledTrustRegionDescent()
 
 
@@ -163,11 +165,12 @@ class _SearchState(eqx.Module):
     step_size: Any  # the fraction of the Gauss-Newton step the next trial takes, in (0, 1]
 
 
-class MinpackTrustRegion(optx.AbstractSearch):
-    """MINPACK's trust-region update on the ratio ``ρ`` of the actual to the predicted reduction of ``½|r|²``.
+class CappedTrustRegion(optx.AbstractSearch):
+    """A trust-region update on the ratio ``ρ`` of the actual to the predicted reduction of ``½|r|²``, with
+    MINPACK's thresholds, whose step size never exceeds the Gauss-Newton step.
 
-    Accept the step tried when ``ρ ≥ accept`` (1e-4); then multiply the step size by ``grow`` (4) when
-    ``ρ ≥ good`` (0.75), else keep it; reject it and multiply the step size by ``shrink`` (0.25) when
+    Accept the step tried when ``ρ ≥ accept`` (1e-4, MINPACK's); then multiply the step size by ``grow`` (4) when
+    ``ρ > good`` (0.75, MINPACK's), else keep it; reject it and multiply the step size by ``shrink`` (0.25) when
     ``ρ < accept``. The step size is a fraction of the Gauss-Newton step (:class:`ScaledTrustRegionDescent`) and
     never exceeds 1: beyond it the descent takes the Gauss-Newton step anyway, and a larger radius would only
     need rejections to come back (MINPACK bounds its radius by the length of the step taken, ``lmpar``).
@@ -234,10 +237,10 @@ def normal_equations_of(fn: Callable, y, args):
     return r @ r, jacobian.T @ r, jacobian.T @ jacobian, aux
 
 
-class MinpackLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
+class ScaledLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
     """Levenberg-Marquardt for ``optx.least_squares(fn, solver, y0, args)`` with ``y0`` a vector: Marquardt-scaled
-    steps (:class:`ScaledTrustRegionDescent`), MINPACK's trust region (:class:`MinpackTrustRegion`) and stopping
-    tests. Use it through :func:`least_squares`.
+    steps (:class:`ScaledTrustRegionDescent`), MINPACK's trust-region thresholds (:class:`CappedTrustRegion`) and
+    stopping tests. Use it through :func:`least_squares`.
 
     ``rtol`` is MINPACK's ``ftol``: stop when the step just tried changed ``|r|²`` by a relative ``≤ rtol`` that
     the linear model predicted too (judged on the step tried, accepted or not, as ``lmder`` does: at the optimum
@@ -257,7 +260,7 @@ class MinpackLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
     gtol: float
     normal_equations: Callable | None = None
     descent: ScaledTrustRegionDescent = MINPACK_DESCENT
-    search: MinpackTrustRegion = MinpackTrustRegion()
+    search: CappedTrustRegion = CappedTrustRegion()
 
     @property
     def norm(self) -> Callable:
@@ -362,7 +365,7 @@ def least_squares(
     descent: ScaledTrustRegionDescent = MINPACK_DESCENT,
 ) -> optx.Solution:
     """The least-squares solution of ``fn(y, args)`` (residuals of any shape; ``(residuals, aux)`` with
-    ``has_aux``) from ``y0`` (a vector), by :class:`MinpackLevenbergMarquardt` in ``optx.least_squares``.
+    ``has_aux``) from ``y0`` (a vector), by :class:`ScaledLevenbergMarquardt` in ``optx.least_squares``.
 
     ``rtol``, ``gtol``, ``atol`` are MINPACK's ``ftol``, ``gtol`` and an exact fit's ``|r|`` (the solver's
     docstring); at most ``max_steps`` steps, or ``budget`` (an integer array, an argument of a compiled program).
@@ -375,7 +378,7 @@ def least_squares(
     respect to ``args`` (and to arrays ``fn`` closes over) by the implicit function theorem (:data:`ADJOINT`);
     it has no derivative with respect to ``y0``, on which the optimum does not depend.
     """
-    solver = MinpackLevenbergMarquardt(
+    solver = ScaledLevenbergMarquardt(
         rtol=rtol, atol=atol, gtol=gtol, normal_equations=normal_equations, descent=descent
     )
     return optx.least_squares(

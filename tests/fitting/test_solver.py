@@ -192,10 +192,10 @@ def _quadratic_info(rng, k=3):
 @pytest.mark.parametrize("ratio", [1.0, 0.8, 0.7, 0.5, 1e-3, 1.1e-4, 0.9e-4, -1.0])
 @pytest.mark.parametrize("step_size", [1.0, 0.25, 2.0**-10])
 def test_the_trust_region_decides_as_optimistix_classical_one_and_stops_at_gauss_newton(rng, ratio, step_size):
-    """MinpackTrustRegion takes optimistix's ClassicalTrustRegion's decisions with MINPACK's thresholds (accept at
-    ρ ≥ 1e-4, ×4 at ρ ≥ 0.75, else ×0.25), the same arithmetic, and never a step size above 1 (the Gauss-Newton
+    """CappedTrustRegion takes optimistix's ClassicalTrustRegion's decisions with MINPACK's thresholds (accept at
+    ρ ≥ 1e-4, ×4 at ρ > 0.75, ×0.25 on rejection), the same arithmetic, and never a step size above 1 (the Gauss-Newton
     step): the actual reduction of each case is ``ratio`` times the predicted one."""
-    from brdffit.fitting.solver import MinpackTrustRegion
+    from brdffit.fitting.solver import CappedTrustRegion
 
     info, gram, gradient = _quadratic_info(rng)
     y = jnp.zeros(3)
@@ -203,14 +203,14 @@ def test_the_trust_region_decides_as_optimistix_classical_one_and_stops_at_gauss
     delta = np.asarray(y_eval)
     predicted = delta @ gradient + 0.5 * delta @ gram @ delta
     tried = optx.FunctionInfo.EvalGradHessian(info.f + ratio * predicted, info.grad, info.hessian)
-    ours = MinpackTrustRegion()
+    ours = CappedTrustRegion()
     theirs = optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=1e-4, high_constant=4.0, low_constant=0.25)
     first = jnp.array(False)
     mine = ours.step(first, y, y_eval, info, tried, _state_at(ours, y, info, step_size))
     their_size, their_accept, _, _ = theirs.step(first, y, y_eval, info, tried, _state_at(theirs, y, info, step_size))
     assert bool(mine[1]) is bool(their_accept) is (ratio >= 1e-4)
     assert float(mine[0]) == min(float(their_size), 1.0)
-    assert float(mine[0]) == min(step_size * (4.0 if ratio >= 0.75 else 1.0 if ratio >= 1e-4 else 0.25), 1.0)
+    assert float(mine[0]) == min(step_size * (4.0 if ratio > 0.75 else 1.0 if ratio >= 1e-4 else 0.25), 1.0)
     assert float(ours.predict_reduction(y_eval - y, info)) == float(theirs.predict_reduction(y_eval - y, info))
 
 
