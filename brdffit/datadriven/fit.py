@@ -24,7 +24,7 @@ from ..fitting.objective.losses import Loss
 from ..fitting.objective.problem import Sums, build_problem, chunk_size, target_and_scale
 from ..fitting.single.outcome import result_of
 from ..fitting.single.result import FitResult
-from ..fitting.solver.compiled import OUTCOMES, TOLERANCES, Solved
+from ..fitting.solver.compiled import TOLERANCES, Solved, fit_descent, outcome_of
 from ..physics.models.params import Params
 from .basis import Corners, visible_pairs
 from .mapping import EPSILON, cosine_weight, mapped
@@ -178,23 +178,34 @@ def channel_sums(loss: Loss, mapping: str, c, channel: Channel) -> Sums:
 @jit(static_argnums=(0, 1, 2))
 def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, channel: Channel):
     """brdffit's Levenberg-Marquardt (``solver.py``, MINPACK's tests and tolerances) on one channel's coefficients:
-    residuals ``scale·(T(f) − T(y))`` and the prior's ``sqrt(weight)·c``. Returns the coefficients, the outcome's
-    index into ``OUTCOMES`` and the steps taken."""
-    import optimistix as optx
-
-    from ..fitting.solver.levenberg_marquardt import OnePassLevenbergMarquardt
+    residuals ``scale·(T(f) − T(y))`` and the prior's ``sqrt(weight)·c`` (:func:`_channel_residuals`), each step
+    from :func:`channel_sums`. Returns the coefficients, the outcome's index into ``OUTCOMES`` and the steps
+    taken."""
+    from ..fitting.solver.levenberg_marquardt import least_squares
 
     ftol, gtol, atol = TOLERANCES["float64"]
-    equations = partial(channel_sums, loss, mapping)
-    solver = OnePassLevenbergMarquardt(normal_equations=equations, rtol=ftol, atol=atol, gtol=gtol)
+    solution = least_squares(
+        partial(_channel_residuals, loss, mapping),
+        c0,
+        channel,
+        rtol=ftol,
+        atol=atol,
+        gtol=gtol,
+        max_steps=max_steps,
+        has_aux=True,
+        normal_equations=partial(channel_sums, loss, mapping),
+        descent=fit_descent(),
+    )
+    return solution.value, outcome_of(solution.result), solution.stats["num_steps"]
 
-    def shape(c, channel: Channel):  # optimistix asks the residuals' shape only; the solver never evaluates them
-        return jnp.zeros(channel.measured.shape, c.dtype)
 
-    solution = optx.least_squares(shape, solver, c0, args=channel, max_steps=max_steps, throw=False)
-    ended = [solution.result == getattr(optx.RESULTS, name) for name in OUTCOMES]
-    outcome = jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
-    return solution.value, outcome, solution.stats["num_steps"]
+def _channel_residuals(loss: Loss, mapping: str, c, channel: Channel):
+    """The residuals whose sums :func:`channel_sums` accumulates: ``scale·(T(f) − T(y))`` (N,) then the prior's
+    ``sqrt(weight)·c`` (K,), and, as their aux, ``Σ (f − y)²`` over the real samples."""
+    f = channel.corners.brdf(mapping, c[:, None])[:, 0]
+    r = (loss.transform(f, channel.measured, channel.cos_i) - channel.target) * channel.scale
+    error = jnp.where(channel.real, f - channel.measured, 0.0)
+    return jnp.concatenate([r, jnp.sqrt(channel.weight) * c]), error @ error
 
 
 def pca_caveats(samples: Samples, coefficients: np.ndarray, empty: int) -> list[str]:

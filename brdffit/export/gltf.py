@@ -62,6 +62,7 @@ import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -79,7 +80,7 @@ from ..fitting.objective.losses import get_loss
 from ..fitting.options import MAX_STEPS
 from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
-from ..fitting.solver.levenberg_marquardt import OnePassLevenbergMarquardt, ScaledTrustRegionDescent
+from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least_squares
 from ..physics.geometry import above_horizon, half_vector, mirror_direction, spherical_to_direction
 from ..physics.microfacet import ggx_distribution, ggx_lambda
 from ..views.render import display_rgb
@@ -337,54 +338,35 @@ def _model_values(theta, wi, wo, n_channels: int, extended: bool):
     return values[:, :n_channels]
 
 
-class _Sums(NamedTuple):
-    """What :class:`~brdffit.fitting.solver.OnePassLevenbergMarquardt` asks of a pass (``fitting/problem.Sums``)."""
-
-    cost: jax.Array  # rᵀr
-    gradient: jax.Array  # Jᵀr, (k,)
-    gram: jax.Array  # JᵀJ, (k, k)
-    squared_error: jax.Array  # Σ (f − y)², (1/sr)²
-
-
 @jit(static_argnames=("loss_name", "n_channels", "extended"))
 def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended: bool):
     """Levenberg-Marquardt from ``theta`` on the residuals ``T(f) − T(y)`` (N, C) of the loss ``loss_name``: the
     optimum, its sum of squared residuals ``Σ r²``, the step count and whether the solver met its tolerances.
 
-    The solver is brdffit's (``fitting/solver.py``): optimistix's ``least_squares`` loop and trust region with
-    Marquardt's scaled damping and MINPACK's stopping tests, at the fits' float64 tolerances
-    (``fitting/fit.py``). optimistix's own ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate
-    whose factor heads for 0 or 1 (metallic 0 for a plastic, 1 for a metal) has a vanishing Jacobian column,
-    gets vanishing steps and crawls; measured on exact glTF data of a metal, 200 steps left ``1 − metallic``
-    at 1e-5, and its Cauchy test (every parameter step small) never passed. Here such a column drops out of
-    the step once it is below ``ε`` of the largest, and the fit stops on the cost's relative change.
+    The solver is the fit's (``fitting/solver.least_squares``): optimistix's ``least_squares`` loop with
+    Marquardt's scaled damping, MINPACK's trust-region thresholds and stopping tests, at the fits' float64
+    tolerances (``fitting/solve.py``), with the descent's guards off (below). optimistix's own
+    ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate whose factor heads for 0 or 1 (metallic 0
+    for a plastic, 1 for a metal) has a vanishing Jacobian column, gets vanishing steps and crawls; measured on
+    exact glTF data of a metal, 200 steps left ``1 − metallic`` at 1e-5, and its Cauchy test (every parameter
+    step small) never passed. Here such a column drops out of the step once it is below ``ε`` of the largest, and
+    the fit stops on the cost's relative change.
     """
-    transform = get_loss(loss_name).transform
-    cos_i = wi[:, 2:3]
-    target = transform(measured, measured, cos_i)
-
-    def residuals(theta):
-        return transform(_model_values(theta, wi, wo, n_channels, extended), measured, cos_i) - target
-
-    def normal_equations(theta, _):
-        r = residuals(theta).reshape(-1)
-        jacobian = jax.jacfwd(residuals)(theta).reshape(r.size, -1)
-        error = _model_values(theta, wi, wo, n_channels, extended) - measured
-        return _Sums(r @ r, jacobian.T @ r, jacobian.T @ jacobian, jnp.sum(error * error))
-
     ftol, gtol, atol = TOLERANCES["float64"]
-    # Free steps (the descent's guards off): a colour whose logistic coordinate must travel far, to saturate at 0 or
-    # 1, reaches it; with the guards, two of the recovery tests' materials stopped in local minima.
-    descent = ScaledTrustRegionDescent(max_coordinate_step=None, running_scale=False)
-    solver = OnePassLevenbergMarquardt(
-        normal_equations=normal_equations, rtol=ftol, atol=atol, gtol=gtol, descent=descent
-    )
-    solution = optx.least_squares(
-        lambda theta, _: jnp.zeros(measured.shape, theta.dtype),  # shapes only: the solver asks normal_equations
-        solver,
+    residual_fn = partial(_residuals, get_loss(loss_name).transform, n_channels, extended)
+    solution = least_squares(
+        residual_fn,
         theta,
+        (wi, wo, measured),
+        rtol=ftol,
+        atol=atol,
+        gtol=gtol,
         max_steps=MAX_STEPS,
-        throw=False,
+        # The fit's descent without its guards: a colour whose logistic coordinate must travel far, to saturate
+        # at 0 or 1, reaches it. With them, the coloured coat of the recovery tests stopped at a cost of 2e-5
+        # (1e-16 without) and the flat-Fresnel material at 0.045 (2e-16); with MINPACK's running scale alone,
+        # the coat's extended starts ran out of steps.
+        descent=ScaledTrustRegionDescent(drop_negligible_columns=True, running_scale=False),
     )
     return (
         solution.value,
@@ -392,6 +374,15 @@ def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended
         solution.stats["num_steps"],
         solution.result == optx.RESULTS.successful,
     )
+
+
+def _residuals(transform, n_channels: int, extended: bool, theta, data):
+    """The glTF fit's residuals ``T(f) − T(y)`` (N, C) at ``theta``, ``data`` the pairs ``wi``, ``wo`` and the
+    values ``y`` (N, C)."""
+    wi, wo, measured = data
+    cos_i = wi[:, 2:3]
+    predicted = _model_values(theta, wi, wo, n_channels, extended)
+    return transform(predicted, measured, cos_i) - transform(measured, measured, cos_i)
 
 
 def _starts(values: np.ndarray) -> list[np.ndarray]:

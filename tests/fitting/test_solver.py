@@ -10,9 +10,10 @@ import scipy.optimize
 
 import data_synth
 from brdffit import fit, get_model
+from brdffit.data.samples import Samples
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problem, residuals
-from brdffit.fitting.solver.levenberg_marquardt import MAX_COORDINATE_STEP, ScaledTrustRegionDescent
+from brdffit.fitting.solver.compiled import MAX_COORDINATE_STEP, fit_descent
 from brdffit.fitting.starts.grid import starting_points
 
 LOG = get_loss("log")
@@ -27,7 +28,7 @@ def descent_state(rng, k=6, residual_scale=1e-3):
     info = optx.FunctionInfo.EvalGradHessian(
         0.5 * residual @ residual, jnp.asarray(gradient), lx.MatrixLinearOperator(jnp.asarray(gram))
     )
-    descent = ScaledTrustRegionDescent()
+    descent = fit_descent()
     return descent, descent.query(None, info, descent.init(jnp.zeros(k), info)), gram, gradient
 
 
@@ -123,3 +124,98 @@ def test_a_step_budget_stops_the_solve_as_max_steps_does(budget):
     assert int(budgeted.result) == int(capped.result) and bool(budgeted.converged) is (budget == 50)
     np.testing.assert_allclose(np.asarray(budgeted.theta), np.asarray(capped.theta), rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(float(budgeted.cost), float(capped.cost), rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------- the contract
+def test_the_one_pass_normal_equations_are_those_of_the_residuals_the_solver_is_given():
+    """The fit hands optimistix its true residuals (``fit_residuals``) and takes each step from the one-pass sums
+    (``problem.normal_equations``): both must be the same function's. Checked against ``rᵀr``, ``Jᵀr``, ``JᵀJ``
+    of the residuals' own forward-mode Jacobian (``solver.normal_equations_of``), with sigma and weights and
+    padding, free and with a hold (a fixed entry, a bounded one). The residuals are the problem's; the sums agree
+    to 1e-12 relative (the same 4,000 × 3 terms summed in another order and grouping: ~1e-14)."""
+    from brdffit.fitting.hold import Hold, z_of
+
+    from brdffit.fitting.objective.problem import normal_equations, prepared
+    from brdffit.fitting.solver.compiled import _held_equations, _held_residuals, fit_residuals
+    from brdffit.fitting.solver.levenberg_marquardt import normal_equations_of
+
+    model = get_model("cook-torrance", fresnel="schlick")
+    wi, wo = data_synth.uniform_random(4000, seed=5)
+    truth = {"kd": [0.2, 0.1, 0.05], "ks": [0.3, 0.3, 0.4], "m": 0.15, "f0": 0.6}
+    synthetic = data_synth.synthesize("cook-torrance", truth, wi, wo, noise=0.02, seed=5, with_sigma=True)
+    weight = np.random.default_rng(5).uniform(0.5, 2.0, synthetic.n_samples)
+    samples = Samples.from_arrays(wi, wo, synthetic.values, synthetic.channels, synthetic.sigma, weight)
+    problem = prepared(LOG, build_problem(samples))
+    assert problem.wi.shape[0] > samples.n_samples  # padded
+    theta = model.unconstrained.from_params(model.dictionary.to_params(truth)) + 0.1
+    k = theta.size
+    hold = Hold(
+        free=np.r_[np.ones(k - 2), 0.0, 1.0],
+        bounded=np.r_[np.zeros(k - 1), 1.0],
+        value=np.r_[np.zeros(k - 2), theta[-2], 0.0],
+        low=np.r_[np.zeros(k - 1), theta[-1] - 1.0],
+        high=np.r_[np.zeros(k - 1), theta[-1] + 2.0],
+    )
+    residual_fn = lambda t, p: fit_residuals(model, LOG, t, p)
+    equations = lambda t, p: normal_equations(model, LOG, t, p)
+    r, squared_error = residual_fn(jnp.asarray(theta), problem)
+    # The same arithmetic compiled per chunk: T(f) and T(y) may round differently, by ~ε of them, in a difference
+    # that is a few % of them (the noise): up to ~1e-14 of the residual; 1e-12 is ample.
+    np.testing.assert_allclose(r, residuals(model, LOG, jnp.asarray(theta), problem), rtol=1e-12)
+    cases = [
+        (residual_fn, equations, jnp.asarray(theta), problem),
+        (
+            lambda z, data: _held_residuals(residual_fn, z, data),
+            lambda z, data: _held_equations(equations, z, data),
+            z_of(jnp.asarray(theta), hold),
+            (problem, hold),
+        ),
+    ]
+    for fn, one_pass, y, args in cases:
+        expected = normal_equations_of(jax.jit(fn), y, args)
+        sums = jax.jit(one_pass)(y, args)
+        for name, ours, theirs in zip(("rᵀr", "Jᵀr", "JᵀJ", "Σ(f−y)²"), sums, expected, strict=True):
+            np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12 * np.max(np.abs(theirs)), err_msg=name)
+    assert float(squared_error) == pytest.approx(float(expected[3]), rel=1e-12)
+
+
+def _quadratic_info(rng, k=3):
+    """½|r|² of a random linear residual and its exact quadratic model: actual reduction = predicted reduction."""
+    jacobian = rng.standard_normal((20, k))
+    residual = rng.standard_normal(20)
+    gram, gradient = jacobian.T @ jacobian, jacobian.T @ residual
+    info = optx.FunctionInfo.EvalGradHessian(
+        0.5 * residual @ residual, jnp.asarray(gradient), lx.MatrixLinearOperator(jnp.asarray(gram))
+    )
+    return info, gram, gradient
+
+
+@pytest.mark.parametrize("ratio", [1.0, 0.8, 0.7, 0.5, 1e-3, 1.1e-4, 0.9e-4, -1.0])
+@pytest.mark.parametrize("step_size", [1.0, 0.25, 2.0**-10])
+def test_the_trust_region_decides_as_optimistix_classical_one_and_stops_at_gauss_newton(rng, ratio, step_size):
+    """CappedTrustRegion takes optimistix's ClassicalTrustRegion's decisions with MINPACK's thresholds (accept at
+    ρ ≥ 1e-4, ×4 at ρ > 0.75, ×0.25 on rejection), the same arithmetic, and never a step size above 1 (the Gauss-Newton
+    step): the actual reduction of each case is ``ratio`` times the predicted one."""
+    from brdffit.fitting.solver.levenberg_marquardt import CappedTrustRegion
+
+    info, gram, gradient = _quadratic_info(rng)
+    y = jnp.zeros(3)
+    y_eval = jnp.asarray(-0.1 * np.linalg.solve(gram, gradient))
+    delta = np.asarray(y_eval)
+    predicted = delta @ gradient + 0.5 * delta @ gram @ delta
+    tried = optx.FunctionInfo.EvalGradHessian(info.f + ratio * predicted, info.grad, info.hessian)
+    ours = CappedTrustRegion()
+    theirs = optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=1e-4, high_constant=4.0, low_constant=0.25)
+    first = jnp.array(False)
+    mine = ours.step(first, y, y_eval, info, tried, _state_at(ours, y, info, step_size))
+    their_size, their_accept, _, _ = theirs.step(first, y, y_eval, info, tried, _state_at(theirs, y, info, step_size))
+    assert bool(mine[1]) is bool(their_accept) is (ratio >= 1e-4)
+    assert float(mine[0]) == min(float(their_size), 1.0)
+    assert float(mine[0]) == min(step_size * (4.0 if ratio > 0.75 else 1.0 if ratio >= 1e-4 else 0.25), 1.0)
+    assert float(ours.predict_reduction(y_eval - y, info)) == float(theirs.predict_reduction(y_eval - y, info))
+
+
+def _state_at(search, y, info, step_size):
+    """A trust region's state at ``step_size``, built through its public ``init`` and the pytree it is (one leaf)."""
+    state = search.init(y, info)
+    return jax.tree.unflatten(jax.tree.structure(state), [jnp.asarray(step_size)])

@@ -4,10 +4,15 @@ The parameters move in unconstrained coordinates (``Model.unconstrained``), so e
 valid. The solver (``solver.py``) is compiled once per model, loss and bucketed data size
 (``problem.padded_size``) and reused for every start and every dataset of that size.
 
-The compiled solve is differentiable with respect to the data: its derivatives are those of the optimum
-(the implicit function theorem, ``implicit.py``), never of the solver's iterations.
+The compiled solve is differentiable with respect to the data: its derivatives are those of the optimum,
+never of the solver's iterations. optimistix's ``ImplicitAdjoint`` (``solver.ADJOINT``) gives them, by the
+implicit function theorem on the fit's optimality condition ``∇½|r|² = 0`` differentiated through the fit's
+residuals (:func:`fit_residuals`); the start carries none, the optimum does not depend on it. The cost and
+the rmse come from the solver's last pass and are differentiated as the functions of the optimum and the data
+they are (:func:`computed_as`).
 """
 
+from collections.abc import Callable
 from functools import partial
 from typing import Any, NamedTuple
 
@@ -18,9 +23,8 @@ from ..._programs import built_once, jit
 from ...physics.models.model import Model
 from ...physics.models.params import Params
 from ..objective.losses import Loss
-from ..objective.problem import Problem, Sums, cost, normal_equations, prepared, residuals
+from ..objective.problem import Problem, Sums, chunks, cost, normal_equations, prepared, residuals
 from .hold import Hold, slopes, theta_of, z_of
-from .implicit import at_optimum, computed_as
 
 #: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -29,6 +33,20 @@ from .implicit import at_optimum, computed_as
 #: that differ by 1% carry ~1e-4 relative rounding error, so its cost jitters at ~1e-5 and only loose tests can
 #: pass; the float32 stage merely has to land near the optimum, which float64 then refines.
 TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
+
+#: The largest change of any unconstrained coordinate in one step: a log-albedo or log-roughness by a factor e² ≈ 7.4.
+MAX_COORDINATE_STEP = 2.0
+
+
+def fit_descent():
+    """The descent of the BRDF fits (``solver.ScaledTrustRegionDescent``): MINPACK's, with columns below ``ε`` of
+    the largest left out (an albedo at 0 in log space, a lobe switched off) and at most :data:`MAX_COORDINATE_STEP`
+    per coordinate per step. A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one step, where its
+    column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says what these
+    guards changed on brdffit's starts)."""
+    from .levenberg_marquardt import ScaledTrustRegionDescent
+
+    return ScaledTrustRegionDescent(drop_negligible_columns=True, max_coordinate_step=MAX_COORDINATE_STEP)
 
 
 class Solved(NamedTuple):
@@ -86,13 +104,10 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
     compiles nothing.
 
     Differentiable with respect to ``problem`` (its measurements, sigma, weights, directions) and the hold's
-    values: ``theta``, ``params``, ``cost`` and ``rmse`` carry the derivatives of the optimum (``implicit.py``);
-    the start ``theta0`` has none, the optimum does not depend on it.
+    values: ``theta``, ``params``, ``cost`` and ``rmse`` carry the derivatives of the optimum (the module
+    docstring); the start ``theta0`` has none, the optimum does not depend on it.
     """
-    return jit(
-        partial(solved_from, model, loss, max_steps, dtype),
-        name=f"fitting.solve.solved_from[{model!r}, {loss!r}, {max_steps}, {dtype!r}]",
-    )
+    return jit(partial(solved_from, model, loss, max_steps, dtype))  # named by its bound arguments' cache keys
 
 
 def solved_from(
@@ -109,60 +124,83 @@ def solved_from(
     most ``max_steps`` steps, or ``budget`` (an integer array ≤ ``max_steps``: an argument of the program, not a
     constant of it) when given.
 
-    With a ``hold`` the solver moves the coordinates ``z`` of ``hold.py`` (fixed entries stay at their values,
-    bounded ones inside their ranges), and ``theta0`` is first moved onto what the hold allows."""
+    The solver sees the fit's residuals (:func:`fit_residuals`) and takes each step from the one-pass normal
+    equations (``problem.normal_equations``), which give the same sums without forming the Jacobian. With a
+    ``hold`` it moves the coordinates ``z`` of ``hold.py`` (fixed entries stay at their values, bounded ones
+    inside their ranges), and ``theta0`` is first moved onto what the hold allows."""
     import optimistix as optx
 
-    from .levenberg_marquardt import OnePassLevenbergMarquardt
+    from .levenberg_marquardt import least_squares
 
     ftol, gtol, atol = TOLERANCES[dtype]
+    problem = prepared(loss, problem)
+    residual_fn = partial(fit_residuals, model, loss)
+    equations = partial(normal_equations, model, loss)
     if hold is None:
-        equations = partial(normal_equations, model, loss)
-        to_theta = lambda y, data: y
+        data = problem
         start = jnp.asarray(theta0, jnp.float64)  # the optimum is float64's whatever the start's dtype
     else:
-        equations = partial(_held_equations, partial(normal_equations, model, loss))
-        to_theta = lambda y, data: theta_of(y, data[1])
         hold = jax.tree.map(lambda leaf: jnp.asarray(leaf, jnp.float64), hold)
+        residual_fn, equations = partial(_held_residuals, residual_fn), partial(_held_equations, equations)
+        data = (problem, hold)
         start = z_of(jnp.asarray(theta0, jnp.float64), hold)
-    solver = OnePassLevenbergMarquardt(normal_equations=equations, rtol=ftol, atol=atol, gtol=gtol)
-
-    def gradient(y, data):
-        return equations(y, data).gradient
-
-    def squared_error(theta, problem: Problem):
-        n_channels = problem.measured.shape[1]
-
-        def error(t, chunk):
-            predicted = model.brdf(model.unconstrained.to_params(t, n_channels), chunk.wi, chunk.wo)
-            return jnp.where(chunk.real[:, None], predicted - chunk.measured, 0.0)
-
-        return cost(error, theta, problem)
-
-    problem = prepared(loss, problem)
-    data = problem if hold is None else (problem, hold)
-    frozen_start, frozen_data = jax.lax.stop_gradient((start, data))
-    solution = optx.least_squares(
-        _residual_shape,
-        solver,
-        frozen_start,
-        args=frozen_data,
-        options=None if budget is None else {"budget": budget},
+    solution = least_squares(
+        residual_fn,
+        start,
+        data,
+        rtol=ftol,
+        atol=atol,
+        gtol=gtol,
         max_steps=max_steps,
-        throw=False,
+        has_aux=True,
+        normal_equations=equations,
+        budget=budget,
+        descent=fit_descent(),
     )
-    theta = to_theta(at_optimum(gradient, solution.value, data), data)
+    theta = solution.value if hold is None else theta_of(solution.value, hold)
     n_channels = problem.measured.shape[1]
     params = model.unconstrained.to_params(theta, n_channels)
     sum_of_squares = partial(cost, partial(residuals, model, loss))
     total = computed_as(sum_of_squares, 2.0 * solution.state.f_info.f, theta, problem)
-    # rmse: sqrt(mean((f - y)²)) over the real samples, from the pass at the point returned.
+    # rmse: sqrt(mean((f - y)²)) over the real samples, from the pass at the point returned (the residuals' aux).
     n_values = jnp.sum(problem.real) * n_channels
-    rmse = jnp.sqrt(computed_as(squared_error, solution.state.squared_error, theta, problem) / n_values)
-    ended = [solution.result == getattr(optx.RESULTS, name) for name in OUTCOMES]
-    outcome = jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
+    squared_error = partial(cost, partial(_brdf_error, model))
+    rmse = jnp.sqrt(computed_as(squared_error, solution.aux, theta, problem) / n_values)
     converged = solution.result == optx.RESULTS.successful
-    return Solved(theta, total, solution.stats["num_steps"], outcome, converged, params, rmse)
+    return Solved(theta, total, solution.stats["num_steps"], outcome_of(solution.result), converged, params, rmse)
+
+
+def fit_residuals(model: Model, loss: Loss, theta, problem: Problem):
+    """The fit's residual function as the solver sees it: the residuals (N, C) of ``problem.residuals`` at
+    ``theta`` and, as their aux, ``Σ (f - y)²`` over the real samples (float64, the rmse's numerator), computed
+    chunk by chunk (``problem.chunks``).
+
+    The solver never evaluates it (``problem.normal_equations`` gives its sums in one pass); optimistix traces it
+    for its shape and differentiates it for the derivatives of the optimum. Each chunk is recomputed on the way
+    back (``jax.checkpoint``), so that those derivatives hold one chunk's intermediates at a time, as the
+    normal equations do, rather than the whole problem's.
+    """
+
+    def chunk_residuals(total, chunk):
+        error = _brdf_error(model, theta, chunk).astype(jnp.float64)
+        return total + jnp.sum(error * error), residuals(model, loss, theta, chunk)
+
+    total, r = jax.lax.scan(jax.checkpoint(chunk_residuals), jnp.zeros((), jnp.float64), chunks(problem))
+    return r.reshape(problem.measured.shape[0], -1), total
+
+
+def _brdf_error(model: Model, theta, problem: Problem):
+    """``f - y`` (N, C) at ``theta``, 0 on padding, 1/sr, computed in the problem's dtype as the residuals are."""
+    params = model.unconstrained.to_params(theta, problem.measured.shape[1])
+    params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
+    predicted = model.brdf(params, problem.wi, problem.wo)
+    return jnp.where(problem.real[:, None], predicted - problem.measured, 0.0)
+
+
+def _held_residuals(residual_fn, z, data):
+    """``residual_fn`` in the coordinates ``z`` of a hold."""
+    problem, hold = data
+    return residual_fn(theta_of(z, hold), problem)
 
 
 def _held_equations(equations, z, data) -> Sums:
@@ -174,16 +212,29 @@ def _held_equations(equations, z, data) -> Sums:
     return sums._replace(gradient=slope * sums.gradient, gram=slope[:, None] * sums.gram * slope[None, :])
 
 
-def _residual_shape(theta, data):
-    """The residuals' shape and dtype, which is all optimistix's interface needs of them here.
+@partial(jax.custom_jvp, nondiff_argnums=(0,))
+def computed_as(function: Callable, value, theta, data):
+    """``value``, which the solver computed as ``function(theta, data)``, with that function's derivatives (with
+    respect to ``theta`` and ``data``): the cost and the rmse come from the solver's last pass, not from a
+    separate evaluation, and differentiate as what they are."""
+    return value
 
-    The solver only calls ``normal_equations``; handing optimistix the real
-    residual function would make it trace the model once more for nothing
-    (0.13 s of the first fit of a Cook-Torrance model). Nothing differentiates
-    it either: the solve's derivatives come from ``implicit.py``.
-    """
-    problem = data if isinstance(data, Problem) else data[0]
-    return jnp.zeros(problem.measured.shape, theta.dtype)
+
+@computed_as.defjvp
+def _computed_as_jvp(function, primals, tangents):
+    value, theta, data = primals
+    _, theta_tangent, data_tangent = tangents
+    _, tangent = jax.jvp(function, (theta, data), (theta_tangent, data_tangent))
+    return value, tangent
+
+
+def outcome_of(result):
+    """The index into :data:`OUTCOMES` of optimistix's ``result`` (JAX), ``len(OUTCOMES)`` for one it does not
+    list."""
+    import optimistix as optx
+
+    ended = [result == getattr(optx.RESULTS, name) for name in OUTCOMES]
+    return jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
 
 
 def failure_message(outcome: int, max_steps: int) -> str:

@@ -1,37 +1,43 @@
-"""Levenberg-Marquardt as an optimistix least-squares solver, on normal equations accumulated in one pass.
+"""Levenberg-Marquardt after MINPACK's ``lmder``, as an optimistix least-squares solver, for any residuals.
 
-optimistix builds its ``LevenbergMarquardt`` from parts: a Gauss-Newton loop
-(``AbstractGaussNewton``), a damped-Newton *descent* and a classical trust
-region (``ClassicalTrustRegion``). This solver runs in optimistix's
-``least_squares`` loop with optimistix's trust region and result codes, and
-changes the parts that cost time, memory or convergence on BRDF data; each
-follows MINPACK's ``lmder`` (Moré, "The Levenberg-Marquardt algorithm:
-implementation and theory", 1978):
+:func:`least_squares` solves ``min_y |fn(y, args)|²`` for a vector ``y`` by ``optimistix.least_squares`` with
+:class:`ScaledLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the
+residuals' shape, the solver differentiates it (or takes an equivalent pass, below), and optimistix's
+``ImplicitAdjoint`` differentiates the solution through it. Nothing here knows about BRDFs; the BRDF fit
+(``solve.py``), the data-driven fit (``pca.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
+(``tests/fitting/test_nist.py``) all call :func:`least_squares`.
 
-* **Normal equations in one pass.** optimistix linearises the whole residual at
-  every trial point (keeping every intermediate of the N·C-long evaluation
-  alive) and materialises the Jacobian; here ``rᵀr``, ``Jᵀr`` and ``JᵀJ`` come
-  from one chunked forward-mode pass (``problem.normal_equations``) and the
-  trust region sees them as ``FunctionInfo.EvalGradHessian(½rᵀr, Jᵀr, JᵀJ)``,
-  whose predicted reduction is exactly the Gauss-Newton model's. A step costs
-  one fused Jacobian evaluation and memory does not grow with the data.
-* **A trust region on the scaled step.** optimistix damps with ``λ I``
-  (Levenberg 1944), which is not invariant to the scale of a parameter: a
-  log-albedo whose albedo tends to 0 has a vanishing Jacobian column, gets a
-  vanishing step and crawls for hundreds of steps. Here the step lives in
-  Marquardt's scaled variables ``z = D δ`` (``D² = diag JᵀJ``) and its length is
-  a fraction of the Gauss-Newton step (:class:`ScaledTrustRegionDescent`), so
-  that a rejected step is followed by one four times shorter; with the trust
-  region's thresholds set to MINPACK's (grow at ρ ≥ 0.75), step counts match
-  MINPACK's (7.5 against 7.1 on 30 random Cook-Torrance materials; with ``λ``
-  damping it took 8.4, and up to 35 where MINPACK took 17).
-* **MINPACK's stopping tests**, in place of optimistix's Cauchy test (every
-  parameter step and every residual change below ``atol + rtol·|value|``),
-  which a parameter heading to a bound never passes and which needs the
-  residual vector: stop when the step just tried changed the sum of squares
-  by a relative ``≤ rtol`` that the linear model predicted (``ftol``); when
-  every Jacobian column is orthogonal to the residuals to within ``gtol``
-  (the cosine test); or when the sum of squares is below ``atol²`` (an exact fit).
+**What is optimistix's, through its public API.** The iterative loop, ``max_steps`` and the result codes
+(``optx.least_squares``, ``optx.RESULTS``); the solver, descent and search interfaces
+(``optx.AbstractLeastSquaresSolver``, ``optx.AbstractDescent``, ``optx.AbstractSearch``,
+``optx.FunctionInfo.EvalGradHessian``); and derivatives of the solution with respect to ``args``:
+``optx.ImplicitAdjoint`` applies the implicit function theorem to ``∇½|fn|² = 0`` at the solution (Blondel et
+al., "Efficient and modular implicit differentiation", NeurIPS 2022), never to the solver's iterations, with
+lineax's SVD solve (``lx.SVD``) so that a direction the residuals do not determine (a held parameter, an
+albedo at 0: a zero row of the Hessian) gets the pseudo-inverse's zero derivative instead of a NaN.
+
+**What is owned here, and why** (Moré, "The Levenberg-Marquardt algorithm: implementation and theory", 1978;
+MINPACK's ``lmder``). optimistix's ``LevenbergMarquardt`` cannot be configured into these:
+
+* **The descent** (:class:`ScaledTrustRegionDescent`): the step lives in Marquardt's scaled variables
+  ``z = D δ`` (``D² = diag JᵀJ``, Marquardt 1963) with its length a fraction of the Gauss-Newton step.
+  optimistix damps with ``λ I`` (Levenberg 1944), which is not invariant to a parameter's scale: a column that
+  vanishes (a log-albedo whose albedo tends to 0) gets a vanishing step and crawls for hundreds of steps.
+* **The trust-region update** (:class:`CappedTrustRegion`): optimistix's ``ClassicalTrustRegion`` with
+  MINPACK's thresholds makes the same accept/grow/shrink decisions but lets the step size grow without bound,
+  and a step size beyond the Gauss-Newton step only costs extra rejections to come back; MINPACK bounds its
+  radius by the step taken. The search here holds the step size at 1, in its own state. (MINPACK's radius is
+  a length in the scaled variables, kept from step to step; here it is a fraction of each point's Gauss-Newton
+  step, which is what makes NIST's MGH10 from its far start end elsewhere: ``tests/fitting/test_nist.py``.)
+* **The stopping tests**: MINPACK's ``ftol`` (relative reduction of the sum of squares, actual and predicted),
+  ``gtol`` (cosine between the residuals and every Jacobian column) and an exact fit (``|r| ≤ atol``), where
+  optimistix's Cauchy test asks every parameter step and residual change to be small, which a parameter heading
+  to a bound (an albedo to 0 in log space) never passes.
+* **The normal equations** ``rᵀr``, ``Jᵀr``, ``JᵀJ`` are what a step needs. By default they come from ``fn``
+  (``jax.jacfwd``); a caller may pass ``normal_equations``, a faster pass giving the same sums (the BRDF fit
+  accumulates them chunk by chunk without forming the Jacobian, so memory does not grow with the data), which
+  the tests check against ``fn``'s Jacobian.
+* **A step budget** (``budget``): a ``max_steps`` that a compiled program takes as an argument.
 """
 
 from collections.abc import Callable
@@ -44,8 +50,9 @@ import lineax as lx
 import optimistix as optx
 from optimistix import RESULTS
 
-#: The largest change of any unconstrained coordinate in one step (a log-albedo or log-roughness by a factor e² ≈ 7.4).
-MAX_COORDINATE_STEP = 2.0
+#: How the solution is differentiated: the implicit function theorem, with the pseudo-inverse of the Hessian of
+#: ``½|r|²`` (lineax's SVD solve), so that directions the residuals do not determine get no derivative.
+ADJOINT = optx.ImplicitAdjoint(linear_solver=lx.SVD())
 
 
 class _DescentState(eqx.Module):
@@ -71,27 +78,30 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
     ``log λ``. So each rejection shortens the step by the trust region's
     factor, where damping ``λ I`` from a small ``λ`` barely shortens it.
 
-    A column whose squared norm is below ``ε·max`` (an albedo that has gone to
-    0 in log space) cannot change the residuals at float precision; it is left
-    out of the step, whose length would otherwise be all its own and leave the
-    other parameters a vanishing radius.
+    A column of ``J`` that is 0 (a held parameter) is *dead*: it is left out of the step (and of the cosine
+    test), where it would make the scaled matrix singular. Three options, each off in MINPACK and so by default,
+    suit coordinates that are logarithms or logits (the BRDF fit's, ``solve.FIT_DESCENT``):
 
-    Two guards against a fit that runs off into a flat region, both on by default:
+    * ``drop_negligible_columns``: a column whose squared norm is below ``ε·max`` (an albedo that has gone to 0
+      in log space) is dead too: it cannot change the residuals at float precision over a step of order 1, and
+      its length would otherwise take all of the step and leave the other parameters a vanishing radius. In
+      units of any scale it is wrong: NIST's Hahn1 has columns 10⁹ apart (``1`` and ``x³``) and stops 10
+      digits short with it (``tests/fitting/test_nist.py``).
+    * ``max_coordinate_step``: no coordinate moves by more than this in one step (the whole step is shortened
+      along its direction), an absolute length.
+    * ``running_scale=False``: the scale is each column's norm now, not MINPACK's (``lmder``, mode 1) largest norm
+      so far. MINPACK's keeps the step of a column that shrinks on the way (an albedo heading to 0) the size it
+      had, instead of a step that grows as it shrinks.
 
-    * ``running_scale``: MINPACK's scale (``lmder``, mode 1), each column's largest norm so far rather than its
-      norm now, so that a column that shrinks on the way (an albedo heading to 0) keeps a step of the size it
-      had instead of a step that grows as it shrinks;
-    * ``max_coordinate_step``: no unconstrained coordinate moves by more than this in one step (the whole step
-      is shortened along its direction). A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one
-      step, where its column vanishes and the step test freezes it, goes by a factor e² at most.
-
-    Without them, brdffit's grid starts ended in a false optimum on 2 of 300 small Ward fits and 3 of 200
-    Cook-Torrance ones (an albedo collapsed to 3e-10, a Fresnel f0 saturated at 1) that MINPACK from the same
-    starts did not; with them, none. The glTF fit (``export/gltf.py``), whose logistic coordinates must
-    travel far to saturate a colour at 0 or 1, turns both off.
+    The last two are guards against a fit that runs off into a flat region (MINPACK's scale on, the step
+    bounded): without them, brdffit's grid starts ended in a false optimum on 2 of 300 small Ward fits and 3 of
+    200 Cook-Torrance ones (an albedo collapsed to 3e-10, a Fresnel f0 saturated at 1) that MINPACK from the same
+    starts did not; with them, none. The glTF fit (``export/gltf.py``), whose logistic coordinates must travel
+    far to saturate a colour at 0 or 1, turns both off.
     """
 
-    max_coordinate_step: float | None = MAX_COORDINATE_STEP
+    drop_negligible_columns: bool = False
+    max_coordinate_step: float | None = None
     running_scale: bool = True
 
     def init(self, y, f_info_struct):
@@ -105,7 +115,7 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         tiny = jnp.finfo(gram.dtype).tiny
         eps = jnp.finfo(gram.dtype).eps
         diagonal = jnp.diag(gram)
-        live = diagonal > eps * jnp.max(diagonal)
+        live = diagonal > (eps * jnp.max(diagonal) if self.drop_negligible_columns else 0.0)
         norms = jnp.sqrt(diagonal)
         running = jnp.maximum(state.largest_norms, norms) if self.running_scale else norms
         scale = jnp.where(live, running, 1.0)
@@ -147,12 +157,61 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
         return jnp.where(finite, delta, 0.0), RESULTS.where(finite, RESULTS.successful, RESULTS.singular)
 
 
+#: The default descent: MINPACK's scale (each column's largest norm so far), no column dropped, no step bounded.
+MINPACK_DESCENT = ScaledTrustRegionDescent()
+
+
+class _SearchState(eqx.Module):
+    step_size: Any  # the fraction of the Gauss-Newton step the next trial takes, in (0, 1]
+
+
+class CappedTrustRegion(optx.AbstractSearch):
+    """A trust-region update on the ratio ``ρ`` of the actual to the predicted reduction of ``½|r|²``, with
+    MINPACK's thresholds, whose step size never exceeds the Gauss-Newton step.
+
+    Accept the step tried when ``ρ ≥ accept`` (1e-4, MINPACK's); then multiply the step size by ``grow`` (4) when
+    ``ρ > good`` (0.75, MINPACK's), else keep it; reject it and multiply the step size by ``shrink`` (0.25) when
+    ``ρ < accept``. The step size is a fraction of the Gauss-Newton step (:class:`ScaledTrustRegionDescent`) and
+    never exceeds 1: beyond it the descent takes the Gauss-Newton step anyway, and a larger radius would only
+    need rejections to come back (MINPACK bounds its radius by the length of the step taken, ``lmpar``).
+
+    These are the decisions of optimistix's ``ClassicalTrustRegion(low_cutoff=1e-4, high_cutoff=0.75,
+    high_constant=4, low_constant=0.25)`` (whose defaults, 0.01 and 0.99, rarely enlarge the region, and the fit
+    crawls), computed the same way (the predicted reduction is the quadratic model's ``gᵀδ + ½δᵀGδ``), with the
+    cap at 1 added: optimistix's state is private, so the whole update is owned here.
+    """
+
+    accept: float = 1e-4
+    good: float = 0.75
+    grow: float = 4.0
+    shrink: float = 0.25
+
+    def init(self, y, f_info_struct):
+        return _SearchState(step_size=jnp.array(1.0))
+
+    def predict_reduction(self, y_diff, f_info):
+        """The quadratic model's change of ``½|r|²`` for the step ``y_diff``: ``gᵀδ + ½ δᵀ(JᵀJ)δ`` (negative for
+        a descent)."""
+        curvature = jnp.matmul(f_info.hessian.as_matrix(), y_diff, precision=jax.lax.Precision.HIGHEST)
+        return jnp.dot(y_diff, f_info.grad + 0.5 * curvature, precision=jax.lax.Precision.HIGHEST)
+
+    def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
+        predicted = self.predict_reduction(y_eval - y, f_info)
+        # ρ ≥ c  ⇔  actual ≤ c·predicted, both reductions negative for a descent: no division.
+        actual = f_eval_info.f - f_info.f
+        accept = (actual <= self.accept * predicted) | first_step
+        good = (actual < self.good * predicted) & (predicted < 0) & ~first_step
+        factor = jnp.where(accept, jnp.where(good, self.grow, 1.0), self.shrink)
+        step_size = jnp.minimum(factor * state.step_size, 1.0)
+        return step_size, accept, RESULTS.successful, _SearchState(step_size)
+
+
 class _State(eqx.Module):
     first_step: Any
-    y_eval: Any
+    y_eval: Any  # the point tried next
     search_state: Any
     f_info: Any  # FunctionInfo.EvalGradHessian at the last accepted point: ½rᵀr, Jᵀr, JᵀJ
-    squared_error: Any  # Σ (f - y)² at the last accepted point (problem.Sums), for the result's rmse
+    aux: Any  # fn's auxiliary output at the last accepted point
     descent_state: Any
     terminate: Any
     result: Any
@@ -164,29 +223,44 @@ def _function_info(cost, gradient, gram):
     return optx.FunctionInfo.EvalGradHessian(0.5 * cost, gradient, hessian)
 
 
-class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
-    """Levenberg-Marquardt on normal equations, for ``least_squares(fn, solver, y0, args)`` with ``args`` a
-    :class:`~brdffit.fitting.problem.Problem`.
+def normal_equations_of(fn: Callable, y, args):
+    """``(rᵀr, Jᵀr, JᵀJ, aux)`` of ``fn(y, args) = (r, aux)`` at ``y`` (a vector), ``J = ∂r/∂y`` by forward mode
+    (``jax.jacfwd``, one pass of ``k`` tangents), in ``y``'s dtype; ``r`` may have any shape."""
 
-    Not optimistix's ``LevenbergMarquardt``: its contract differs (it never evaluates ``fn``).
+    def residuals_twice(point):
+        residuals, aux = fn(point, args)
+        return residuals, (residuals, aux)
 
-    ``normal_equations(theta, problem) -> problem.Sums`` supplies ``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²``
-    (``problem.normal_equations``); ``fn`` itself is only used by optimistix for shapes. The state's
-    ``squared_error`` is that of the point returned. ``rtol`` is
-    MINPACK's ``ftol`` (relative reduction of the sum of squares), ``gtol`` its
-    cosine test, and ``atol`` the residual norm below which the fit is exact.
+    jacobian, (residuals, aux) = jax.jacfwd(residuals_twice, has_aux=True)(y)
+    r = residuals.reshape(-1).astype(y.dtype)
+    jacobian = jacobian.reshape(r.size, y.size).astype(y.dtype)
+    return r @ r, jacobian.T @ r, jacobian.T @ jacobian, aux
+
+
+class ScaledLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
+    """Levenberg-Marquardt for ``optx.least_squares(fn, solver, y0, args)`` with ``y0`` a vector: Marquardt-scaled
+    steps (:class:`ScaledTrustRegionDescent`), MINPACK's trust-region thresholds (:class:`CappedTrustRegion`) and
+    stopping tests. Use it through :func:`least_squares`.
+
+    ``rtol`` is MINPACK's ``ftol``: stop when the step just tried changed ``|r|²`` by a relative ``≤ rtol`` that
+    the linear model predicted too (judged on the step tried, accepted or not, as ``lmder`` does: at the optimum
+    a step predicted to gain ~1e-16 is accepted or rejected by rounding alone). ``gtol`` is MINPACK's cosine
+    test: stop when every live column of ``J`` makes a cosine ``≤ gtol`` with ``r``. ``atol``: stop when
+    ``|r| ≤ atol`` (an exact fit).
+
+    ``normal_equations(y, args) -> (rᵀr, Jᵀr, JᵀJ, aux)``, when given, replaces :func:`normal_equations_of`
+    ``(fn, y, args)`` in every step and must give the same sums (and ``fn``'s ``aux``); ``fn`` then only serves
+    optimistix (shapes, and the derivatives of the solution). ``options={"budget": b}`` (an integer, possibly
+    traced) stops after ``b`` steps as ``max_steps`` would; ``aux`` of the solution is ``fn``'s at the point
+    returned.
     """
 
-    normal_equations: Callable = eqx.field(static=True)
     rtol: float
     atol: float
     gtol: float
-    descent: ScaledTrustRegionDescent = ScaledTrustRegionDescent()
-    #: MINPACK's thresholds: accept when the actual reduction is ≥ 1e-4 of the predicted one, enlarge the
-    #: trust region when ≥ 0.75 (optimistix's defaults, 0.01 and 0.99, rarely enlarge it and the fit crawls).
-    search: optx.ClassicalTrustRegion = optx.ClassicalTrustRegion(
-        high_cutoff=0.75, low_cutoff=1e-4, high_constant=4.0, low_constant=0.25
-    )
+    normal_equations: Callable | None = None
+    descent: ScaledTrustRegionDescent = MINPACK_DESCENT
+    search: CappedTrustRegion = CappedTrustRegion()
 
     @property
     def norm(self) -> Callable:
@@ -195,13 +269,13 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
         k = y.size
-        f_info = _function_info(jnp.zeros((), jnp.float64), jnp.zeros(k, y.dtype), jnp.zeros((k, k), y.dtype))
+        f_info = _function_info(jnp.zeros((), y.dtype), jnp.zeros(k, y.dtype), jnp.zeros((k, k), y.dtype))
         return _State(
             first_step=jnp.array(True),
             y_eval=y,
             search_state=self.search.init(y, f_info),
             f_info=f_info,
-            squared_error=jnp.zeros((), jnp.float64),
+            aux=jax.tree.map(lambda leaf: jnp.zeros(leaf.shape, leaf.dtype), aux_struct),
             descent_state=self.descent.init(y, f_info),
             terminate=jnp.array(False),
             result=RESULTS.successful,
@@ -209,26 +283,23 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         )
 
     def step(self, fn, y, args, options, state, tags):
-        sums = self.normal_equations(state.y_eval, args)
-        f_eval_info = _function_info(sums.cost, sums.gradient, sums.gram)
+        if self.normal_equations is None:
+            cost, gradient, gram, aux = normal_equations_of(fn, state.y_eval, args)
+        else:
+            cost, gradient, gram, aux = self.normal_equations(state.y_eval, args)
+        f_eval_info = _function_info(cost, gradient, gram)
         step_size, accept, search_result, search_state = self.search.step(
             state.first_step, y, state.y_eval, state.f_info, f_eval_info, state.search_state
         )
-        # A step size of 1 is the Gauss-Newton step; beyond it the trust region would only need extra
-        # rejections to come back, so it stops there (MINPACK bounds its radius by the step taken).
-        step_size = jnp.minimum(step_size, 1.0)
-        search_state = eqx.tree_at(lambda s: s.step_size, search_state, step_size)
         new_y = jnp.where(accept, state.y_eval, y)
         f_info = jax.tree.map(lambda new, old: jnp.where(accept, new, old), f_eval_info, state.f_info)
+        new_aux = jax.tree.map(lambda new, old: jnp.where(accept, new, old), aux, state.aux)
         descent_state = self.descent.query(new_y, f_info, state.descent_state)
 
-        # MINPACK's ftol, judged on the step just tried whether accepted or not (lmder does the same): at the
-        # optimum a step predicted to gain ~1e-16 is rejected or accepted by rounding alone, and waiting for an
-        # acceptance would shrink the region pass after pass for nothing.
+        # MINPACK's ftol, on the step just tried whether accepted or not (the class docstring).
         cost_before = 2.0 * state.f_info.f
         cost_tried = 2.0 * f_eval_info.f
         cost_after = 2.0 * f_info.f
-        # predict_reduction is the model's change of ½rᵀr for the step just tried, gᵀδ + ½δᵀGδ.
         predicted = -2.0 * self.search.predict_reduction(state.y_eval - y, state.f_info)
         safe_before = jnp.where(cost_before > 0, cost_before, 1.0)
         actual_relative = (cost_before - cost_tried) / safe_before
@@ -242,7 +313,7 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         # MINPACK's gtol: the largest cosine between a Jacobian column and the residual vector.
         # Columns the descent leaves out as dead (below ε·max) are left out here too.
         squared_norms = jnp.diag(f_info.hessian.as_matrix())
-        live = squared_norms > jnp.finfo(squared_norms.dtype).eps * jnp.max(squared_norms)
+        live = descent_state.live
         cosine = jnp.where(live, jnp.abs(f_info.grad) / jnp.sqrt(jnp.where(live, squared_norms, 1.0)), 0.0)
         gtol = jnp.max(cosine) <= self.gtol * jnp.sqrt(cost_after)
         exact = cost_after <= self.atol**2
@@ -255,18 +326,18 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
             y_eval=new_y + y_descent,
             search_state=search_state,
             f_info=f_info,
-            squared_error=jnp.where(accept, sums.squared_error, state.squared_error),
+            aux=new_aux,
             descent_state=descent_state,
             terminate=terminate,
             result=result,
             steps=state.steps + 1,
         )
-        return new_y, new_state, None
+        return new_y, new_state, new_aux
 
     def terminate(self, fn, y, args, options, state, tags):
-        """The stopping tests of :meth:`step`; with ``options={"budget": b}`` (an integer, possibly traced) also a
-        stop after ``b`` steps, reported as ``max_steps`` would report it: a budget is a ``max_steps`` that a
-        program takes as an argument, so that one compiled solve serves a short race and the full solve."""
+        """The stopping tests of :meth:`step`; with ``options={"budget": b}`` also a stop after ``b`` steps, reported
+        as ``max_steps`` would report it: a budget is a ``max_steps`` that a program takes as an argument, so that
+        one compiled solve serves a short race and the full solve."""
         if not options or "budget" not in options:
             return state.terminate, state.result
         spent = ~state.terminate & (state.steps >= options["budget"])
@@ -276,4 +347,50 @@ class OnePassLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         return state.terminate | spent, result
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
-        return y, aux, {}
+        return y, state.aux, {}
+
+
+def least_squares(
+    fn: Callable,
+    y0,
+    args: Any = None,
+    *,
+    rtol: float,
+    atol: float,
+    gtol: float,
+    max_steps: int,
+    has_aux: bool = False,
+    normal_equations: Callable | None = None,
+    budget=None,
+    descent: ScaledTrustRegionDescent = MINPACK_DESCENT,
+) -> optx.Solution:
+    """The least-squares solution of ``fn(y, args)`` (residuals of any shape; ``(residuals, aux)`` with
+    ``has_aux``) from ``y0`` (a vector), by :class:`ScaledLevenbergMarquardt` in ``optx.least_squares``.
+
+    ``rtol``, ``gtol``, ``atol`` are MINPACK's ``ftol``, ``gtol`` and an exact fit's ``|r|`` (the solver's
+    docstring); at most ``max_steps`` steps, or ``budget`` (an integer array, an argument of a compiled program).
+    ``normal_equations``: the solver's. ``descent``: MINPACK's by default, or with the options of
+    :class:`ScaledTrustRegionDescent`.
+
+    Returns optimistix's ``Solution`` (never raises on failure: ``solution.result`` says how the solve ended;
+    ``solution.stats["num_steps"]`` counts the steps, rejected ones included; ``solution.state.f_info.f`` is
+    ``½|r|²`` and ``solution.aux`` ``fn``'s aux at ``solution.value``). ``solution.value`` is differentiable with
+    respect to ``args`` (and to arrays ``fn`` closes over) by the implicit function theorem (:data:`ADJOINT`);
+    it has no derivative with respect to ``y0``, on which the optimum does not depend.
+    """
+    solver = ScaledLevenbergMarquardt(
+        rtol=rtol, atol=atol, gtol=gtol, normal_equations=normal_equations, descent=descent
+    )
+    return optx.least_squares(
+        fn,
+        solver,
+        y0,
+        args,
+        options=None if budget is None else {"budget": budget},
+        has_aux=has_aux,
+        max_steps=max_steps,
+        adjoint=ADJOINT,
+        throw=False,
+        # The Hessian of ½|r|² is symmetric: a linear solver of the adjoint may use it (lx.SVD does not need it).
+        tags=frozenset({lx.symmetric_tag}),
+    )
