@@ -15,15 +15,8 @@ from paths import TAPE
 from brdffit import BrdfInputError, FitResult, fit, load_samples
 from brdffit._version import __version__
 from brdffit.export.approximate import dense_grid
-from brdffit.export.gltf import (
-    DEFAULT_F0,
-    EXTENSION_GAIN,
-    GltfMaterial,
-    fit_gltf,
-    fit_material,
-    gltf_brdf,
-    write_gltf,
-)
+from brdffit.export.gltf import EXTENSION_GAIN, fit_gltf, fit_material, write_gltf
+from brdffit.export.gltf_material import DEFAULT_F0, GltfMaterial, gltf_brdf
 from brdffit.fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from brdffit.physics.microfacet import ggx_lambda
 
