@@ -19,8 +19,6 @@ be stored (a static argument without a cache key, an argument that is not an arr
 import hashlib
 import importlib
 import json
-import os
-import tempfile
 import threading
 from collections.abc import Callable, Sequence
 from functools import cache
@@ -28,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import atomic_path
 from .._jax import jax
 from .keys import key_of
 
@@ -195,15 +194,11 @@ def _register(kind: type) -> None:
 
 
 def _write_atomically(path: Path, data: bytes) -> None:
-    """``data`` into ``path`` through a temporary file and a rename: a reader never sees half a program."""
+    """``data`` into ``path`` atomically (``_files.atomic_path``): a reader never sees half a program. A cache that
+    cannot be written (read-only, full) stores nothing; the program is still used in this process."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    except OSError:  # a read-only cache: the program is still used in this process
-        return
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            stream.write(data)
-        os.replace(temporary, path)
-    except OSError:  # a full disk
-        Path(temporary).unlink(missing_ok=True)
+        with atomic_path(path) as temporary:
+            temporary.write_bytes(data)
+    except OSError:
+        pass
