@@ -29,7 +29,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
 
     Every program is cached, however quickly it compiled (JAX's default keeps
     only those over a second), and brdffit's own programs are also kept before
-    compiling (``programs/``, ``_programs.py``), so that a later process does not
+    compiling (``programs/``, ``stored.py``), so that a later process does not
     trace them again. Returns the folder, or None when the cache is off or the
     folder cannot be created (a read-only home): fits then compile as usual.
     """

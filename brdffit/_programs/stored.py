@@ -2,7 +2,7 @@
 
 JAX's persistent compilation cache (``cache.py``) keeps XLA's executables, but JAX finds one by a key that it
 computes by tracing the Python function and lowering it to StableHLO: for the shipped example's fit that was
-0.7 s of a 2 s command, in every run. Here a function compiled by ``_jax.jit`` is stored once per *signature*
+0.7 s of a 2 s command, in every run. Here a function compiled by ``jit.jit`` is stored once per *signature*
 as a serialized ``jax.export.Exported`` (its StableHLO and its argument and result trees). A later process
 computes the signature from the call alone, without tracing: the function's identity (its name, and the cache
 keys of what a closure closes over), the cache keys of its static arguments (``keys.py``), and the tree, shapes and
@@ -37,12 +37,12 @@ _lock = threading.Lock()
 _loaded: dict[str, Callable | None] = {}  # signature → compiled call, None when it cannot be stored
 _registered: set[type] = set()
 _lock_count = threading.Lock()
-_traced = 0  # programs traced in this process: stored programs exported, and first calls of ``_jax.jit``
+_traced = 0  # programs traced in this process: stored programs exported, and first calls of ``jit.jit``
 
 
 def traced() -> int:
     """How many programs brdffit has traced in this process so far (exported for storing, or compiled by
-    ``_jax.jit``): a caller that sees the count unchanged over a piece of work knows it compiled nothing new."""
+    ``jit.jit``): a caller that sees the count unchanged over a piece of work knows it compiled nothing new."""
     return _traced
 
 

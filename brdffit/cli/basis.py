@@ -1,8 +1,8 @@
 """``brdffit basis``: a data-driven basis learned from a library of MERL tables, and the directions to measure.
 
-``basis build LIB… -o basis.npz``: the principal components of the library's mapped tables (``data/library.py``).
+``basis build LIB… -o basis.npz``: the principal components of the library's mapped tables (``datadriven/build.py``).
 ``basis directions basis.npz -n 20 -o directions.csv``: the pairs that best condition a fit of a new material's
-coefficients (``physics/pca/directions.py``). ``brdffit fit SAMPLES --model pca --basis basis.npz`` fits them.
+coefficients (``datadriven/directions.py``). ``brdffit fit SAMPLES --model pca --basis basis.npz`` fits them.
 """
 
 import argparse

@@ -116,7 +116,7 @@ def _read_table(path: Path) -> np.ndarray:
 
 def stored_planes(path: str | os.PathLike) -> np.ndarray:
     """The stored numbers of a MERL file as a read-only memory map (3, 1,458,000), after checking its header and
-    size: a library of many tables is read bin block by bin block, never whole (``data/library.py``)."""
+    size: a library of many tables is read bin block by bin block, never whole (``datadriven/build.py``)."""
     path = Path(path)
     with reading(path, "a MERL file"), path.open("rb") as handle:
         size = os.fstat(handle.fileno()).st_size

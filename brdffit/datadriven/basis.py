@@ -3,7 +3,7 @@ basis evaluated at any pair of directions.
 
 A library material ``x`` (one channel of one table, mapped by ``mapping.py``) is, up to what the kept components
 leave out, ``x = mean + Σ_k c_k · components[k]``. The components are scaled so that the library's coefficients
-have unit variance along each (``data/library.py``): a coefficient is measured in library standard deviations, and a
+have unit variance along each (``datadriven/build.py``): a coefficient is measured in library standard deviations, and a
 coefficient of 3 lies at the library's edge.
 
 At a pair that falls between bins (``tabulation.py``), each of its 8 neighbouring bins gives a BRDF from its own

@@ -1,9 +1,9 @@
 """The data-driven model: a material as coefficients of a basis learned from a library of tables.
 
-The basis is ``physics/pca``'s, learned by ``data/library.py``.
+The basis is ``physics/pca``'s, learned by ``datadriven/build.py``.
 
 ``f(wi, wo)[c] = ρ(mean + Σ_k coefficients[k][c] · components[k])``, the basis interpolated at the pair
-(``physics/pca/basis.py``) and ``ρ(m)`` its mapping's inverse (``physics/pca/mapping.py``; Matusik et al. 2003,
+(``datadriven/basis.py``) and ``ρ(m)`` its mapping's inverse (``datadriven/mapping.py``; Matusik et al. 2003,
 Nielsen et al. 2015). The parameters are the coefficients, ``K × C`` real numbers in library standard deviations
 (``K`` the basis's components); the result file writes them as ``{"coefficients": [[c_r, c_g, c_b], …]}``, one list
 per component. Options: ``basis`` (the ``.npz`` file), ``ridge`` (the weight of the library prior, :data:`RIDGE`)
@@ -13,7 +13,7 @@ The model fits the machinery of every other model through its own parameter form
 coefficients in every coordinate system (they are unbounded, so the solver and the sampler move them as they
 are), ``Params.specular`` (K, C) carrying them. The ridge is a Gaussian prior on the coefficients,
 ``Σ r² + ridge · ridge_scale · Σ c²`` (``prior_weight``), which the fit, Laplace's curvature and the sampler all
-include; ``ridge_scale`` carries a residual of the mapped space into the loss's units (``fitting/pca.py``).
+include; ``ridge_scale`` carries a residual of the mapped space into the loss's units (``datadriven/fit.py``).
 
 Two models of one basis are equal whatever their ridge: the ridge reaches every compiled program as data, so a
 program compiled for one fit serves the next.
@@ -49,7 +49,7 @@ def pca(
 ) -> "PcaModel":
     """The ``pca`` model of the basis file ``basis`` (required); ``basis_sha256``, when given, must be the file's
     digest (a result records it). ``ridge_scale``: a mapped residual's square in the loss's units, which the fit
-    measures on its samples (``fitting/pca.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
+    measures on its samples (``datadriven/fit.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
     from .basis import load_basis
 
     if basis is None:

@@ -3,7 +3,7 @@
 The fitted model is tabulated on a dense hemisphere grid (:func:`dense_grid`); the renderer's model is fitted to
 those values with the fit's own loss; how far the two differ is reported (:class:`Approximation`): the rmse over
 the grid, in 1/sr, and the worst relative difference of their directional albedos ``∫ f cos θo dωo`` (the light a
-surface reflects, at the incidences ``fitting/caveats.py`` checks: 0°, 30°, 60°, 80°).
+surface reflects, at the incidences ``fitting/single/caveats.py`` checks: 0°, 30°, 60°, 80°).
 """
 
 from collections.abc import Callable

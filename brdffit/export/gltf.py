@@ -3,8 +3,8 @@
 
 **The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.dense_grid`
 (:func:`~brdffit.export.approximate.tabulated`) and the glTF parameters are fitted to it with the fit's own loss
-(residual ``T(f) − T(y)``, ``fitting/losses.py``) by Levenberg-Marquardt (``optimistix.least_squares`` with
-brdffit's solver, ``fitting/solver.py``: :func:`_solve` says why not optimistix's own), in unconstrained
+(residual ``T(f) − T(y)``, ``fitting/objective/losses.py``) by Levenberg-Marquardt (``optimistix.least_squares`` with
+brdffit's solver, ``fitting/solver/levenberg_marquardt.py``: :func:`_solve` says why not optimistix's own), in unconstrained
 coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters free. The
 extensions are kept only when they lower the grid rmse by :data:`EXTENSION_GAIN` or more. How far the material
 lies from the fitted BRDF is an :class:`~brdffit.export.approximate.Approximation`.
@@ -111,7 +111,7 @@ def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended
 
     The solver is the fit's (``fitting/solver.least_squares``): optimistix's ``least_squares`` loop with
     Marquardt's scaled damping, MINPACK's trust-region thresholds and stopping tests, at the fits' float64
-    tolerances (``fitting/solve.py``), with the descent's guards off (below). optimistix's own
+    tolerances (``fitting/solver/compiled.py``), with the descent's guards off (below). optimistix's own
     ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate whose factor heads for 0 or 1 (metallic 0
     for a plastic, 1 for a metal) has a vanishing Jacobian column, gets vanishing steps and crawls; measured on
     exact glTF data of a metal, 200 steps left ``1 − metallic`` at 1e-5, and its Cauchy test (every parameter

@@ -21,7 +21,7 @@ Priors (``physics/domains.py``): flat on albedos and bounded parameters (``f0``,
 ``psi``), log-uniform on scales (roughness, exponents, ``eta - 1``) and on
 ``s``. They are improper where unbounded; the likelihood makes the posterior
 proper whenever the fit is determined. A fit that held parameters
-(``fit.fixed``, ``fit.bounds``; ``fitting/constraints.py``) keeps them held:
+(``fit.fixed``, ``fit.bounds``; ``fitting/single/constraints.py``) keeps them held:
 its fixed ones are no coordinates of the posterior (they stay at their values),
 and its bounds truncate the prior.
 

@@ -2,7 +2,7 @@
 misses.
 
 The page holds, in order: the data summary of ``brdffit info`` (counts, coverage, reciprocity); the comparison of
-the candidate models (``fitting/compare.py``: ranked by cross-validated loss, with AIC and BIC); then, for the
+the candidate models (``fitting/comparison/compare.py``: ranked by cross-validated loss, with AIC and BIC); then, for the
 best model and the runner-up, the parameter table (with errors when an uncertainty method is asked for) and the
 fit's warnings, and the figures: slices, the polar plot, each fit's residual map and the lit spheres. Images are
 PNG embedded as base64 ``data:`` URIs and the style is inline, so the file opens offline, sent as it is, with no

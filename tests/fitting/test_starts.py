@@ -1,4 +1,4 @@
-"""The start search's parts (``fitting/starts.py``): the non-negative least squares of its albedos, and the
+"""The start search's parts (``fitting/starts/grid.py``): the non-negative least squares of its albedos, and the
 grid starts of stacked datasets, each dataset's own."""
 
 import numpy as np

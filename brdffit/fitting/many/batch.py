@@ -1,7 +1,7 @@
 """Fit one model to many datasets: a scanned material library, the texels of a spatially varying BRDF.
 
 The datasets are grouped into buckets whose problems stack (``buckets.bucket_key``: one padded size, channel
-count and set of columns) and each bucket is fitted in a few compiled programs (``buckets.solve_bucket``): the
+count and set of columns) and each bucket is fitted in a few compiled programs (``single/stacked.StackedFit``): the
 start search of all its datasets in one, every Levenberg-Marquardt run in another. ``strategy`` says how a
 program goes through the datasets of a bucket:
 
@@ -10,16 +10,16 @@ program goes through the datasets of a bucket:
   saves;
 * ``vmap`` (the default on a GPU): all at once, which fills the device.
 
-Models with several lobes (Lafortune) are fitted lobe by lobe, one dataset at a time (``fit.py``), unless
-every dataset has its start.
+Models with several lobes (Lafortune) are fitted lobe by lobe, one dataset at a time (``single/fit.py``), unless
+every dataset has its start; so is the data-driven model (``buckets.fitted_alone``).
 
 The units of work (a batch of a bucket, or one dataset fitted lobe by lobe) run on ``threads`` threads, by default
 one per CPU core: a compiled program runs its datasets one after another on one core, and XLA runs with the GIL
 released, so a second batch fills the second core (1,000 Ward fits of 500 samples with compiled programs, on 2
 cores: 1.3–1.6 s on one thread, 0.8–1.0 s on two). A bucket is cut into a multiple of ``threads`` batches that
 together hold at most ``buckets.BATCH_SAMPLES`` samples; each dataset's programs treat it alone, so the results do
-not depend on the cut. The other units start once the first has its programs compiled (or found them compiled
-after its start search): in a fresh process compilation is most of the time, and the other units' work beside it
+not depend on the cut. The other units start once the first has its programs compiled (``threads.py``): in a fresh
+process compilation is most of the time, and the other units' work beside it
 on 2 cores made 20 × 100k Ward slower than one thread (7.4 s against 6.4 s, compile included).
 """
 

@@ -55,7 +55,9 @@ class WorkUnit(NamedTuple):
 
     indices: list[int]
     given: bool  # every one has its start: no search
-    stack: int = 1  # the datasets are stacked to this many (``buckets.stack_size``), as are the others of the bucket
+    stack: int = (
+        1  # the datasets are stacked to this many (``single/stacked.stack_size``), as are the others of the bucket
+    )
     size: int = 0  # samples of each stacked dataset (``problem.padded_size``)
 
 
@@ -69,7 +71,7 @@ def fitted_alone(model: Model, given: bool) -> bool:
 def work_units(model: Model, samples: Sequence[Samples], given: Sequence[bool], threads: int = 1) -> list[WorkUnit]:
     """How :func:`fit_many` cuts ``samples`` (as kept for the fit) into units: by bucket and by whether the start
     is given (a given start replaces the search), each bucket in batches for ``threads`` threads
-    (``buckets.batches``: together at most ``buckets.BATCH_SAMPLES`` samples at a time); a model with several
+    (:func:`batches`: together at most :data:`BATCH_SAMPLES` samples at a time); a model with several
     lobes and no start, one dataset per unit."""
     groups: dict[tuple, list[int]] = {}
     for index, (one, has_start) in enumerate(zip(samples, given, strict=True)):

@@ -182,7 +182,7 @@ def screen_bucket(model: LobeModel, params: list[Params], samples: Sequence[Samp
 
 def screen_program(model: LobeModel, samples: Sequence[Samples], stack: int) -> tuple:
     """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for
-    ``samples`` stacked to ``stack`` datasets, to compile it ahead (``buckets.compile_in_background``)."""
+    ``samples`` stacked to ``stack`` datasets, to compile it ahead (``stacked.compile_in_background``)."""
     n_channels, size = samples[0].n_channels, padded_size(samples[0].n_samples)
     vector = np.zeros((stack, model.unconstrained.size(n_channels)))
     params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)

@@ -119,7 +119,7 @@ def _row(holds: Hold) -> Hold:
 
 
 def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Problem:
-    """The problem the starts are searched on: ``full``, or that of the subset ``starts.search_subset`` picks."""
+    """The problem the starts are searched on: ``full``, or that of the subset ``starts/grid.search_subset`` picks."""
     subset = search_subset(samples, seed)
     return full if subset is None else build_problem(samples.select(subset), dtype)
 

@@ -88,7 +88,7 @@ class FitResult:
     ``quantity`` and ``max_theta`` say how the samples were read and selected
     (what their values were taken as, ``docs/quantities.md``; None for samples
     made from arrays), so that they can be read the same way again. ``fixed``
-    and ``bounds`` are the parameters the fit held (``fitting/constraints.py``):
+    and ``bounds`` are the parameters the fit held (``fitting/single/constraints.py``):
     name → value (a list per channel for an albedo), and name → ``[lo, hi]``.
     ``uncertainty`` is the :class:`Uncertainty` when one was asked for
     (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical

@@ -189,7 +189,7 @@ def onto_bounds(solve, solved, holds):
 
 
 def _best(solved):
-    """The best run (``solve.best_index``) of each dataset: Solved (D, S, …) → (D, …), on the host."""
+    """The best run (``solver/compiled.best_index``) of each dataset: Solved (D, S, …) → (D, …), on the host."""
     solved = jax.tree.map(np.asarray, solved)
     chosen = best_index(solved.cost)
     rows = np.arange(len(chosen))

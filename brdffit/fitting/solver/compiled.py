@@ -1,7 +1,7 @@
 """One Levenberg-Marquardt solve of one problem from one start, as a compiled program, and the best of several.
 
 The parameters move in unconstrained coordinates (``Model.unconstrained``), so every step is physically
-valid. The solver (``solver.py``) is compiled once per model, loss and bucketed data size
+valid. The solver (``levenberg_marquardt.py``) is compiled once per model, loss and bucketed data size
 (``problem.padded_size``) and reused for every start and every dataset of that size.
 
 The compiled solve is differentiable with respect to the data: its derivatives are those of the optimum,
@@ -26,7 +26,7 @@ from ..objective.losses import Loss
 from ..objective.problem import Problem, Sums, chunks, cost, normal_equations, prepared, residuals
 from .hold import Hold, slopes, theta_of, z_of
 
-#: Stopping tolerances (``solver.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
+#: Stopping tolerances (``levenberg_marquardt.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
 #: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
 #: leaves each parameter within ~sqrt(1e-10·N) standard errors of the optimum (0.002 σ for 10⁴ samples × 3
 #: channels, 0.02 σ at MERL's 4.4·10⁶) and gtol 1e-8 within ~1e-8·sqrt(N) σ. A float32 model makes residuals
@@ -62,7 +62,7 @@ class Solved(NamedTuple):
 
 
 #: How a solve ends, by the names of optimistix's ``RESULTS``; a compiled solve returns the index (a program
-#: stored by ``_programs.py`` returns arrays, and reading the message back needs no optimistix).
+#: stored by ``brdffit/_programs/stored.py`` returns arrays, and reading the message back needs no optimistix).
 OUTCOMES = (
     "successful",
     "nonlinear_max_steps_reached",
@@ -120,7 +120,7 @@ def solved_from(
     hold: Hold | None = None,
     budget=None,
 ) -> Solved:
-    """The Levenberg-Marquardt solve (``solver.py``) of ``problem`` from ``theta0`` (JAX, to be traced), of at
+    """The Levenberg-Marquardt solve (``levenberg_marquardt.py``) of ``problem`` from ``theta0`` (JAX, to be traced), of at
     most ``max_steps`` steps, or ``budget`` (an integer array ≤ ``max_steps``: an argument of the program, not a
     constant of it) when given.
 

@@ -9,7 +9,7 @@ same length instead, and every entry is one of three kinds::
 
 The bounds are those of ``θ``, each domain's map of the user's physical bounds (``constraints.py``); every map is
 increasing, so a physical value in ``[lo, hi]`` is exactly a ``θ`` in ``[low, high]``. A fixed entry's column
-of ``JᵀJ`` is 0, which the solver's dead-column rule (``solver.py``) leaves out of every step and of the
+of ``JᵀJ`` is 0, which the solver's dead-column rule (``levenberg_marquardt.py``) leaves out of every step and of the
 stopping tests, so it never moves and costs nothing but its share of the normal equations' size.
 
 Everything in a hold is a float array (masks as 0 and 1), so it is data to a compiled program: changing a fixed

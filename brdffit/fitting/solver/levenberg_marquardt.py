@@ -4,7 +4,7 @@
 :class:`ScaledLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the
 residuals' shape, the solver differentiates it (or takes an equivalent pass, below), and optimistix's
 ``ImplicitAdjoint`` differentiates the solution through it. Nothing here knows about BRDFs; the BRDF fit
-(``solve.py``), the data-driven fit (``pca.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
+(``compiled.py``), the data-driven fit (``datadriven/fit.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
 (``tests/fitting/test_nist.py``) all call :func:`least_squares`.
 
 **What is optimistix's, through its public API.** The iterative loop, ``max_steps`` and the result codes
@@ -80,7 +80,7 @@ class ScaledTrustRegionDescent(optx.AbstractDescent):
 
     A column of ``J`` that is 0 (a held parameter) is *dead*: it is left out of the step (and of the cosine
     test), where it would make the scaled matrix singular. Three options, each off in MINPACK and so by default,
-    suit coordinates that are logarithms or logits (the BRDF fit's, ``solve.FIT_DESCENT``):
+    suit coordinates that are logarithms or logits (the BRDF fit's, ``compiled.fit_descent``):
 
     * ``drop_negligible_columns``: a column whose squared norm is below ``ε·max`` (an albedo that has gone to 0
       in log space) is dead too: it cannot change the residuals at float precision over a step of order 1, and

@@ -7,7 +7,7 @@ lobe by lobe:
 
 1. the first lobe at the grid's best shapes, fitted alone (the other lobes switched off: albedo 0, which
    the solver's dead-column rule leaves alone, so every fit runs in the one compiled solver of the model);
-2. each next lobe placed beside the lobes fitted so far (variable projection over the grid, ``starts.py``)
+2. each next lobe placed beside the lobes fitted so far (variable projection over the grid, ``grid.py``)
    at the best shape of every family of directions (forward, retro, normal, flatter, steeper), and the
    whole model refitted from each; the best goes on to the next lobe;
 3. at the end the greedy grid starts of the whole model compete too.
@@ -29,7 +29,7 @@ from .grid import LobeSearch, starting_points
 
 
 class LobeFit(NamedTuple):
-    """The best run of a lobe-by-lobe fit (a ``fit.Solved``) and the cost with one lobe less."""
+    """The best run of a lobe-by-lobe fit (a ``solver/compiled.Solved``) and the cost with one lobe less."""
 
     best: object
     fewer_lobes_cost: float

@@ -2,7 +2,7 @@
 
 Ngan et al. 2005 fit roughnesses of 0.005–0.65 and exponents of 1–10⁵ to the
 MERL materials; the fit starts from the best few points of these grids (see
-``brdffit/starts.py``), so each grid only needs to land within the basin of
+``brdffit/fitting/starts/grid.py``), so each grid only needs to land within the basin of
 the optimum, a factor of ~2 in roughness.
 """
 
