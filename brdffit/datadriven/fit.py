@@ -1,14 +1,14 @@
 """A material's coefficients fitted to samples: a ridge start in the mapped space, then Levenberg-Marquardt.
 
-In the space the basis is linear in (``mapping.py``), the material is ``m = mean + Φ c``: fitting the coefficients
-there is ridge regression, solved exactly in one step (``(ΦᵀΦ + ridge·I) c = Φᵀ(m(y) − mean)``, per channel).
-That is what the linearity buys: no search over starts, a unique optimum of the mapped problem, and a start that
-is already at the optimum when the measurements lie on the basis. The fit itself minimises the chosen loss on the
-BRDF values, ``Σ r² + ridge · Σ c²``, with brdffit's one-pass Levenberg-Marquardt (``fitting/solver/levenberg_marquardt.py``, on Optimistix)
-from that start, chunk by chunk (a MERL-size measurement fits in the memory of one chunk): the loss and the map
-differ (a log loss on ``ln(1 + f cos θi)``, a map on ``ln(f cos θi cos θo + ε)``), and the BRDF between bins is a
-blend of its neighbours' (``basis.py``), so a few steps remain. Channels have their own coefficients and are
-solved one after another by one compiled program.
+In the space the basis is linear in (``mapping.py``), the material is ``m = mean + Φ c``: fitting the coefficients there
+is ridge regression, solved exactly in one step (``(ΦᵀΦ + ridge·I) c = Φᵀ(m(y) − mean)``, per channel). That is what the
+linearity buys: no search over starts, a unique optimum of the mapped problem, and a start that is already at the
+optimum when the measurements lie on the basis. The fit itself minimises the chosen loss on the BRDF values, ``Σ r² +
+ridge · Σ c²``, with brdffit's one-pass Levenberg-Marquardt (``fitting/solver/levenberg_marquardt.py``, on Optimistix)
+from that start, chunk by chunk (a MERL-size measurement fits in the memory of one chunk): the loss and the map differ
+(a log loss on ``ln(1 + f cos θi)``, a map on ``ln(f cos θi cos θo + ε)``), and the BRDF between bins is a blend of its
+neighbours' (``basis.py``), so a few steps remain. Channels have their own coefficients and are solved one after another
+by one compiled program.
 """
 
 from functools import partial
@@ -177,10 +177,10 @@ def channel_sums(loss: Loss, mapping: str, c, channel: Channel) -> Sums:
 
 @jit(static_argnums=(0, 1, 2))
 def _solve_channel(loss: Loss, mapping: str, max_steps: int, c0, channel: Channel):
-    """brdffit's Levenberg-Marquardt (``fitting/solver/levenberg_marquardt.py``, MINPACK's tests and tolerances) on one channel's coefficients:
-    residuals ``scale·(T(f) − T(y))`` and the prior's ``sqrt(weight)·c`` (:func:`_channel_residuals`), each step
-    from :func:`channel_sums`. Returns the coefficients, the outcome's index into ``OUTCOMES`` and the steps
-    taken."""
+    """brdffit's Levenberg-Marquardt (``fitting/solver/levenberg_marquardt.py``, MINPACK's tests and tolerances) on one
+    channel's coefficients: residuals ``scale·(T(f) − T(y))`` and the prior's ``sqrt(weight)·c``
+    (:func:`_channel_residuals`), each step from :func:`channel_sums`. Returns the coefficients, the outcome's index
+    into ``OUTCOMES`` and the steps taken."""
     from ..fitting.solver.levenberg_marquardt import least_squares
 
     ftol, gtol, atol = TOLERANCES["float64"]

@@ -47,9 +47,9 @@ NAME = "coefficients"
 def pca(
     basis: str | None = None, ridge: float = RIDGE, basis_sha256: str | None = None, ridge_scale: float | None = None
 ) -> "PcaModel":
-    """The ``pca`` model of the basis file ``basis`` (required); ``basis_sha256``, when given, must be the file's
-    digest (a result records it). ``ridge_scale``: a mapped residual's square in the loss's units, which the fit
-    measures on its samples (``datadriven/fit.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
+    """The ``pca`` model of the basis file ``basis`` (required); ``basis_sha256``, when given, must be the file's digest
+    (a result records it). ``ridge_scale``: a mapped residual's square in the loss's units, which the fit measures on
+    its samples (``datadriven/fit.py``) and the result records; the prior's weight is ``ridge·ridge_scale``."""
     from .basis import load_basis
 
     if basis is None:

@@ -4,9 +4,9 @@
 **The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.dense_grid`
 (:func:`~brdffit.export.approximate.tabulated`) and the glTF parameters are fitted to it with the fit's own loss
 (residual ``T(f) − T(y)``, ``fitting/objective/losses.py``) by Levenberg-Marquardt (``optimistix.least_squares`` with
-brdffit's solver, ``fitting/solver/levenberg_marquardt.py``: :func:`_solve` says why not optimistix's own), in unconstrained
-coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters free. The
-extensions are kept only when they lower the grid rmse by :data:`EXTENSION_GAIN` or more. How far the material
+brdffit's solver, ``fitting/solver/levenberg_marquardt.py``: :func:`_solve` says why not optimistix's own), in
+unconstrained coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters
+free. The extensions are kept only when they lower the grid rmse by :data:`EXTENSION_GAIN` or more. How far the material
 lies from the fitted BRDF is an :class:`~brdffit.export.approximate.Approximation`.
 """
 

@@ -1,12 +1,12 @@
 """The fit report: one self-contained HTML file that says what the data are, which model suits them, and where it
 misses.
 
-The page holds, in order: the data summary of ``brdffit info`` (counts, coverage, reciprocity); the comparison of
-the candidate models (``fitting/comparison/compare.py``: ranked by cross-validated loss, with AIC and BIC); then, for the
-best model and the runner-up, the parameter table (with errors when an uncertainty method is asked for) and the
-fit's warnings, and the figures: slices, the polar plot, each fit's residual map and the lit spheres. Images are
-PNG embedded as base64 ``data:`` URIs and the style is inline, so the file opens offline, sent as it is, with no
-reference to anything outside it.
+The page holds, in order: the data summary of ``brdffit info`` (counts, coverage, reciprocity); the comparison of the
+candidate models (``fitting/comparison/compare.py``: ranked by cross-validated loss, with AIC and BIC); then, for the
+best model and the runner-up, the parameter table (with errors when an uncertainty method is asked for) and the fit's
+warnings, and the figures: slices, the polar plot, each fit's residual map and the lit spheres. Images are PNG embedded
+as base64 ``data:`` URIs and the style is inline, so the file opens offline, sent as it is, with no reference to
+anything outside it.
 """
 
 import base64

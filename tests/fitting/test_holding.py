@@ -1,4 +1,5 @@
-"""Fixed and bounded parameters (``fitting/single/constraints.py``, ``fitting/solver/hold.py``): what a user holds stays held.
+"""Fixed and bounded parameters (``fitting/single/constraints.py``, ``fitting/solver/hold.py``): what a user holds stays
+held.
 
 The acceptance cases of the issue: a dielectric Cook-Torrance with ``eta`` fixed at its truth recovers the rest
 and narrows the Laplace errors of ``ks``; the ``ks``/``f0`` pair that near-normal data cannot separate stops being

@@ -26,12 +26,12 @@ from ..objective.losses import Loss
 from ..objective.problem import Problem, Sums, chunks, cost, normal_equations, prepared, residuals
 from .hold import Hold, slopes, theta_of, z_of
 
-#: Stopping tolerances (``levenberg_marquardt.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest cosine
-#: between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
-#: leaves each parameter within ~sqrt(1e-10·N) standard errors of the optimum (0.002 σ for 10⁴ samples × 3
-#: channels, 0.02 σ at MERL's 4.4·10⁶) and gtol 1e-8 within ~1e-8·sqrt(N) σ. A float32 model makes residuals
-#: that differ by 1% carry ~1e-4 relative rounding error, so its cost jitters at ~1e-5 and only loose tests can
-#: pass; the float32 stage merely has to land near the optimum, which float64 then refines.
+#: Stopping tolerances (``levenberg_marquardt.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest
+#: cosine between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
+#: leaves each parameter within ~sqrt(1e-10·N) standard errors of the optimum (0.002 σ for 10⁴ samples × 3 channels,
+#: 0.02 σ at MERL's 4.4·10⁶) and gtol 1e-8 within ~1e-8·sqrt(N) σ. A float32 model makes residuals that differ by 1%
+#: carry ~1e-4 relative rounding error, so its cost jitters at ~1e-5 and only loose tests can pass; the float32 stage
+#: merely has to land near the optimum, which float64 then refines.
 TOLERANCES = {"float64": (1e-10, 1e-8, 1e-8), "float32": (1e-5, 1e-4, 1e-5)}
 
 #: The largest change of any unconstrained coordinate in one step: a log-albedo or log-roughness by a factor e² ≈ 7.4.
@@ -120,8 +120,8 @@ def solved_from(
     hold: Hold | None = None,
     budget=None,
 ) -> Solved:
-    """The Levenberg-Marquardt solve (``levenberg_marquardt.py``) of ``problem`` from ``theta0`` (JAX, to be traced), of at
-    most ``max_steps`` steps, or ``budget`` (an integer array ≤ ``max_steps``: an argument of the program, not a
+    """The Levenberg-Marquardt solve (``levenberg_marquardt.py``) of ``problem`` from ``theta0`` (JAX, to be traced), of
+    at most ``max_steps`` steps, or ``budget`` (an integer array ≤ ``max_steps``: an argument of the program, not a
     constant of it) when given.
 
     The solver sees the fit's residuals (:func:`fit_residuals`) and takes each step from the one-pass normal

@@ -1,10 +1,10 @@
 """Levenberg-Marquardt after MINPACK's ``lmder``, as an optimistix least-squares solver, for any residuals.
 
 :func:`least_squares` solves ``min_y |fn(y, args)|²`` for a vector ``y`` by ``optimistix.least_squares`` with
-:class:`ScaledLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the
-residuals' shape, the solver differentiates it (or takes an equivalent pass, below), and optimistix's
-``ImplicitAdjoint`` differentiates the solution through it. Nothing here knows about BRDFs; the BRDF fit
-(``compiled.py``), the data-driven fit (``datadriven/fit.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
+:class:`ScaledLevenbergMarquardt`, and ``fn`` is the true residual function: optimistix traces it for the residuals'
+shape, the solver differentiates it (or takes an equivalent pass, below), and optimistix's ``ImplicitAdjoint``
+differentiates the solution through it. Nothing here knows about BRDFs; the BRDF fit (``compiled.py``), the data-driven
+fit (``datadriven/fit.py``), the glTF export (``export/gltf.py``) and the NIST StRD tests
 (``tests/fitting/test_nist.py``) all call :func:`least_squares`.
 
 **What is optimistix's, through its public API.** The iterative loop, ``max_steps`` and the result codes
