@@ -9,11 +9,15 @@ from pathlib import Path
 from .errors import BrdfInputError
 
 
-def _default_mode() -> int:
-    """Permissions a plain ``open(path, "w")`` would give: 0666 less the umask (mkstemp uses 0600)."""
-    umask = os.umask(0)
+def _read_umask() -> int:
+    """The process's umask (read once, at import: reading it sets it for a moment, which other threads would see)."""
+    umask = os.umask(0o077)
     os.umask(umask)
-    return 0o666 & ~umask
+    return umask
+
+
+#: Permissions a plain ``open(path, "w")`` gives: 0666 less the umask (mkstemp uses 0600).
+DEFAULT_MODE = 0o666 & ~_read_umask()
 
 
 @contextmanager
@@ -25,7 +29,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     os.close(handle)
     try:
         yield Path(temporary)
-        os.chmod(temporary, _default_mode())
+        os.chmod(temporary, DEFAULT_MODE)
         os.replace(temporary, path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)

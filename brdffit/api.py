@@ -77,7 +77,7 @@ def fit(
     samples = as_samples(samples)
     if start is not None and isinstance(model, str):  # Lafortune's number of lobes may come from the start
         model, model_options = model_for(model, start, **model_options), {}
-    setup = checked(samples, model, loss, max_theta, solving, holding, **model_options)
+    setup = checked(samples, model, loss, max_theta, holding, **model_options)
     if uncertainty == "mcmc":  # before the fit: emcee needs two walkers per sampled coordinate
         check_walkers(mcmc or MCMC(), setup.model, setup.samples, setup.constraints)
     result = fit_checked(setup, solving, start)
@@ -150,13 +150,16 @@ def fit_batch(
     else:
         samples = [as_samples(one, **read_options) for one in samples]
         if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
-            for one in samples:
-                setup = checked(one, model, loss, max_theta, solving, holding, **model_options)
-                check_walkers(mcmc or MCMC(), setup.model, setup.samples, setup.constraints)
+            options["on_checked"] = partial(_check_walkers, mcmc or MCMC())
         results = fit_here(samples, model, loss, start=start, progress=progress, **options, **model_options)
     for result in results:
         warn_about(result)
     return results
+
+
+def _check_walkers(settings: MCMC, setup) -> None:
+    """emcee's two walkers per sampled coordinate, for one dataset as the fit checked it."""
+    check_walkers(settings, setup.model, setup.samples, setup.constraints)
 
 
 def warn_about(result: FitResult) -> None:

@@ -5,8 +5,11 @@ and a bucket says when its programs are compiled, so that the other threads star
 import threading
 import time
 
+import jax
+import numpy as np
+
 import data_synth
-from brdffit._programs import cache
+from brdffit._programs import cache, jit
 from brdffit._programs.first_calls import FirstCalls
 
 
@@ -40,8 +43,8 @@ def test_first_calls_of_one_signature_run_one_at_a_time():
 
 
 def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(monkeypatch):
-    """``StackedFit``'s stages, which ``fit_batch`` uses to start its other threads: once the first batch's
-    programs are compiled, or after its search when that traced nothing (every program was compiled before)."""
+    """``StackedFit``'s stages, which ``fit_batch`` uses to start its other threads once the first batch's programs
+    are compiled: the first call compiles them (it traces), the second finds them compiled (it traces nothing)."""
     from brdffit._programs.stored import traced
     from brdffit.fitting.objective.losses import get_loss
     from brdffit.fitting.options import Solving
@@ -65,3 +68,14 @@ def test_a_bucket_says_when_its_starts_are_searched_and_its_programs_compiled(mo
         fit.solve(fit.starts())
         assert [stage for stage, _ in stages] == ["searched", "compiled"]
         assert (stages[0][1] > before) == compiles  # the first call traced its programs, the second nothing
+
+
+def test_a_program_says_whether_it_is_compiled(monkeypatch):
+    """``is_compiled``: false before a signature's first call, true after it (or after a precompile), per shape."""
+    monkeypatch.setattr(cache, "_enabled", None)
+    doubled = jit(lambda x: 2.0 * x)
+    assert not doubled.is_compiled(np.ones(3))
+    doubled(np.ones(3))
+    assert doubled.is_compiled(np.ones(3)) and not doubled.is_compiled(np.ones(4))
+    doubled.precompile(jax.ShapeDtypeStruct((4,), np.float64))
+    assert doubled.is_compiled(np.ones(4))

@@ -4,6 +4,7 @@ models, losses or holds that compute differently never share one, nor does anoth
 import hashlib
 import itertools
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -46,14 +47,21 @@ def test_what_no_key_names_is_never_stored():
 
 
 class OwnLobe:
-    """A class defined outside brdffit."""
+    """A class defined outside brdffit, whose author keeps a version."""
+
+    cache_version = "1"
 
 
-def test_a_class_outside_brdffit_is_keyed_by_its_source():
+class Unversioned:
+    """A class defined outside brdffit without a version: what it calls elsewhere may change unseen."""
+
+
+def test_a_class_outside_brdffit_is_keyed_by_its_version_and_source():
     assert class_key(type(get_model("ward").lobe)) == ["brdffit.physics.models.ward", "WardLobe"]  # brdffit's source
-    module, name, digest = class_key(OwnLobe)
-    assert (module, name) == (__name__, "OwnLobe")
+    module, name, version, digest = class_key(OwnLobe)
+    assert (module, name, version) == (__name__, "OwnLobe", "1")
     assert digest == hashlib.sha256(Path(__file__).read_bytes()).hexdigest()  # a changed file: another key
+    assert class_key(Unversioned) is None  # never stored
     assert class_key(object) is None  # no source file
     local = type("Local", (), {"__qualname__": "f.<locals>.Local"})
     assert class_key(local) is None  # defined in a function
@@ -82,3 +90,10 @@ def test_a_brdffit_version_names_its_programs(monkeypatch):
     monkeypatch.setattr(stored, "_environment", lambda: ["0.0.0", *environment[1:]])
     assert stored._signature(identity, (np.zeros(3),), ()) != before
     assert brdffit.__version__ == __version__
+
+
+def test_a_model_whose_parts_have_no_key_has_none():
+    model = get_model("ward")
+    assert key_of(replace(model, options=(("scale", np.int64(1)),))) is None  # not a plain value
+    assert key_of(replace(model, n_lobes=np.int64(1))) is None
+    assert json.dumps(key_of(model))  # JSON, whatever the model

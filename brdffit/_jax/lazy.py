@@ -1,4 +1,4 @@
-"""JAX, imported on first use: ``from .._lazy import jax, jnp``.
+"""JAX, imported on first use: ``from .._jax import jax, jnp``.
 
 Importing JAX costs 0.4–1 s. The models, their parameters and domains, and every reader and writer are plain
 Python and numpy until something is computed, so the commands that only list, read or convert (``brdffit

@@ -88,17 +88,21 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         return stored.stored_program(identity, top_level(), args, static_argnums, compiler_options())
 
     first_calls = FirstCalls()
+    compiled: set = set()  # the call keys whose programs have run or been compiled in this process
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
         with float64():
             if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
                 return plain()(*args, **kwargs)
+            key = _call_key(args, kwargs, static_argnums)
             program = stored_for(args, kwargs)
             if program is not None:
-                return program(*stored.dynamic_arguments(args, static_argnums))
-            key = _call_key(args, kwargs, static_argnums)
-            return first_calls.run(key, lambda: top_level()(*args, **kwargs))
+                result = program(*stored.dynamic_arguments(args, static_argnums))
+            else:
+                result = first_calls.run(key, lambda: top_level()(*args, **kwargs))
+            compiled.add(key)
+            return result
 
     def precompile(*args, **kwargs) -> None:
         """Trace and compile for the shapes of ``args`` (arrays or ``jax.ShapeDtypeStruct``), without running.
@@ -107,15 +111,22 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         can run in another thread while the caller does other work.
         """
         with float64():
+            key = _call_key(args, kwargs, static_argnums)
             program = stored_for(args, kwargs)
             if program is not None:
                 shapes = stored.dynamic_arguments(args, static_argnums)
                 program.lower(*shapes).compile()
             else:
-                key = _call_key(args, kwargs, static_argnums)
                 first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile())
+            compiled.add(key)
+
+    def is_compiled(*args, **kwargs) -> bool:
+        """Whether a call with ``args`` of these shapes (arrays or ``jax.ShapeDtypeStruct``) has run or been
+        precompiled in this process: then it compiles nothing."""
+        return _call_key(args, kwargs, static_argnums) in compiled
 
     call.precompile = precompile
+    call.is_compiled = is_compiled
     return call
 
 

@@ -117,7 +117,10 @@ def _signature(identity: list, args: Sequence, static_argnums: Sequence[int]) ->
 
 @cache
 def _environment() -> list[str]:
-    """What a stored program depends on besides its signature: brdffit's version and source, JAX, the backend."""
+    """What a stored program depends on besides its signature: brdffit's version and source, JAX, the libraries whose
+    code its programs hold (optimistix's loop, equinox, lineax), the backend."""
+    from importlib.metadata import version
+
     import jaxlib
 
     from .._version import __version__
@@ -128,7 +131,16 @@ def _environment() -> list[str]:
         source.update(str(path.relative_to(package)).encode())
         source.update(path.read_bytes())
     device = jax.devices()[0]
-    return [__version__, source.hexdigest(), jax.__version__, jaxlib.__version__, device.platform, device.device_kind]
+    libraries = [f"{name} {version(name)}" for name in ("optimistix", "equinox", "lineax")]
+    return [
+        __version__,
+        source.hexdigest(),
+        jax.__version__,
+        jaxlib.__version__,
+        *libraries,
+        device.platform,
+        device.device_kind,
+    ]
 
 
 def _load_or_export(path: Path, jitted, args: Sequence, static_argnums: Sequence[int]):

@@ -1,6 +1,6 @@
 """Checks of a table's values, shared by every reader: each reports the first bad cell in one line.
 
-``_arrays.first_bad`` is the one scan for "the first row, then column, where something is wrong";
+``_jax.arrays.first_bad`` is the one scan for "the first row, then column, where something is wrong";
 :class:`TableChecks` phrases what was wrong there, naming the row as the caller's ``locate`` does
 (``samples.csv: row 3 (line 5)``, ``tape.dat: line 12``) and the column as its ``column`` does
 (``column theta_o``, ``channel g``).

@@ -41,7 +41,7 @@ BLOCK = 2**15
 class Basis:
     """A learned basis; arrays over MERL's 1,458,000 bins in file order (``data/merl.py``).
 
-    ``mapping``: one of :data:`~brdffit.physics.pca.mapping.MAPPINGS`; ``mean`` (bins,) the library's mean mapped value;
+    ``mapping``: one of :data:`~brdffit.datadriven.mapping.MAPPINGS`; ``mean`` (bins,) the library's mean mapped value;
     ``reference`` (bins,) the library's median BRDF in 1/sr (log-relative's ``ρ_ref``); ``components`` (K, bins)
     float32, mapped units per library standard deviation; ``filled`` (bins,) the bins that hold a value;
     ``explained`` (K,) the fraction of the library's variance each component explains; ``materials`` the

@@ -1,6 +1,6 @@
 """The data-driven model: a material as coefficients of a basis learned from a library of tables.
 
-The basis is ``physics/pca``'s, learned by ``datadriven/build.py``.
+The basis is ``basis.py``'s, learned by ``build.py``.
 
 ``f(wi, wo)[c] = ρ(mean + Σ_k coefficients[k][c] · components[k])``, the basis interpolated at the pair
 (``datadriven/basis.py``) and ``ρ(m)`` its mapping's inverse (``datadriven/mapping.py``; Matusik et al. 2003,

@@ -109,14 +109,14 @@ def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended
     """Levenberg-Marquardt from ``theta`` on the residuals ``T(f) − T(y)`` (N, C) of the loss ``loss_name``: the
     optimum, its sum of squared residuals ``Σ r²``, the step count and whether the solver met its tolerances.
 
-    The solver is the fit's (``fitting/solver.least_squares``): optimistix's ``least_squares`` loop with
-    Marquardt's scaled damping, MINPACK's trust-region thresholds and stopping tests, at the fits' float64
+    The solver is the fit's (``fitting/solver/levenberg_marquardt.least_squares``): optimistix's ``least_squares`` loop
+    with Marquardt's scaled damping, MINPACK's trust-region thresholds and stopping tests, at the fits' float64
     tolerances (``fitting/solver/compiled.py``), with the descent's guards off (below). optimistix's own
-    ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate whose factor heads for 0 or 1 (metallic 0
-    for a plastic, 1 for a metal) has a vanishing Jacobian column, gets vanishing steps and crawls; measured on
-    exact glTF data of a metal, 200 steps left ``1 − metallic`` at 1e-5, and its Cauchy test (every parameter
-    step small) never passed. Here such a column drops out of the step once it is below ``ε`` of the largest, and
-    the fit stops on the cost's relative change.
+    ``LevenbergMarquardt`` damps with ``λ I``: a logistic coordinate whose factor heads for 0 or 1 (metallic 0 for a
+    plastic, 1 for a metal) has a vanishing Jacobian column, gets vanishing steps and crawls; measured on exact glTF
+    data of a metal, 200 steps left ``1 − metallic`` at 1e-5, and its Cauchy test (every parameter step small) never
+    passed. Here such a column drops out of the step once it is below ``ε`` of the largest, and the fit stops on the
+    cost's relative change.
     """
     ftol, gtol, atol = TOLERANCES["float64"]
     residual_fn = partial(_residuals, get_loss(loss_name).transform, n_channels, extended)

@@ -12,13 +12,35 @@ The public ``brdffit.fit`` and ``fit_batch`` (``brdffit/api.py``) add the uncert
 """
 
 import importlib
+import importlib.abc
+import importlib.util
+import sys
 
-#: Modules the documentation once named by their old paths (``brdffit.fitting.compare.load_comparison``), kept as
-#: attributes of this package where they live now; new code imports them from their rooms, or the names from brdffit.
-_MOVED = {"compare": ".comparison.compare", "losses": ".objective.losses", "problem": ".objective.problem"}
+#: Modules by the paths the documentation once gave them, and where they live now: ``from brdffit.fitting.fit import
+#: compiled_solver``, ``brdffit.fitting.compare.load_comparison`` and results pickled by an older brdffit still work.
+#: New code imports from the rooms (or the public names from ``brdffit``).
+MOVED = {
+    "compare": "comparison.compare",
+    "fit": "single.fit",
+    "losses": "objective.losses",
+    "problem": "objective.problem",
+    "results": "single.result",
+}
 
 
-def __getattr__(name: str):
-    if name in _MOVED:
-        return importlib.import_module(_MOVED[name], __name__)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+class _MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds ``brdffit.fitting.<old name>`` as the module of :data:`MOVED`, the same module object under both names."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        package, _, name = fullname.rpartition(".")
+        return importlib.util.spec_from_loader(fullname, self) if package == __name__ and name in MOVED else None
+
+    def create_module(self, spec):
+        return importlib.import_module(f"{__name__}.{MOVED[spec.name.rpartition('.')[2]]}")
+
+    def exec_module(self, module):
+        """Nothing to run: the module was imported under its own name."""
+
+
+if not any(isinstance(finder, _MovedModules) for finder in sys.meta_path):
+    sys.meta_path.append(_MovedModules())

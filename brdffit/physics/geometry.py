@@ -4,7 +4,7 @@ Frame: ``z`` is the surface normal, ``x`` the tangent (azimuth ``phi = 0``), ``y
 from the surface towards the light, ``wo`` towards the viewer. Angles are in radians unless a name says
 degrees; files use degrees.
 
-Every function works on numpy and JAX arrays alike (:func:`brdffit._arrays.namespace`) and broadcasts
+Every function works on numpy and JAX arrays alike (:func:`brdffit._jax.arrays.namespace`) and broadcasts
 over leading axes; the last axis holds ``(x, y, z)``. Host code (readers, writers, ``data_synth``) gets
 numpy back, so this module imports no JAX of its own.
 """

@@ -3,7 +3,7 @@
 Bin ``(i, j, k)`` at flat index ``k + 180 j + 16200 i`` holds ``θh = (i/90)² · π/2`` (a square-root grid,
 dense near the specular peak), ``θd = j/90 · π/2`` and ``φd = k/180 · π``; ``φd`` is folded into ``[0, π)`` by
 reciprocity. These are the angles MERL's ``BRDFRead.cpp`` maps to the bin (each bin's lower edge). The file
-format is ``data/merl.py``'s; the data-driven model's basis lives on the same bins (``physics/pca``).
+format is ``data/merl.py``'s; the data-driven model's basis lives on the same bins (``brdffit/datadriven``).
 """
 
 import math

@@ -128,7 +128,7 @@ def inverse_with_null_space(matrix: np.ndarray, labels: list[str]) -> tuple[np.n
 
 
 def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
-    """``result`` with its Laplace :class:`~brdffit.fitting.results.Uncertainty`; ``samples`` are those it was
+    """``result`` with its Laplace :class:`~brdffit.fitting.single.result.Uncertainty`; ``samples`` are those it was
     fitted to.
 
     Warns (:class:`~brdffit.UncertaintyWarning`) about degenerate pairs, undetermined parameters and a fit

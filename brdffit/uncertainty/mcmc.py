@@ -116,7 +116,7 @@ def sample_posterior(
     chain: str | os.PathLike | None = None,
     progress: bool = False,
 ) -> FitResult:
-    """``result`` with its MCMC :class:`~brdffit.fitting.results.Uncertainty` and the draws behind it.
+    """``result`` with its MCMC :class:`~brdffit.fitting.single.result.Uncertainty` and the draws behind it.
 
     ``samples`` are those ``result`` was fitted to. ``chain``: save the whole
     chain (burn-in included) to a ``.npz`` file or emcee's HDF5 backend

@@ -1,9 +1,9 @@
 """The solver on NIST's certified nonlinear regression problems (StRD), from both starts, as lmfit tests its own.
 
-NIST's Statistical Reference Datasets (``nist/README.md``) give 27 problems, Misra1a to Bennett5, with two starts
-each (start 1 far from the solution, start 2 near it), the certified parameters, their standard deviations and
-the residual sum of squares, to 11 significant digits. Each is solved here by ``solver.least_squares`` on the
-residuals ``f(x; b) − y``: the generic solver with MINPACK's descent, independently of any BRDF.
+NIST's Statistical Reference Datasets (``nist/README.md``) give 27 problems, Misra1a to Bennett5, with two starts each
+(start 1 far from the solution, start 2 near it), the certified parameters, their standard deviations and the residual
+sum of squares, to 11 significant digits. Each is solved here by ``levenberg_marquardt.least_squares`` on the residuals
+``f(x; b) − y``: the generic solver with MINPACK's descent, independently of any BRDF.
 
 Agreement is counted in digits, the log relative error ``LRE = −log10(|found − certified| / |certified|)``
 (McCullough, "Assessing the reliability of statistical software: Part I", The American Statistician, 1998).

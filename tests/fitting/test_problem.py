@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from catalogue import CASES, parametrize_cases
 
+import brdffit
 import data_synth
 from brdffit import get_model
 from brdffit.data.samples import Samples
@@ -128,3 +129,19 @@ def test_brdffit_jit_agrees_with_jax_jit_at_top_level_and_inside_traces():
     np.testing.assert_allclose(jax.jit(wrapped)(x), expected, rtol=1e-12)
     np.testing.assert_allclose(jax.vmap(wrapped)(jnp.stack([x, 2 * x]))[0], expected, rtol=1e-12)
     assert compiler_options() == (CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None)
+
+
+def test_the_old_module_paths_are_the_new_modules():
+    """Paths the documentation once gave (and older pickles name) import the modules where they live now."""
+    import importlib
+
+    from brdffit.fitting.fit import compiled_solver
+    from brdffit.fitting.losses import get_loss as old_get_loss
+    from brdffit.fitting.problem import build_problem as old_build_problem
+
+    from brdffit.fitting.comparison import compare
+    from brdffit.fitting.solver.compiled import compiled_solver as new_compiled_solver
+
+    assert compiled_solver is new_compiled_solver and old_get_loss is get_loss and old_build_problem is build_problem
+    assert importlib.import_module("brdffit.fitting.compare") is compare
+    assert importlib.import_module("brdffit.fitting.results").FitResult is brdffit.FitResult

@@ -1,15 +1,20 @@
 """The start search's parts (``fitting/starts/grid.py``): the non-negative least squares of its albedos, and the
 grid starts of stacked datasets, each dataset's own."""
 
+from dataclasses import dataclass
+
+import jax.numpy as jnp
 import numpy as np
 import pytest
 import scipy.optimize
 
 import data_synth
-from brdffit import get_model
+from brdffit import LobeModel, MappedLobe, Params, Samples, get_model
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problems
 from brdffit.fitting.starts.grid import grid_starts, nonnegative_least_squares
+from brdffit.physics.domains import ALBEDO
+from brdffit.physics.models.ward import WardLobe
 
 
 @pytest.mark.parametrize("n_basis", [1, 2, 3, 5])
@@ -42,3 +47,38 @@ def test_stacked_grid_starts_are_each_datasets_own():
     for index, samples in enumerate(datasets):
         alone = grid_starts(model, loss, 2, build_problems([samples], "float64", 1))
         np.testing.assert_allclose(together[index], alone[0], rtol=1e-12, atol=1e-12)
+
+
+@dataclass(frozen=True)
+class HalfLambertian(MappedLobe):
+    """A diffuse term of half Lambert's value, ``1/(2π)``: a parameter-free diffuse term other than the built-in one."""
+
+    summary = "1/(2π)"
+    albedo_domain = ALBEDO
+    peaks_at_mirror = True
+
+    @property
+    def parameters(self):
+        return ()
+
+    @property
+    def grid(self):
+        return ({},)
+
+    def __call__(self, shape, wi, wo):
+        return jnp.full(wi.shape[:1], 0.5 / jnp.pi, wi.dtype)
+
+
+def test_the_starts_ask_the_models_diffuse_term():
+    """Noise-free Ward data with a half-Lambertian diffuse term, at a shape of the grid: the start's albedos are the
+    data's (0.4, 0.05), as with Lambert's term, not what they would be if the start search wrote the diffuse term as
+    1/π (0.18, measured before the search asked the model)."""
+    model = LobeModel("ward-half", "Ward with a half-Lambertian diffuse term", WardLobe(), 1, diffuse=HalfLambertian())
+    params = Params(np.array([0.4]), np.array([[0.05]]), {"alpha": np.array([0.15])})  # 0.15: on the grid
+    wi, wo = data_synth.hemisphere_grid(6, 12, 12)
+    samples = Samples.from_arrays(wi, wo, model.host_brdf(params, wi, wo))
+    (theta,) = np.asarray(grid_starts(model, get_loss("l2"), 1, build_problems([samples])))[0]
+    start = model.unconstrained.to_params(theta, 1)
+    # Exact but for the least squares' relative ridge of 1e-12 and float64 rounding.
+    assert float(start.diffuse[0]) == pytest.approx(0.4, rel=1e-9)
+    assert float(start.specular[0, 0]) == pytest.approx(0.05, rel=1e-9)

@@ -254,7 +254,7 @@ def compare(
         raise BrdfInputError(Argument("models"), ": give at least one model to compare")
     _check_every_name_used(chosen, holding)
     # Every model's values and bounds, checked before any fit.
-    setups = [checked(samples, model, loss, max_theta, solving, _held_by(model, holding)) for model in chosen]
+    setups = [checked(samples, model, loss, max_theta, _held_by(model, holding)) for model in chosen]
     split = make_folds(samples, folds, seed)
     problem = build_problem(samples)
     from tqdm.auto import tqdm
@@ -429,9 +429,9 @@ WARNINGS_OF_FIRST = 3
 
 
 def comparison_table(comparison) -> str:
-    """The ranking of a :class:`~brdffit.fitting.compare.Comparison`: rank, mark, spec, k, cost, rmse, AIC, BIC, the
-    cross-validated loss with its standard error and the count of warnings; then the key, the warnings every model
-    shares (about the data) once, the other warnings of the first :data:`WARNINGS_OF_FIRST` models, and every
+    """The ranking of a :class:`~brdffit.fitting.comparison.compare.Comparison`: rank, mark, spec, k, cost, rmse, AIC,
+    BIC, the cross-validated loss with its standard error and the count of warnings; then the key, the warnings every
+    model shares (about the data) once, the other warnings of the first :data:`WARNINGS_OF_FIRST` models, and every
     model's notes on its folds."""
     how = (
         "each holding out whole light directions"

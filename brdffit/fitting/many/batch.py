@@ -33,7 +33,7 @@ from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...errors import BrdfInputError
 from ..options import HOLDING_NOTHING, SOLVING, Holding, Solving
-from ..single.fit import checked, fit_checked, start_vector
+from ..single.fit import Setup, checked, fit_checked, start_vector
 from ..single.result import FitResult
 from ..single.stacked import StackedFit, default_strategy
 from .buckets import WorkUnit, fitted_alone, work_units
@@ -55,10 +55,12 @@ def fit_many(
     solving: Solving = SOLVING,
     holding: Holding = HOLDING_NOTHING,
     threads: int | None = None,
+    on_checked: Callable[[Setup], None] = lambda setup: None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch` (``solving`` and
-    ``holding`` the objects its keywords make, ``fitting/options.py``)."""
+    ``holding`` the objects its keywords make, ``fitting/options.py``); ``on_checked`` is called with each dataset's
+    :class:`~brdffit.fitting.single.fit.Setup` before any fit (``brdffit.fit_batch`` checks an MCMC's walkers so)."""
     choice("strategy", strategy, STRATEGIES)
     strategy = default_strategy() if strategy == "auto" else strategy
     if threads is None:  # one thread per core; on a GPU one, whose programs fill the device
@@ -68,7 +70,9 @@ def fit_many(
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
     starts = starts_per_dataset(start, len(samples))
-    setups = [checked(one, model, loss, max_theta, solving, holding, **model_options) for one in samples]
+    setups = [checked(one, model, loss, max_theta, holding, **model_options) for one in samples]
+    for setup in setups:  # what the caller checks of every dataset before any fit (the walkers of an MCMC)
+        on_checked(setup)
     built, built_loss = setups[0].model, setups[0].loss
     kept = [setup.samples for setup in setups]
     vectors = [

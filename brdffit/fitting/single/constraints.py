@@ -5,12 +5,12 @@ result file's ``params``: an albedo (``kd``, ``rho_d``, ``lobes[0].rho_s``) take
 list of one per channel, a lobe's shape parameter (``m``, ``eta``, ``alpha_x``, ``lobes[1].n``) one number. A
 bound is a range ``[lo, hi]`` inside the parameter's domain; an albedo's applies to each channel.
 
-:class:`Constraints` checks them against a model (one-line errors) and turns them into what each part of brdffit
-needs: the solver's :class:`~brdffit.fitting.hold.Hold` over the unconstrained vector, the mask of the coordinates
-the MCMC walkers move and their bounds, the number of free parameters (``compare``'s ``k``), and the result's
-parameters with the fixed ones at exactly their values. Every coordinate system has the same entries
-(``coordinates.py``), so one mask serves all; a Lafortune lobe's ``cxy`` and ``cz`` are both its angle ``ψ``
-(``Lobe.coordinate_index``), and ``cxy`` alone holds it with ``cz ≥ 0`` (``Lobe.shape_holding``).
+:class:`Constraints` checks them against a model (one-line errors) and turns them into what each part of brdffit needs:
+the solver's :class:`~brdffit.fitting.solver.hold.Hold` over the unconstrained vector, the mask of the coordinates the
+MCMC walkers move and their bounds, the number of free parameters (``compare``'s ``k``), and the result's parameters
+with the fixed ones at exactly their values. Every coordinate system has the same entries (``coordinates.py``), so one
+mask serves all; a Lafortune lobe's ``cxy`` and ``cz`` are both its angle ``ψ`` (``Lobe.coordinate_index``), and ``cxy``
+alone holds it with ``cz ≥ 0`` (``Lobe.shape_holding``).
 """
 
 import re
@@ -21,9 +21,10 @@ from typing import Any
 import numpy as np
 
 from ...errors import Argument, BrdfInputError
-from ...physics.domains import ALBEDO, Domain
+from ...physics.domains import Domain
 from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
+from ..options import parameter_mapping
 from ..solver.hold import Hold, on_bound
 
 _LOBE_NAME = re.compile(r"^lobes\[(\d+)\]\.(\w+)$")
@@ -162,7 +163,7 @@ def constraints_for(
 ) -> Constraints | None:
     """The :class:`Constraints` of ``fixed`` and ``bounds`` for ``model`` with ``n_channels`` channels, every name
     and value checked; None when neither holds anything (the fit then runs as it always has)."""
-    fixed, bounds = _mapping(fixed, "fixed"), _mapping(bounds, "bounds")
+    fixed, bounds = parameter_mapping(fixed, "fixed"), parameter_mapping(bounds, "bounds")
     if not fixed and not bounds:
         return None
     if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
@@ -207,16 +208,6 @@ def parameter_names(model: Model) -> list[str]:
     return names
 
 
-def _mapping(value: Any, argument: str) -> dict[str, Any]:
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping):
-        raise BrdfInputError(
-            Argument(argument), f" must be a dictionary of parameter names (as in the result file), got {value!r}"
-        )
-    return dict(value)
-
-
 def _prefix(model: Model, k: int) -> str:
     return f"lobes[{k}]." if model.lobes_as_list else ""
 
@@ -230,7 +221,7 @@ def _target(model: Model, name: str, argument: str = "fixed") -> Target:
         else:
             lobe, parameter = 0, name
         if parameter == model.diffuse_name and name == model.diffuse_name:
-            return Target(name, "diffuse", 0, parameter, ALBEDO)
+            return Target(name, "diffuse", 0, parameter, model.diffuse.albedo_domain)
         if parameter == model.specular_name:
             return Target(name, "specular", lobe, parameter, model.lobe.albedo_domain)
         return Target(name, "shape", lobe, parameter, dict(model.lobe.parameters)[parameter])

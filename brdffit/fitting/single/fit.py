@@ -55,13 +55,17 @@ def fit_one(
     **model_options: Any,
 ) -> FitResult:
     """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
-    return fit_checked(checked(samples, model, loss, max_theta, solving, holding, **model_options), solving, start)
+    return fit_checked(checked(samples, model, loss, max_theta, holding, **model_options), solving, start)
 
 
 @float64
 def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = None) -> FitResult:
     """The fit of what :func:`checked` passed, from ``start`` (a parameter dictionary) or the data's own starts."""
     model, loss, samples, constraints, max_theta = setup
+    if not isinstance(model, LobeModel | PcaModel):
+        raise BrdfInputError(
+            f"model {model.name}: brdffit fits lobe models and the data-driven model, not {type(model).__name__}"
+        )
     if isinstance(model, PcaModel):  # the data-driven kind: a ridge start and a solve of its own
         if solving.dtype != "float64":
             raise BrdfInputError(
@@ -124,11 +128,9 @@ def search_problem(samples: Samples, full: Problem, dtype: str, seed: int) -> Pr
     return full if subset is None else build_problem(samples.select(subset), dtype)
 
 
-def checked(
-    samples, model, loss, max_theta, solving: Solving = SOLVING, holding: Holding = HOLDING_NOTHING, **model_options
-) -> Setup:
-    """What a fit of ``samples`` is given, after every check of the arguments (:class:`Setup`); ``solving`` was
-    checked when it was made."""
+def checked(samples, model, loss, max_theta, holding: Holding = HOLDING_NOTHING, **model_options) -> Setup:
+    """What a fit of ``samples`` is given, after every check of the arguments (:class:`Setup`; the solver's options
+    checked themselves when they were made, :class:`~brdffit.fitting.options.Solving`)."""
     _check_option_names(model_options)
     model = get_model(model, **model_options)
     loss = get_loss(loss)

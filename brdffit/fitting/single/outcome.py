@@ -1,7 +1,7 @@
 """A solve as a :class:`FitResult`: its parameters moved onto their domains, its caveats, how it ended.
 
-Every fit ends here, whichever way it was solved: one dataset (``fit.py``), a bucket of many (``batch.py``), the
-data-driven model's own solve (``datadriven/fit.py``).
+Every fit ends here, whichever way it was solved: one dataset or a batch of many (``stacked.py``), a model of several
+lobes (``fit.py``), the data-driven model's own solve (``datadriven/fit.py``).
 """
 
 from collections.abc import Sequence

@@ -119,11 +119,18 @@ class StackedFit:
         )
         self.on_stage("searched")
         if subset_race:
+            # Compiled before (a later batch, a second call): said now, so that other threads start beside the race.
+            said = self.solver.is_compiled(thetas, search, holds, self.budget) and self.solver.is_compiled(
+                one_start, self.problems, holds, self.budget
+            )
+            if said:
+                self.on_stage("compiled")
             compiling = winners()
             if thetas.shape[1] > 1:  # the starts race to convergence on the subset
                 thetas = _best(self.solver(thetas, search, holds, self.budget)).theta[:, None]
         compiling.join()
-        self.on_stage("compiled")
+        if not (subset_race and said):
+            self.on_stage("compiled")
         if thetas.shape[1] > 1:  # the starts race a few steps on every sample, one start at a time
             budget = step_budget(min(RACE_STEPS, self.max_steps))
             raced = [self.solver(thetas[:, [s]], self.problems, holds, budget) for s in range(thetas.shape[1])]
@@ -202,7 +209,7 @@ def _is_static(leaf) -> bool:
 
 
 def compile_in_background(solve, *arguments) -> threading.Thread:
-    """Compile ``solve`` (a :func:`~brdffit._jax.jit` function) for ``arguments`` (``jax.ShapeDtypeStruct``s,
+    """Compile ``solve`` (a :func:`~brdffit._programs.jit` function) for ``arguments`` (``jax.ShapeDtypeStruct``s,
     arrays whose shapes are taken, or static models and losses) in a thread, while the caller does other work (the
     start search, the solves before a caveat screen): XLA compiles with the GIL released, so on two or more cores a
     program's compilation (~1 s for a MERL-size Cook-Torrance solve) overlaps that work instead of following it. A

@@ -5,7 +5,7 @@ valid. The solver (``levenberg_marquardt.py``) is compiled once per model, loss 
 (``problem.padded_size``) and reused for every start and every dataset of that size.
 
 The compiled solve is differentiable with respect to the data: its derivatives are those of the optimum,
-never of the solver's iterations. optimistix's ``ImplicitAdjoint`` (``solver.ADJOINT``) gives them, by the
+never of the solver's iterations. optimistix's ``ImplicitAdjoint`` (``levenberg_marquardt.ADJOINT``) gives them, by the
 implicit function theorem on the fit's optimality condition ``∇½|r|² = 0`` differentiated through the fit's
 residuals (:func:`fit_residuals`); the start carries none, the optimum does not depend on it. The cost and
 the rmse come from the solver's last pass and are differentiated as the functions of the optimum and the data
@@ -39,11 +39,11 @@ MAX_COORDINATE_STEP = 2.0
 
 
 def fit_descent():
-    """The descent of the BRDF fits (``solver.ScaledTrustRegionDescent``): MINPACK's, with columns below ``ε`` of
-    the largest left out (an albedo at 0 in log space, a lobe switched off) and at most :data:`MAX_COORDINATE_STEP`
-    per coordinate per step. A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in one step, where its
-    column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says what these
-    guards changed on brdffit's starts)."""
+    """The descent of the BRDF fits (``levenberg_marquardt.ScaledTrustRegionDescent``): MINPACK's, with columns below
+    ``ε`` of the largest left out (an albedo at 0 in log space, a lobe switched off) and at most
+    :data:`MAX_COORDINATE_STEP` per coordinate per step. A log-albedo that Gauss-Newton would send from 0.2 to 3e-10 in
+    one step, where its column vanishes and the step test freezes it, goes by e² at most (the descent's docstring says
+    what these guards changed on brdffit's starts)."""
     from .levenberg_marquardt import ScaledTrustRegionDescent
 
     return ScaledTrustRegionDescent(drop_negligible_columns=True, max_coordinate_step=MAX_COORDINATE_STEP)

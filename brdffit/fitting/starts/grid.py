@@ -138,11 +138,11 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
     squares, and every vector respects it.
     """
     problem = prepared(loss, problem)
-    n, n_channels = problem.measured.shape
+    n_channels = problem.measured.shape[1]
     weight = linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
     grid = _grid(model)
     n_placed = len(next(iter(chosen.values()), ()))
-    fixed = jnp.full((1, n), 1.0 / np.pi, problem.wi.dtype)
+    fixed = model.diffuse({}, problem.wi, problem.wo)[None].astype(problem.wi.dtype)  # the diffuse term's basis
     if chosen:
         fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
     if model.n_lobes:

@@ -177,12 +177,9 @@ class LobeModel(Model):
         return PhysicalCoordinates(self)
 
     def cache_key(self) -> list | None:
-        lobe, diffuse = key_of(self.lobe), key_of(self.diffuse)
-        if lobe is None or diffuse is None:
-            return None
-        options = [[key, key_of(value)] for key, value in self.options]
-        layout = [self.n_lobes, self.diffuse_name, self.specular_name, self.isotropic, self.lobes_as_list]
-        return [self.name, options, layout, lobe, diffuse]
+        parts = [self.name, self.options, self.n_lobes, self.diffuse_name, self.specular_name, self.isotropic]
+        key = key_of((*parts, self.lobes_as_list, self.lobe, self.diffuse))  # None if any part has no key
+        return None if key is None else key[1]
 
 
 @jit(static_argnums=0)

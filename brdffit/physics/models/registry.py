@@ -34,7 +34,8 @@ MODELS: dict[str, ModelEntry] = {
 
 def register_model(name: str, entry: ModelEntry) -> None:
     """Add a model to the registry under ``name`` (``--model NAME``, ``get_model(NAME)``, ``compare``'s specs):
-    ``entry.build(**options)`` must build a :class:`Model` whose ``name`` is ``name``. A name is registered once."""
+    ``entry.build(**options)`` must build a :class:`Model` whose ``name`` is ``name``. A name is registered once;
+    register before fitting (the registry is read, not locked, by fits running on other threads)."""
     if not isinstance(name, str) or not name or any(character in name for character in ":,= "):
         raise BrdfInputError(Argument.given("name", name), " must be a word without ':', ',', '=' or spaces")
     if name in MODELS:
@@ -69,7 +70,7 @@ def chosen_options(model: Model) -> dict[str, Any]:
     """The options of ``model`` that differ from their defaults: what names a fit apart from its model's default
     (``{"fresnel": "conductor"}``; ``{}`` for Cook-Torrance with Beckmann, V-groove and Schlick). A file an option
     names (pca's basis) and what a result only records (its digest, the ridge's scale) name nothing apart."""
-    defaults = model_option_defaults(model.name)
+    defaults = model_option_defaults(model.name) if model.name in MODELS else {}
     unnamed = recorded_options() | file_options()
     return {key: value for key, value in model.options if defaults.get(key) != value and key not in unnamed}
 
