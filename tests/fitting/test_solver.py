@@ -133,10 +133,9 @@ def test_the_one_pass_normal_equations_are_those_of_the_residuals_the_solver_is_
     of the residuals' own forward-mode Jacobian (``solver.normal_equations_of``), with sigma and weights and
     padding, free and with a hold (a fixed entry, a bounded one). The residuals are the problem's; the sums agree
     to 1e-12 relative (the same 4,000 × 3 terms summed in another order and grouping: ~1e-14)."""
-    from brdffit.fitting.hold import Hold, z_of
-
     from brdffit.fitting.objective.problem import normal_equations, prepared
     from brdffit.fitting.solver.compiled import _held_equations, _held_residuals, fit_residuals
+    from brdffit.fitting.solver.hold import Hold, z_of
     from brdffit.fitting.solver.levenberg_marquardt import normal_equations_of
 
     model = get_model("cook-torrance", fresnel="schlick")
