@@ -218,3 +218,174 @@ def _state_at(search, y, info, step_size):
     """A trust region's state at ``step_size``, built through its public ``init`` and the pytree it is (one leaf)."""
     state = search.init(y, info)
     return jax.tree.unflatten(jax.tree.structure(state), [jnp.asarray(step_size)])
+
+
+# ------------------------------------------------------------------------- MINPACK's radius (the generic solver's)
+def _linear_problem(rng, k=3):
+    """A random linear residual ``r + J δ`` with columns of different scales: its Jacobian, residual and
+    ``FunctionInfo`` at ``δ = 0``."""
+    jacobian = rng.standard_normal((20, k)) * np.logspace(-2, 1, k)
+    residual = rng.standard_normal(20)
+    info = optx.FunctionInfo.EvalGradHessian(
+        0.5 * residual @ residual,
+        jnp.asarray(jacobian.T @ residual),
+        lx.MatrixLinearOperator(jnp.asarray(jacobian.T @ jacobian)),
+    )
+    return jacobian, residual, info
+
+
+def _levenberg_marquardt_step(jacobian, residual, scale, par):
+    """``p = −(JᵀJ + par D²)⁻¹ Jᵀr``, by numpy."""
+    gram = jacobian.T @ jacobian
+    return -np.linalg.solve(gram + par * np.diag(scale**2), jacobian.T @ residual)
+
+
+@pytest.mark.parametrize("fraction", [2.0, 1.0 + 1e-9, 0.5, 0.1, 1e-3])
+def test_an_absolute_radius_is_the_scaled_length_of_the_step(rng, fraction):
+    """MINPACK's descent takes ``Δ`` as a length in the scaled variables: Gauss-Newton's step when ``|D p| ≤ Δ``,
+    else the Levenberg-Marquardt step with ``|D p| = Δ`` (bisection to 60 halvings of a 46-wide log interval:
+    ~1e-12; rel 1e-6), which numpy's solve with the same ``λ`` found by root-finding reproduces."""
+    from brdffit.fitting.solver.levenberg_marquardt import MINPACK_DESCENT
+
+    jacobian, residual, info = _linear_problem(rng)
+    scale = np.linalg.norm(jacobian, axis=0)  # MINPACK's D at a first point
+    newton = _levenberg_marquardt_step(jacobian, residual, scale, 0.0)
+    radius = fraction * np.linalg.norm(scale * newton)
+    state = MINPACK_DESCENT.query(None, info, MINPACK_DESCENT.init(jnp.zeros(3), info))
+    delta, result = MINPACK_DESCENT.step(jnp.asarray(radius), state)
+    assert result == optx.RESULTS.successful
+    if fraction >= 1.0:
+        np.testing.assert_allclose(delta, newton, rtol=1e-8)
+        return
+    par = scipy.optimize.brentq(
+        lambda p: np.linalg.norm(scale * _levenberg_marquardt_step(jacobian, residual, scale, p)) - radius, 0.0, 1e12
+    )
+    np.testing.assert_allclose(delta, _levenberg_marquardt_step(jacobian, residual, scale, par), rtol=1e-6)
+    assert np.linalg.norm(scale * np.asarray(delta)) == pytest.approx(radius, rel=1e-6)
+
+
+def _lmder_radius(jacobian, residual, scale, step, par, cost_tried, radius, first):
+    """MINPACK's ``lmder`` after trying ``step`` (its Fortran, statements 230 to 260, transcribed in its own
+    variables): whether the step is accepted and the new ``delta``."""
+    fnorm, fnorm1 = np.linalg.norm(residual), np.sqrt(2.0 * cost_tried)
+    pnorm = np.linalg.norm(scale * step)
+    if first:
+        radius = min(radius, pnorm)
+    actred = 1.0 - (fnorm1 / fnorm) ** 2 if 0.1 * fnorm1 < fnorm else -1.0
+    temp1 = np.linalg.norm(jacobian @ step) / fnorm
+    temp2 = np.sqrt(par) * pnorm / fnorm
+    prered = temp1**2 + temp2**2 / 0.5
+    dirder = -(temp1**2 + temp2**2)
+    ratio = actred / prered if prered != 0 else 0.0
+    if ratio <= 0.25:
+        temp = 0.5 if actred >= 0 else 0.5 * dirder / (dirder + 0.5 * actred)
+        if 0.1 * fnorm1 >= fnorm or temp < 0.1:
+            temp = 0.1
+        radius = temp * min(radius, pnorm / 0.1)
+    elif par == 0 or ratio >= 0.75:
+        radius = pnorm / 0.5
+    return bool(ratio >= 1e-4), float(radius)
+
+
+@pytest.mark.parametrize("first", [False, True])
+@pytest.mark.parametrize("bound", [True, False], ids=["radius-binds", "gauss-newton"])
+@pytest.mark.parametrize("ratio", [1.0, 0.8, 0.6, 0.3, 0.1, 1e-3, 0.5e-4, -0.5, -3.0, "tenfold"])
+def test_the_minpack_radius_is_updated_as_lmder_updates_delta(rng, first, bound, ratio):
+    """MinpackTrustRegion accepts and sets ``Δ`` as ``lmder`` does (:func:`_lmder_radius`, in MINPACK's own
+    variables ``fnorm``, ``prered``, ``dirder``, ``par``): for a step the radius bound (``par > 0``) and a
+    Gauss-Newton step inside it (``par = 0``), on MINPACK's first iteration (``Δ`` clipped to the step's length)
+    and later ones, for ratios in each of its bands and a residual grown tenfold. The ratios stay clear of the
+    band edges, where rounding may decide; the two computations of the same ``Δ`` agree to 1e-10 (``prered``
+    formed as ``|Jp|² + 2 par |Dp|²`` against ``gᵀp + ½ pᵀJᵀJp``, and ``par`` found by root-finding to 1e-12)."""
+    from brdffit.fitting.solver.levenberg_marquardt import MinpackTrustRegion
+
+    jacobian, residual, info = _linear_problem(rng)
+    scale = np.linalg.norm(jacobian, axis=0)
+    newton = _levenberg_marquardt_step(jacobian, residual, scale, 0.0)
+    newton_length = np.linalg.norm(scale * newton)
+    if bound:
+        radius = 0.3 * newton_length
+        par = scipy.optimize.brentq(
+            lambda p: np.linalg.norm(scale * _levenberg_marquardt_step(jacobian, residual, scale, p)) - radius,
+            0.0,
+            1e12,
+            xtol=1e-300,
+            rtol=1e-14,
+        )
+        step = _levenberg_marquardt_step(jacobian, residual, scale, par)
+    else:
+        radius, par, step = 3.0 * newton_length, 0.0, newton
+    predicted = step @ (jacobian.T @ residual) + 0.5 * step @ jacobian.T @ jacobian @ step
+    cost = 0.5 * residual @ residual
+    cost_tried = 150.0 * cost if ratio == "tenfold" else cost + ratio * predicted
+    tried = optx.FunctionInfo.EvalGradHessian(jnp.asarray(cost_tried), info.grad, info.hessian)
+
+    search = MinpackTrustRegion()
+    y = jnp.zeros(3)
+    state = search.init(y, info)
+    state = jax.tree.unflatten(
+        jax.tree.structure(state),
+        [jnp.asarray(radius), jnp.asarray(scale), jnp.asarray(scale), jnp.asarray(not first)],
+    )
+    new_radius, accept, _, _ = search.step(jnp.array(False), y, jnp.asarray(step), info, tried, state)
+    expected_accept, expected_radius = _lmder_radius(jacobian, residual, scale, step, par, cost_tried, radius, first)
+    assert bool(accept) is expected_accept
+    assert float(new_radius) == pytest.approx(expected_radius, rel=1e-10)
+
+
+def test_the_minpack_radius_starts_at_factor_times_the_scaled_start():
+    """``Δ₀ = factor·|D y0|`` with MINPACK's ``D`` (the column norms, 1 for a zero column), ``factor`` where
+    ``D y0 = 0`` (``lmder``, statements 40 to 80): exact arithmetic on small integers."""
+    from brdffit.fitting.solver.levenberg_marquardt import MinpackTrustRegion
+
+    jacobian = np.array([[3.0, 0.0, 0.0], [4.0, 2.0, 0.0]])  # column norms 5, 2 and 0
+    info = optx.FunctionInfo.EvalGradHessian(
+        jnp.asarray(1.0), jnp.zeros(3), lx.MatrixLinearOperator(jnp.asarray(jacobian.T @ jacobian))
+    )
+    search = MinpackTrustRegion(factor=2.0)
+    for y0, expected in ((np.array([1.0, 6.0, 7.0]), 2.0 * np.sqrt(5.0**2 + 12.0**2 + 7.0**2)), (np.zeros(3), 2.0)):
+        y = jnp.asarray(y0)
+        radius, accept, _, _ = search.step(jnp.array(True), y, y, info, info, search.init(y, info))
+        assert bool(accept)
+        assert float(radius) == pytest.approx(expected, rel=1e-15)
+
+
+def test_a_residual_that_is_not_finite_is_rejected_and_shrinks_the_radius_tenfold(rng):
+    """A trial whose ``|r|²`` is NaN (a model evaluated at a pole) is rejected and ``Δ ← min(Δ, 10|Dp|)/10``, as
+    for a residual grown tenfold, where MINPACK's comparisons with NaN would be undefined."""
+    from brdffit.fitting.solver.levenberg_marquardt import MinpackTrustRegion
+
+    jacobian, residual, info = _linear_problem(rng)
+    scale = np.linalg.norm(jacobian, axis=0)
+    step = 0.1 * _levenberg_marquardt_step(jacobian, residual, scale, 0.0)
+    search = MinpackTrustRegion()
+    y = jnp.zeros(3)
+    state = jax.tree.unflatten(
+        jax.tree.structure(search.init(y, info)), [jnp.asarray(1e3), jnp.asarray(scale), jnp.asarray(scale), True]
+    )
+    tried = optx.FunctionInfo.EvalGradHessian(jnp.asarray(np.nan), info.grad, info.hessian)
+    radius, accept, _, _ = search.step(jnp.array(False), y, jnp.asarray(step), info, tried, state)
+    assert not bool(accept)
+    assert float(radius) == pytest.approx(np.linalg.norm(scale * step), rel=1e-12)
+
+
+def test_a_descent_and_a_search_that_disagree_on_the_radius_are_refused():
+    """The step size means a fraction of Gauss-Newton's step to one pair and a scaled length to the other: a
+    solver mixing them is refused, and so is MINPACK's radius with a scale that is not MINPACK's."""
+    from brdffit.fitting.solver.levenberg_marquardt import (
+        CappedTrustRegion,
+        MinpackTrustRegion,
+        ScaledLevenbergMarquardt,
+        ScaledTrustRegionDescent,
+    )
+
+    tolerances = {"rtol": 1e-10, "atol": 0.0, "gtol": 1e-8}
+    ScaledLevenbergMarquardt(**tolerances)  # the defaults agree
+    ScaledLevenbergMarquardt(**tolerances, descent=ScaledTrustRegionDescent(), search=CappedTrustRegion())
+    for descent, search in (
+        (ScaledTrustRegionDescent(), MinpackTrustRegion()),
+        (ScaledTrustRegionDescent(absolute_radius=True), CappedTrustRegion()),
+        (ScaledTrustRegionDescent(absolute_radius=True, running_scale=False), MinpackTrustRegion()),
+    ):
+        with pytest.raises(ValueError, match=r"radius|running_scale"):
+            ScaledLevenbergMarquardt(**tolerances, descent=descent, search=search)
