@@ -36,10 +36,14 @@ class _MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return importlib.util.spec_from_loader(fullname, self) if package == __name__ and name in MOVED else None
 
     def create_module(self, spec):
-        return importlib.import_module(f"{__name__}.{MOVED[spec.name.rpartition('.')[2]]}")
+        module = importlib.import_module(f"{__name__}.{MOVED[spec.name.rpartition('.')[2]]}")
+        spec.loader_state = module.__spec__  # its own, which the import system replaces by this one
+        return module
 
     def exec_module(self, module):
-        """Nothing to run: the module was imported under its own name."""
+        """Nothing to run (the module was imported under its own name); but the import system has set the module's
+        ``__spec__`` to the old name's, which would make its relative imports look elsewhere: its own is put back."""
+        module.__spec__ = module.__spec__.loader_state
 
 
 if not any(isinstance(finder, _MovedModules) for finder in sys.meta_path):

@@ -144,4 +144,7 @@ def test_the_old_module_paths_are_the_new_modules():
 
     assert compiled_solver is new_compiled_solver and old_get_loss is get_loss and old_build_problem is build_problem
     assert importlib.import_module("brdffit.fitting.compare") is compare
-    assert importlib.import_module("brdffit.fitting.results").FitResult is brdffit.FitResult
+    results = importlib.import_module("brdffit.fitting.results")
+    assert results.FitResult is brdffit.FitResult
+    # The module keeps its own spec under both names (its relative imports, inside functions too, find its rooms).
+    assert results.__spec__.name == "brdffit.fitting.single.result" and compare.__spec__.parent == compare.__package__
