@@ -153,6 +153,7 @@ class StackedFit:
         if holds is not None and np.any(self.hold.bounded):
             again = lambda theta, held: solver64(theta[:, None], problems64, held, self.budget)
             solved = onto_bounds(again, solved, holds)
+        self.problems = None  # the results need none of it: its memory (~110 MB at MERL size) back before the caveats
         return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
 
     def results(
