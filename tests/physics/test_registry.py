@@ -2,7 +2,6 @@
 registry's entries, which say what the rest of brdffit needs to know about a model."""
 
 import inspect
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -71,26 +70,6 @@ def test_a_models_exact_export_is_its_entrys():
     assert MODELS["ward"].exact_export("mitsuba") is None
 
 
-@dataclass(frozen=True)
-class Flat(brdffit.MappedLobe):
-    """A lobe that is the same everywhere (a test's lobe family)."""
-
-    summary = "1/π everywhere"
-    albedo_domain = brdffit.physics.domains.ALBEDO
-    peaks_at_mirror = True
-
-    @property
-    def parameters(self):
-        return ()
-
-    @property
-    def grid(self):
-        return ({},)
-
-    def __call__(self, shape, wi, wo):
-        return np.ones(len(wi)) / np.pi
-
-
 @pytest.mark.parametrize(
     "name, entry, message",
     [
@@ -106,8 +85,9 @@ def test_bad_registrations_are_one_line_errors(name, entry, message):
 
 
 def test_a_registered_model_is_built_by_name(monkeypatch):
-    monkeypatch.setitem(MODELS, "flat", brdffit.ModelEntry(lambda: LobeModel("flat", "flat", Flat(), 1)))
+    flat = LAMBERTIAN  # a lobe that is the same everywhere: any lobe family will do
+    monkeypatch.setitem(MODELS, "flat", brdffit.ModelEntry(lambda: LobeModel("flat", "flat", flat, 1)))
     model = get_model("flat")
-    assert isinstance(model, LobeModel) and model.lobe == Flat()
+    assert isinstance(model, LobeModel) and model.lobe == flat
     with pytest.raises(brdffit.BrdfInputError, match="does not apply to model flat"):
         get_model("flat", lobes=2)
