@@ -10,27 +10,38 @@ from .arguments import model_files, output_file
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("result", metavar="RESULT.json", help="a result file of brdffit fit")
     parser.add_argument(
-        "-o", "--output", metavar="FILE", help="the image, .png (default: RESULT's stem + .mitsuba.png, here)"
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="the image: .png, or .exr for the linear radiance (default: RESULT's stem + .mitsuba.png, here)",
     )
     parser.add_argument("--size", type=int, default=256, metavar="PIXELS", help="image width and height (default 256)")
     parser.add_argument("--spp", type=int, default=64, metavar="N", help="samples per pixel (default 64)")
+    parser.add_argument(
+        "--exposure",
+        default=None,
+        metavar="X",
+        help="the factor radiance is multiplied by for display (default π, the same for every image, so that renders"
+        " compare: a white Lambertian surface facing the light shows white), or 'auto': each image its own",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from ..checks import whole_number
     from ..errors import Argument, BrdfInputError
-    from ..export.mitsuba_render import mitsuba, render_sphere
+    from ..export.mitsuba_render import EXPOSURE, IMAGE_SUFFIXES, checked_exposure, mitsuba, render_sphere
     from ..fitting.single.result import load_result
 
     whole_number("size", args.size, 16, 4096)
     whole_number("spp", args.spp, 1)
+    exposure = EXPOSURE if args.exposure is None else checked_exposure(args.exposure)
     output = args.output or f"{Path(args.result).stem}.mitsuba.png"
-    if Path(output).suffix.lower() != ".png":
-        raise BrdfInputError(Argument("output", output), ": the image must end in .png")
+    if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
+        raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     result = load_result(args.result)
     path = output_file(output, "-o", [args.result, *model_files(result.model_options)])
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
-    exported = render_sphere(result, path, size=args.size, spp=args.spp)
+    exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
     for line in exported.comment_lines()[1:]:
         print(f"  {line}")

@@ -3,8 +3,13 @@
 The scene (Mitsuba 3's ``scalar_rgb`` variant, which runs on any CPU): a unit sphere seen by a perspective camera
 4.5 units away (field of view 28°), lit by one directional light from the upper left front (brdffit's own
 ``point`` preset, ``views/render.py``), Mitsuba's ``direct`` integrator, ``spp`` samples per pixel (a delta light
-leaves only the pixels' antialiasing to sample). The image is tone-mapped as brdffit's spheres are (``views/render.py``:
-the 99th percentile of luminance to white, sRGB).
+leaves only the pixels' antialiasing to sample).
+
+Every image is exposed alike (:data:`EXPOSURE`, unless asked otherwise), so that two renders compare: an export that
+reflects 0.4 times the light of another renders 0.4 times as bright, where exposing each image on its own (its 99th
+percentile of luminance to white, ``exposure="auto"``, as brdffit's figures do) would show both alike. A PNG is the
+exposed image, clipped and sRGB-encoded (``views/render.py``); an OpenEXR file (``.exr``) is the linear radiance
+itself, unexposed, for a user's own tone mapping.
 """
 
 import os
@@ -13,12 +18,17 @@ from pathlib import Path
 import numpy as np
 
 from .._files import atomic_path
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
 from .mitsuba import MitsubaExport, mitsuba_bsdf
 
 #: What to install for :func:`render_sphere`.
 EXTRA = "pip install 'brdffit[render]' (Mitsuba 3)"
+#: The exposure every image gets by default: π, so that a white Lambertian surface facing the light (radiance 1/π
+#: under the scene's unit irradiance) is display white; a darker or brighter material looks darker or brighter.
+EXPOSURE = float(np.pi)
+#: The image formats :func:`render_sphere` writes, by suffix.
+IMAGE_SUFFIXES = (".png", ".exr")
 
 
 def mitsuba():
@@ -31,9 +41,23 @@ def mitsuba():
     return mi
 
 
-def render_sphere(result: FitResult, path: str | os.PathLike, *, size: int = 256, spp: int = 64) -> MitsubaExport:
-    """Render a sphere of ``result``'s Mitsuba BSDF with Mitsuba and write it to ``path`` (PNG, atomically);
-    returns the export (exact or how far it lies)."""
+def render_sphere(
+    result: FitResult,
+    path: str | os.PathLike,
+    *,
+    size: int = 256,
+    spp: int = 64,
+    exposure: float | str = EXPOSURE,
+) -> MitsubaExport:
+    """Render a sphere of ``result``'s Mitsuba BSDF with Mitsuba and write it to ``path`` (PNG, or OpenEXR for
+    ``.exr``; atomically); returns the export (exact or how far it lies). ``exposure``: the factor radiance is
+    multiplied by before display (:data:`EXPOSURE` by default, the same for every image), or ``"auto"``: this
+    image's own (its 99th percentile of luminance to white). An OpenEXR file holds the radiance, unexposed."""
+    exposure = checked_exposure(exposure)
+    if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
+        raise BrdfInputError(
+            Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
+        )
     mi = mitsuba()
     exported = mitsuba_bsdf(result)
     scene = mi.load_dict(
@@ -55,17 +79,44 @@ def render_sphere(result: FitResult, path: str | os.PathLike, *, size: int = 256
             },
         }
     )
-    write_png(np.asarray(mi.render(scene), dtype=float), path)
+    radiance = np.asarray(mi.render(scene), dtype=float)
+    if Path(path).suffix.lower() == ".exr":
+        write_exr(mi, radiance, path)
+    else:
+        write_png(radiance, path, exposure)
     return exported
 
 
-def write_png(linear_rgb: np.ndarray, path: str | os.PathLike) -> Path:
-    """A linear RGB image (H, W, 3), tone-mapped as brdffit's spheres are, as a PNG (atomically)."""
+def write_png(linear_rgb: np.ndarray, path: str | os.PathLike, exposure: float | str = EXPOSURE) -> Path:
+    """A linear RGB image (H, W, 3) times ``exposure`` (or its own, ``"auto"``), clipped and sRGB-encoded as
+    brdffit's spheres are, as a PNG (atomically)."""
     import matplotlib.image
 
     from ..views.render import exposure_for, to_srgb
 
     path = Path(path)
+    factor = exposure_for(linear_rgb) if exposure == "auto" else float(exposure)
     with atomic_path(path) as temporary:
-        matplotlib.image.imsave(temporary, to_srgb(linear_rgb, exposure_for(linear_rgb)), format="png")
+        matplotlib.image.imsave(temporary, to_srgb(linear_rgb, factor), format="png")
     return path
+
+
+def write_exr(mi, linear_rgb: np.ndarray, path: str | os.PathLike) -> Path:
+    """A linear RGB image (H, W, 3) as OpenEXR (32-bit float, Mitsuba's writer), atomically."""
+    path = Path(path)
+    with atomic_path(path) as temporary:
+        mi.Bitmap(np.ascontiguousarray(linear_rgb, dtype=np.float32)).write(str(temporary))
+    return path
+
+
+def checked_exposure(value) -> float | str:
+    """``--exposure``/``exposure=``: a number > 0, or ``"auto"``; a one-line error otherwise."""
+    if value == "auto":
+        return value
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = float("nan")
+    if isinstance(value, bool) or not (number > 0 and np.isfinite(number)):
+        raise BrdfInputError(Argument.given("exposure", value), " must be a number > 0, or 'auto' (each image its own)")
+    return number

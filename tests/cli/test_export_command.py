@@ -73,6 +73,46 @@ def test_render_writes_a_png(results, tmp_path, capsys):
     assert output.read_bytes().startswith(PNG) and out.startswith(f"wrote {output}: Mitsuba 3 rendered a sphere")
 
 
+def test_renders_share_one_exposure_so_that_they_compare(tmp_path):
+    """Two Lambertian fits, one half as bright as the other: at the default exposure the dimmer renders half as
+    bright (in the EXR's radiance and the PNG's decoded values), where each image exposed on its own looks alike."""
+    mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
+    from brdffit import FitResult
+    from brdffit.export.mitsuba_render import render_sphere
+
+    def lambertian(albedo):
+        return FitResult("lambert", {}, ("r", "g", "b"), {"rho_d": [albedo] * 3}, "log", 0.0, 0.0, 1, 1, True)
+
+    def png_linear(path):  # the PNG's values, sRGB-decoded (IEC 61966-2-1)
+        value = matplotlib.image.imread(path)[..., :3].astype(float)
+        return np.where(value <= 0.04045, value / 12.92, ((value + 0.055) / 1.055) ** 2.4)
+
+    import matplotlib.image
+
+    mean = {}
+    for albedo in (0.8, 0.4):
+        render_sphere(lambertian(albedo), tmp_path / f"{albedo}.exr", size=32, spp=4)
+        mean[albedo, "exr"] = float(np.mean(np.asarray(mi.Bitmap(str(tmp_path / f"{albedo}.exr")))))
+        for exposure in ("default", "auto"):
+            chosen = {} if exposure == "default" else {"exposure": exposure}
+            render_sphere(lambertian(albedo), tmp_path / f"{albedo}.png", size=32, spp=4, **chosen)
+            mean[albedo, exposure] = float(np.mean(png_linear(tmp_path / f"{albedo}.png")))
+    # The same sample positions (Mitsuba's seeded sampler): radiance exactly proportional to the albedo.
+    assert mean[0.4, "exr"] / mean[0.8, "exr"] == pytest.approx(0.5, rel=1e-5)
+    # The PNG: 8-bit rounding of each pixel (~0.2% of a mid-grey value), averaged: a percent is ample.
+    assert mean[0.4, "default"] / mean[0.8, "default"] == pytest.approx(0.5, rel=0.01)
+    assert mean[0.4, "auto"] / mean[0.8, "auto"] == pytest.approx(1.0, rel=0.01)  # what it hid
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "bright", "inf"])
+def test_a_bad_exposure_is_one_line_and_writes_nothing(results, tmp_path, capsys, value):
+    pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
+    status, out, err = run(["render", results / "metal.json", "-o", tmp_path / "s.png", "--exposure", value], capsys)
+    assert status == 2 and out == "" and err.count("\n") == 1, err
+    assert f"--exposure '{value}' must be a number > 0, or 'auto'" in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_render_without_mitsuba_names_the_extra(results, tmp_path, capsys, monkeypatch):
     real_import = builtins.__import__
 
@@ -95,7 +135,7 @@ def test_render_without_mitsuba_names_the_extra(results, tmp_path, capsys, monke
         (["export", "{m}", "--to", "merl", "--format", "xml"], "--format xml does not apply to target merl"),
         (["export", "{m}", "--to", "mitsuba", "-o", "{m}"], "is the input"),
         (["export", "{t}/none.json", "--to", "mitsuba", "-o", "{t}/x.xml"], "none.json: no such file"),
-        (["render", "{m}", "-o", "{t}/s.jpg"], "-o {t}/s.jpg: the image must end in .png"),
+        (["render", "{m}", "-o", "{t}/s.jpg"], "-o {t}/s.jpg: the image must end in .png or .exr"),
         (["render", "{m}", "--spp", "0", "-o", "{t}/s.png"], "--spp 0 is not allowed"),
     ],
 )
