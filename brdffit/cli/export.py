@@ -25,7 +25,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "--format",
         metavar="FORMAT",
         help="mitsuba: xml (default; mitsuba.load_file takes it) or dict (a Python file defining bsdf for"
-        " mitsuba.load_dict)",
+        " mitsuba.load_dict); gltf: gltf (default, JSON) or glb (binary). Default: the one -o's suffix names",
     )
     parser.add_argument(
         "-o", "--output", metavar="FILE", help="the file (default: RESULT's stem with the target's suffix, here)"
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from ..export.targets import TARGETS, export, export_format
     from ..fitting.single.result import load_result
 
-    kind = export_format(args.to, args.format)
+    kind = export_format(args.to, args.format, args.output)
     default = Path(args.result).stem + TARGETS[args.to].formats[kind]
     result = load_result(args.result)
     path = output_file(args.output or default, "-o", [args.result, *model_files(result.model_options)])

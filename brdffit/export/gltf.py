@@ -1,5 +1,5 @@
 """A fitted BRDF as a glTF 2.0 material: the glTF metallic-roughness BRDF (``gltf_material.py``) fitted to it, and the
-``.gltf`` file.
+``.gltf`` or ``.glb`` file.
 
 **The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.dense_grid`
 (:func:`~brdffit.export.approximate.tabulated`) and the glTF parameters are fitted to it with the fit's own loss
@@ -8,6 +8,9 @@ brdffit's solver, ``fitting/solver/levenberg_marquardt.py``: :func:`_solve` says
 unconstrained coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters
 free. The extensions are kept only when they lower the grid rmse by :data:`EXTENSION_GAIN` or more. How far the material
 lies from the fitted BRDF is an :class:`~brdffit.export.approximate.Approximation`.
+
+**The file** (:func:`write_gltf`): ``.gltf`` (JSON) or ``.glb`` (binary), the material on a preview sphere
+(``gltf_preview.py``).
 """
 
 import math
@@ -22,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .._files import write_text_atomic
+from .._files import atomic_path, write_text_atomic
 from .._jax import float64
 from .._programs import jit
 from .._version import __version__
@@ -45,7 +48,6 @@ EXTENSION_GAIN = 0.05
 #: renderer holds the values in float32, 6e-8 apart; where the stopping test ends an exact fit, 1e-12 to 1e-8 of the
 #: rms, is rounding's choice, and a 5% gain there is none.)
 EXACT_FIT = 1e-6
-#: The GGX ``α`` never goes below this (roughness 0.001): at ``α = 0`` the distribution is a delta, ``0/0`` at the
 #: The largest index of refraction written; a dielectric ``f0`` beyond its ``((ior − 1)/(ior + 1))² = 0.36`` is written
 #: with ``ior = 0`` (``f0 = 1``) and the specular colour (:func:`_material_of`); diamond's 2.42 gives 0.17.
 MAX_IOR = 4.0
@@ -386,20 +388,20 @@ def _plain(value):
     return value
 
 
-def write_gltf(result: FitResult, path: str | os.PathLike) -> tuple[GltfMaterial, Approximation, list[str]]:
-    """Fit a glTF material to ``result`` (:func:`fit_gltf`) and write it as a ``.gltf`` file (JSON; ``.glb``, binary
-    glTF, is refused), atomically.
+def write_gltf(
+    result: FitResult, path: str | os.PathLike, binary: bool | None = None
+) -> tuple[GltfMaterial, Approximation, list[str]]:
+    """Fit a glTF material to ``result`` (:func:`fit_gltf`) and write it, atomically, as a ``.gltf`` file (JSON) or,
+    with ``binary`` (default: when ``path`` ends in ``.glb``), as a binary ``.glb`` file.
 
-    The file is a glTF 2.0 document holding the material alone (:meth:`GltfMaterial.to_gltf`), named after the
-    file; the material's ``extras.brdffit`` holds the approximation (``rmse`` in 1/sr over the grid, the worst
-    relative ``albedo_error`` and where), the notes, and the source fit's model, options, channels, loss and
-    parameters. Returns the material, the approximation and the notes (one line each).
+    The file is a glTF 2.0 document showing the material on a preview sphere (:meth:`GltfMaterial.to_gltf`, named
+    after the file), so that a viewer opens it; the material's ``extras.brdffit`` holds the approximation (``rmse``
+    in 1/sr over the grid, the worst relative ``albedo_error`` and where), the notes, and the source fit's model,
+    options, channels, loss and parameters. Returns the material, the approximation and the notes (one line each).
     """
     path = Path(path)
-    if path.suffix.lower() == ".glb":
-        raise BrdfInputError(
-            Argument.given("path", str(path)), " is not allowed: .glb is binary glTF; brdffit writes .gltf (JSON)"
-        )
+    if binary is None:
+        binary = path.suffix.lower() == ".glb"
     if not path.parent.is_dir():
         raise BrdfInputError(f"{path}: the folder {path.parent} does not exist")
     material, approximation, notes = _fit(result)
@@ -417,6 +419,9 @@ def write_gltf(result: FitResult, path: str | os.PathLike) -> tuple[GltfMaterial
             },
         }
     }
-    document = material.to_gltf(path.stem, extras=_plain(extras))
-    write_text_atomic(path, json_text(document) + "\n")
+    if binary:
+        with atomic_path(path) as temporary:
+            temporary.write_bytes(material.to_glb(path.stem, extras=_plain(extras)))
+    else:
+        write_text_atomic(path, json_text(material.to_gltf(path.stem, extras=_plain(extras))) + "\n")
     return material, approximation, notes

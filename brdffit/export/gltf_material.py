@@ -65,13 +65,17 @@ from .._version import __version__
 from ..errors import Argument, BrdfInputError
 from ..physics.geometry import above_horizon, half_vector
 from ..physics.microfacet import ggx_distribution, ggx_lambda
+from .gltf_preview import glb_bytes, gltf_document
 
 #: The dielectric's index of refraction in core glTF (Appendix B), and the extension's default.
 DEFAULT_IOR = 1.5
 #: The dielectric's reflectance at normal incidence for :data:`DEFAULT_IOR`: ``((1 − 1.5)/(1 + 1.5))² = 0.04``.
 DEFAULT_F0 = ((1.0 - DEFAULT_IOR) / (1.0 + DEFAULT_IOR)) ** 2  # as ior_f0 computes it
+#: The GGX ``α`` never goes below this (roughness 0.001): at ``α = 0`` the distribution is a delta, ``0/0`` at the
 #: mirror direction.
 MIN_ALPHA = 1e-6
+#: The ``asset.generator`` of every file brdffit writes.
+_GENERATOR = f"brdffit {__version__}"
 
 
 # ---------------------------------------------------------------------- the BRDF
@@ -219,12 +223,11 @@ class GltfMaterial:
             )
         return np.asarray(values)
 
-    def to_gltf(self, name: str, extras: dict[str, Any] | None = None) -> dict[str, Any]:
-        """A complete glTF 2.0 document (JSON as Python objects) holding this material alone, named ``name``:
-        ``asset`` (version 2.0, brdffit as the generator), ``materials[0].pbrMetallicRoughness`` with
-        ``baseColorFactor`` (opaque: alpha 1), ``metallicFactor`` and ``roughnessFactor``, the extensions'
-        objects and the top-level ``extensionsUsed`` only where the material uses them, and ``extras`` (the
-        material's, for application data) when given."""
+    def material_object(self, name: str, extras: dict[str, Any] | None = None) -> dict[str, Any]:
+        """This material as a glTF 2.0 material object (JSON as Python objects), named ``name``:
+        ``pbrMetallicRoughness`` with ``baseColorFactor`` (opaque: alpha 1), ``metallicFactor`` and
+        ``roughnessFactor``, the extensions' objects only where the material uses them (:attr:`extensions`), and
+        ``extras`` (application data) when given."""
         material: dict[str, Any] = {
             "name": str(name),
             "pbrMetallicRoughness": {
@@ -247,8 +250,15 @@ class GltfMaterial:
             material["extensions"] = extensions
         if extras is not None:
             material["extras"] = extras
-        document: dict[str, Any] = {"asset": {"version": "2.0", "generator": f"brdffit {__version__}"}}
-        if extensions:
-            document["extensionsUsed"] = list(extensions)
-        document["materials"] = [material]
-        return document
+        return material
+
+    def to_gltf(self, name: str, extras: dict[str, Any] | None = None) -> dict[str, Any]:
+        """A complete glTF 2.0 document (JSON as Python objects, a ``.gltf`` file's content): this material
+        (:meth:`material_object`) on a preview sphere in a scene named ``name``, so that a viewer shows it; the
+        top-level ``extensionsUsed`` lists the material's extensions; ``asset.generator`` names brdffit
+        (``export/gltf_preview.py``)."""
+        return gltf_document(self.material_object(name, extras), list(self.extensions), name, _GENERATOR)
+
+    def to_glb(self, name: str, extras: dict[str, Any] | None = None) -> bytes:
+        """The document of :meth:`to_gltf` as a binary glTF (``.glb``) file's bytes."""
+        return glb_bytes(self.material_object(name, extras), list(self.extensions), name, _GENERATOR)

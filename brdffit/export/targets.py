@@ -34,7 +34,7 @@ def _mitsuba(result, path: Path, kind: str) -> list[str]:
 def _gltf(result, path: Path, kind: str) -> list[str]:
     from .gltf import write_gltf
 
-    _, approximation, notes = write_gltf(result, path)
+    _, approximation, notes = write_gltf(result, path, binary=kind == "glb")
     return [f"approximate: the glTF BRDF fitted to it, {approximation.line()}", *notes]
 
 
@@ -45,28 +45,41 @@ def _merl(result, path: Path, kind: str) -> list[str]:
 
 
 #: The targets: Mitsuba 3 (XML for ``mitsuba.load_file``, or a Python dictionary for ``mitsuba.load_dict``),
-#: glTF 2.0 and MERL.
+#: glTF 2.0 (JSON ``.gltf`` or binary ``.glb``) and MERL.
 TARGETS = {
     "mitsuba": Target("a Mitsuba 3 BSDF", {"xml": ".xml", "dict": ".mitsuba.py"}, _mitsuba),
-    "gltf": Target("a glTF 2.0 material (pbrMetallicRoughness)", {"gltf": ".gltf"}, _gltf),
+    "gltf": Target(
+        "a glTF 2.0 material (pbrMetallicRoughness) on a preview sphere", {"gltf": ".gltf", "glb": ".glb"}, _gltf
+    ),
     "merl": Target("a MERL table (90 × 90 × 180 bins)", {"binary": ".binary"}, _merl),
 }
 
 
-def export_format(to: str, format: str | None = None) -> str:
-    """The format a target writes: ``format`` if the target takes it, its first by default; one-line errors."""
+def export_format(to: str, format: str | None = None, path: str | os.PathLike | None = None) -> str:
+    """The format a target writes: ``format`` if the target takes it; else the one whose suffix ``path`` ends
+    with, if any; else the target's first. One-line errors for a format the target does not write, and for a
+    ``path`` whose suffix is another of the target's formats' (``--format glb -o oak.gltf``)."""
     choice("to", to, TARGETS)
     formats = TARGETS[to].formats
-    kind = next(iter(formats)) if format is None else format
+    named = next((kind for kind, suffix in formats.items() if path and str(path).lower().endswith(suffix)), None)
+    kind = format or named or next(iter(formats))
     if kind not in formats:
         raise BrdfInputError(
             Argument("format", kind), f" does not apply to target {to}; it writes {', '.join(formats)}"
+        )
+    if named is not None and named != kind:
+        raise BrdfInputError(
+            Argument("format", kind),
+            f" writes {formats[kind]} files, not {Path(path).name} (a {named} file's name); name it"
+            f" {Path(path).name[: -len(formats[named])]}{formats[kind]} or leave the format out",
         )
     return kind
 
 
 def export(result, to: str, path: str | os.PathLike, format: str | None = None) -> list[str]:
     """Write ``result`` (a :class:`~brdffit.FitResult`) for the renderer ``to`` (:data:`TARGETS`) to ``path``,
-    atomically; returns the lines a user should read (whether it is exact, how far it lies otherwise, notes)."""
-    kind = export_format(to, format)
+    atomically, in ``format`` (default: the one ``path``'s suffix names, else the target's first:
+    :func:`export_format`); returns the lines a user should read (whether it is exact, how far it lies otherwise,
+    notes)."""
+    kind = export_format(to, format, path)
     return TARGETS[to].write(result, Path(path), kind)

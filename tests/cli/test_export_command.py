@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from gltf_validator import assert_valid, needs_validator
 
 import data_synth
 from brdffit import fit, load_samples
@@ -135,6 +136,7 @@ def test_render_without_mitsuba_names_the_extra(results, tmp_path, capsys, monke
         (["export", "{m}", "--to", "merl", "--format", "xml"], "--format xml does not apply to target merl"),
         (["export", "{m}", "--to", "mitsuba", "-o", "{m}"], "is the input"),
         (["export", "{t}/none.json", "--to", "mitsuba", "-o", "{t}/x.xml"], "none.json: no such file"),
+        (["export", "{m}", "--to", "gltf", "--format", "glb", "-o", "{t}/s.gltf"], "--format glb writes .glb files"),
         (["render", "{m}", "-o", "{t}/s.jpg"], "-o {t}/s.jpg: the image must end in .png or .exr"),
         (["render", "{m}", "--spp", "0", "-o", "{t}/s.png"], "--spp 0 is not allowed"),
     ],
@@ -159,3 +161,18 @@ def test_gltf_says_how_far_it_lies(results, tmp_path, capsys):
     material = document["materials"][0]
     assert len(material["pbrMetallicRoughness"]["baseColorFactor"]) == 4
     assert material["extras"]["brdffit"]["approximation"]["rmse"] > 0
+
+
+@needs_validator
+def test_gltf_and_glb_open_in_a_viewer(results, tmp_path, capsys, monkeypatch):
+    # A material alone shows nothing in a viewer: both files hold it on a preview sphere, and the Khronos validator
+    # finds no error and no warning in either. The -o suffix picks the format; --format glb names it.
+    monkeypatch.chdir(tmp_path)
+    for argv in (["-o", "ward.gltf"], ["-o", "named.glb"], ["--format", "glb"]):
+        status, _, err = run(["export", results / "ward.json", "--to", "gltf", *argv], capsys)
+        assert status == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["named.glb", "ward.glb", "ward.gltf"]
+    assert json.loads((tmp_path / "ward.gltf").read_text())["meshes"]
+    for path in sorted(tmp_path.iterdir()):
+        assert path.suffix == ".gltf" or path.read_bytes()[:4] == b"glTF"
+        assert_valid(path)

@@ -367,7 +367,6 @@ def test_write_gltf_refuses_bad_input_with_one_line_and_writes_nothing(tmp_path)
     two_channels = result_of("lambert", {"rho_d": [0.5, 0.4]}, channels=("c0", "c1"))
     failures = [
         (two_channels, path, "result has 2 channels (c0, c1); a glTF material takes three"),
-        (result_of("lambert", {"rho_d": [0.5, 0.4, 0.3]}), tmp_path / "oak.glb", "path="),
         (result_of("lambert", {"rho_d": [0.5, 0.4, 0.3]}), tmp_path / "missing" / "oak.gltf", "the folder"),
         ({"model": "ward"}, path, "result must be a FitResult, not dict"),
     ]
