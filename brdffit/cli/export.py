@@ -30,6 +30,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-o", "--output", metavar="FILE", help="the file (default: RESULT's stem with the target's suffix, here)"
     )
+    parser.add_argument(
+        "--samples",
+        metavar="DATA",
+        help="the data the fit was made from (read as the fit read it): also say how far the export, evaluated as"
+        " its renderer evaluates it, lies from the data at the data's own directions (stored in the file too)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,9 +46,10 @@ def run(args: argparse.Namespace) -> int:
     kind = export_format(args.to, args.format, args.output)
     default = Path(args.result).stem + TARGETS[args.to].formats[kind]
     result = load_result(args.result)
-    path = output_file(args.output or default, "-o", [args.result, *model_files(result.model_options)])
+    inputs = [args.result, *model_files(result.model_options), *([args.samples] if args.samples else [])]
+    path = output_file(args.output or default, "-o", inputs)
     enable_compilation_cache()
-    lines = export(result, args.to, path, kind)
+    lines = export(result, args.to, path, kind, args.samples)
     print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")
     for line in lines:
         print(f"  {line}")

@@ -29,6 +29,7 @@ from .._files import atomic_path, write_text_atomic
 from .._jax import float64
 from .._programs import jit
 from .._version import __version__
+from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.objective.losses import get_loss
 from ..fitting.options import MAX_STEPS
@@ -38,6 +39,7 @@ from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least
 from ..physics.geometry import mirror_direction, spherical_to_direction
 from ..views.render import display_rgb
 from .approximate import Approximation, approximation_error, tabulated
+from .at_data import data_error
 from .gltf_material import DEFAULT_F0, GltfMaterial, ior_f0, material_brdf
 from .gltf_material import gltf_brdf as gltf_brdf  # the BRDF's name where the documentation once gave it
 
@@ -65,6 +67,9 @@ START_FLAT_FRESNEL = (0.1, 0.9)
 #: the dielectric's diffuse term dimmed by the mirror's larger Fresnel term).
 RETRO_RATIO = 1.1
 RETRO_INCIDENCE = (30.0, 60.0)
+#: What evaluates a glTF material at the data's directions: no viewer runs in Python, so the BRDF the specification
+#: defines, as the Khronos Sample Viewer implements it (``gltf_material.py``).
+EVALUATED_BY = "the glTF specification's BRDF (Khronos Sample Viewer form)"
 
 
 # ---------------------------------------------------------------------- the fit
@@ -343,7 +348,18 @@ def _retro_reflection_note(result: FitResult) -> list[str]:
     ]
 
 
-def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str]]:
+def _in_channels(material: GltfMaterial, plan: str):
+    """The material's BRDF in the fit's channels, as ``brdf(wi, wo) -> (N, C)``: its RGB converted back to XYZ
+    (``plan`` xyz), its r channel (grey), or its RGB."""
+    if plan == "xyz":
+        rgb_to_xyz = np.linalg.inv(_xyz_to_rgb_matrix())
+        return lambda wi, wo: material.brdf(wi, wo) @ rgb_to_xyz.T
+    if plan == "grey":
+        return lambda wi, wo: material.brdf(wi, wo)[:, :1]
+    return material.brdf
+
+
+def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str]:
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be a FitResult, not {type(result).__name__}")
     plan, notes = _channel_plan(result.channels)
@@ -352,15 +368,9 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str]]:
     if plan == "xyz":
         values = values @ _xyz_to_rgb_matrix().T
     material, fit_notes = fit_material(samples.wi, samples.wo, values, result.loss)
-    if plan == "xyz":
-        rgb_to_xyz = np.linalg.inv(_xyz_to_rgb_matrix())
-        approximation = approximation_error(result, lambda wi, wo: material.brdf(wi, wo) @ rgb_to_xyz.T)
-    elif plan == "grey":
-        approximation = approximation_error(result, lambda wi, wo: material.brdf(wi, wo)[:, :1])
-    else:
-        approximation = approximation_error(result, material.brdf)
+    approximation = approximation_error(result, _in_channels(material, plan))
     warnings = approximation.warnings("glTF's metallic-roughness BRDF")
-    return material, approximation, notes + fit_notes + _retro_reflection_note(result) + warnings
+    return material, approximation, notes + fit_notes + _retro_reflection_note(result) + warnings, plan
 
 
 def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:
@@ -373,7 +383,7 @@ def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:
     channels (the material's RGB converted back to XYZ; its r channel for grey). :func:`write_gltf` also returns
     the notes on these choices.
     """
-    material, approximation, _ = _fit(result)
+    material, approximation, _, _ = _fit(result)
     return material, approximation
 
 
@@ -389,7 +399,7 @@ def _plain(value):
 
 
 def write_gltf(
-    result: FitResult, path: str | os.PathLike, binary: bool | None = None
+    result: FitResult, path: str | os.PathLike, binary: bool | None = None, samples: "Samples | None" = None
 ) -> tuple[GltfMaterial, Approximation, list[str]]:
     """Fit a glTF material to ``result`` (:func:`fit_gltf`) and write it, atomically, as a ``.gltf`` file (JSON) or,
     with ``binary`` (default: when ``path`` ends in ``.glb``), as a binary ``.glb`` file.
@@ -397,18 +407,25 @@ def write_gltf(
     The file is a glTF 2.0 document showing the material on a preview sphere (:meth:`GltfMaterial.to_gltf`, named
     after the file), so that a viewer opens it; the material's ``extras.brdffit`` holds the approximation (``rmse``
     in 1/sr over the grid, the worst relative ``albedo_error`` and where), the notes, and the source fit's model,
-    options, channels, loss and parameters. Returns the material, the approximation and the notes (one line each).
+    options, channels, loss and parameters; given ``samples`` (the data, as ``at_data.data_for`` returns them), also
+    how far the material lies from them at their directions (``at_data``; :class:`~brdffit.export.at_data.DataError`,
+    the first note). Returns the material, the approximation and the notes (one line each).
     """
     path = Path(path)
     if binary is None:
         binary = path.suffix.lower() == ".glb"
     if not path.parent.is_dir():
         raise BrdfInputError(f"{path}: the folder {path.parent} does not exist")
-    material, approximation, notes = _fit(result)
+    material, approximation, notes, plan = _fit(result)
+    at_data = {}
+    if samples is not None:
+        error = data_error(result, samples, _in_channels(material, plan), EVALUATED_BY)
+        notes, at_data = [error.line(), *notes], {"at_data": error.to_dict()}
     extras = {
         "brdffit": {
             "version": __version__,
             "approximation": approximation.to_dict(),
+            **at_data,
             "notes": notes,
             "source": {
                 "model": result.model,

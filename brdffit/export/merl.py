@@ -4,7 +4,7 @@ import os
 
 import numpy as np
 
-from ..data.merl import CHANNELS, HORIZON, N_BINS, bin_directions, write_merl_table
+from ..data.merl import CHANNELS, HORIZON, N_BINS, SCALES, bin_directions, stored_planes, write_merl_table
 from ..errors import BrdfInputError
 from ..physics.evaluate import evaluate
 
@@ -33,3 +33,20 @@ def write_merl(model, params: dict, path: str | os.PathLike, **model_options) ->
     values[above] = computed
     write_merl_table(values, path)
     return notes
+
+
+def merl_brdf(path: str | os.PathLike):
+    """A MERL file's BRDF as brdffit reads it back, ``brdf(wi, wo) -> (N, 3)`` in 1/sr: the table interpolated
+    trilinearly in its bin coordinates (``datadriven/tabulation.py``) over the bins that hold a value (stored ≥ 0)
+    with both directions above the horizon."""
+    from ..datadriven.tabulation import interpolation
+
+    table = np.array(stored_planes(path)) * SCALES[:, None]  # (3, bins), 1/sr
+    wi, wo = bin_directions()
+    filled = np.all(table >= 0, axis=0) & (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
+
+    def brdf(wi, wo):
+        index, weight = interpolation(np.asarray(wi, float), np.asarray(wo, float), filled)
+        return np.einsum("nk,cnk->nc", weight, table[:, index])
+
+    return brdf

@@ -27,6 +27,7 @@ Mitsuba counterpart: the export fits Mitsuba's model (GGX and Beckmann ``roughco
 the better of the two) to the fitted BRDF (``approximate.py``) and reports how far it lies.
 """
 
+import dataclasses
 import pprint
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -40,7 +41,9 @@ from ..physics.models.registry import MODELS, get_model
 from ..physics.models.specs import spec_of
 
 if TYPE_CHECKING:
+    from ..data.samples import Samples
     from .approximate import Approximation
+    from .at_data import DataError
 
 #: The Mitsuba 3 scene-description version the XML declares.
 XML_VERSION = "3.0.0"
@@ -56,7 +59,9 @@ class MitsubaExport:
     """A Mitsuba 3 BSDF as ``mitsuba.load_dict`` takes it (``bsdf``), the fit it was made from (``source``, a model
     spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it,
     ``refitted``), how far that lies from the source (``approximation``, None when exact) and what a user must know
-    (``notes``)."""
+    (``notes``); ``scale``: the factor the exported fit's albedos were scaled by into Mitsuba's range (the BSDF is
+    ``scale`` times ``exported``); ``at_data``: how far the BSDF lies from the data at its directions, when given
+    (``at_data.py``)."""
 
     bsdf: dict[str, Any]
     source: str
@@ -64,10 +69,29 @@ class MitsubaExport:
     approximation: "Approximation | None" = None
     notes: list[str] = field(default_factory=list)
     refitted: bool = False
+    scale: float = 1.0
+    at_data: "DataError | None" = None
 
     @property
     def exact(self) -> bool:
         return self.approximation is None
+
+    def brdf(self, wi, wo) -> np.ndarray:
+        """The BSDF's BRDF (N, C) in 1/sr, by brdffit's model of it: ``scale`` times the exported fit's."""
+        return self.scale * np.asarray(self.exported.predict(wi, wo))
+
+    def compared_with(self, result: FitResult, samples: "Samples") -> "MitsubaExport":
+        """This export of ``result`` with :attr:`at_data` measured on ``samples`` (``at_data.data_for``'s data):
+        evaluated by Mitsuba itself where it is installed, else by :meth:`brdf`."""
+        from .at_data import data_error
+        from .mitsuba_eval import mitsuba_brdf, mitsuba_version
+
+        version = mitsuba_version()
+        if version is None:
+            error = data_error(result, samples, self.brdf, "brdffit's model of the BSDF (Mitsuba is not installed)")
+        else:
+            error = data_error(result, samples, lambda wi, wo: mitsuba_brdf(self.bsdf, wi, wo), f"Mitsuba {version}")
+        return dataclasses.replace(self, at_data=error)
 
     def to_xml(self) -> str:
         """Mitsuba 3 XML of the BSDF (``mitsuba.load_string`` takes it), with a comment on where it came from."""
@@ -79,9 +103,11 @@ class MitsubaExport:
         """A Python module: ``bsdf``, the dictionary ``mitsuba.load_dict(bsdf)`` takes, and ``approximation``."""
         comment = "".join(f"# {line}\n" for line in self.comment_lines())
         approximation = None if self.approximation is None else self.approximation.to_dict()
+        at_data = None if self.at_data is None else self.at_data.to_dict()
         return (
             f"{comment}bsdf = {pprint.pformat(self.bsdf, sort_dicts=False)}\n"
             f"approximation = {pprint.pformat(approximation, sort_dicts=False)}\n"
+            f"at_data = {pprint.pformat(at_data, sort_dicts=False)}\n"
         )
 
     def comment_lines(self) -> list[str]:
@@ -94,7 +120,8 @@ class MitsubaExport:
         else:
             how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
             how += self.approximation.line()
-        return [made, how, *self.notes]
+        at_data = [] if self.at_data is None else [self.at_data.line()]
+        return [made, how, *at_data, *self.notes]
 
 
 def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
@@ -114,7 +141,8 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
             f"its albedos exceed what Mitsuba's RGB reflectances hold (kd + ks up to {1 / scale:.3g}):"
             f" scaled by {scale:.3g}"
         )
-        return MitsubaExport(bsdf, source, result, approximation_error(result, _scaled(result, scale)), notes)
+        approximation = approximation_error(result, _scaled(result, scale))
+        return MitsubaExport(bsdf, source, result, approximation, notes, scale=scale)
     from .approximate import approximation_error, refit
 
     candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
@@ -124,7 +152,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
         notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
     approximation = approximation_error(result, _scaled(exported, scale))
     notes += approximation.warnings("Mitsuba's microfacet model")
-    return MitsubaExport(bsdf, source, exported, approximation, notes, refitted=True)
+    return MitsubaExport(bsdf, source, exported, approximation, notes, refitted=True, scale=scale)
 
 
 def _exact_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:

@@ -21,24 +21,13 @@ from .._files import atomic_path
 from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
 from .mitsuba import MitsubaExport, mitsuba_bsdf
+from .mitsuba_eval import mitsuba
 
-#: What to install for :func:`render_sphere`.
-EXTRA = "pip install 'brdffit[render]' (Mitsuba 3)"
 #: The exposure every image gets by default: π, so that a white Lambertian surface facing the light (radiance 1/π
 #: under the scene's unit irradiance) is display white; a darker or brighter material looks darker or brighter.
 EXPOSURE = float(np.pi)
 #: The image formats :func:`render_sphere` writes, by suffix.
 IMAGE_SUFFIXES = (".png", ".exr")
-
-
-def mitsuba():
-    """Mitsuba 3 with its ``scalar_rgb`` variant set, or a one-line error saying how to install it."""
-    try:
-        import mitsuba as mi
-    except ImportError:
-        raise BrdfInputError(f"rendering with Mitsuba needs Mitsuba 3, which is not installed: {EXTRA}") from None
-    mi.set_variant("scalar_rgb")
-    return mi
 
 
 def render_sphere(

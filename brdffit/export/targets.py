@@ -15,33 +15,40 @@ from ..errors import Argument, BrdfInputError
 @dataclass(frozen=True)
 class Target:
     """An export target: ``description``, its ``formats`` (name → default suffix, the first the default) and
-    ``write(result, path, format) -> lines``, the lines a user should read (exact or how far, notes)."""
+    ``write(result, path, format, samples) -> lines``, the lines a user should read (exact or how far, how far from
+    the data when ``samples`` are given, notes)."""
 
     description: str
     formats: dict[str, str]
     write: Callable
 
 
-def _mitsuba(result, path: Path, kind: str) -> list[str]:
+def _mitsuba(result, path: Path, kind: str, samples) -> list[str]:
     from .._files import write_text_atomic
     from .mitsuba import mitsuba_bsdf
 
     exported = mitsuba_bsdf(result)
+    if samples is not None:
+        exported = exported.compared_with(result, samples)
     write_text_atomic(path, exported.to_xml() if kind == "xml" else exported.to_python())
     return exported.comment_lines()[1:]
 
 
-def _gltf(result, path: Path, kind: str) -> list[str]:
+def _gltf(result, path: Path, kind: str, samples) -> list[str]:
     from .gltf import write_gltf
 
-    _, approximation, notes = write_gltf(result, path, binary=kind == "glb")
+    _, approximation, notes = write_gltf(result, path, binary=kind == "glb", samples=samples)
     return [f"approximate: the glTF BRDF fitted to it, {approximation.line()}", *notes]
 
 
-def _merl(result, path: Path, kind: str) -> list[str]:
-    from .merl import write_merl
+def _merl(result, path: Path, kind: str, samples) -> list[str]:
+    from .at_data import data_error
+    from .merl import merl_brdf, write_merl
 
-    return ["exact: the fitted model tabulated", *write_merl(result.model, result.params, path, **result.model_options)]
+    notes = write_merl(result.model, result.params, path, **result.model_options)
+    if samples is not None:  # the table as it was written, read back: after the write, which cannot hold it
+        notes.insert(0, data_error(result, samples, merl_brdf(path), "the written table, read back by brdffit").line())
+    return ["exact: the fitted model tabulated", *notes]
 
 
 #: The targets: Mitsuba 3 (XML for ``mitsuba.load_file``, or a Python dictionary for ``mitsuba.load_dict``),
@@ -76,10 +83,16 @@ def export_format(to: str, format: str | None = None, path: str | os.PathLike | 
     return kind
 
 
-def export(result, to: str, path: str | os.PathLike, format: str | None = None) -> list[str]:
+def export(result, to: str, path: str | os.PathLike, format: str | None = None, samples=None) -> list[str]:
     """Write ``result`` (a :class:`~brdffit.FitResult`) for the renderer ``to`` (:data:`TARGETS`) to ``path``,
     atomically, in ``format`` (default: the one ``path``'s suffix names, else the target's first:
     :func:`export_format`); returns the lines a user should read (whether it is exact, how far it lies otherwise,
-    notes)."""
+    notes). ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read
+    it), at whose directions the export is evaluated as its renderer evaluates it and compared (``at_data.py``):
+    printed first, and stored in the file where the format has room (Mitsuba's, glTF's)."""
     kind = export_format(to, format, path)
-    return TARGETS[to].write(result, Path(path), kind)
+    if samples is not None:
+        from .at_data import data_for
+
+        samples = data_for(result, samples)
+    return TARGETS[to].write(result, Path(path), kind, samples)

@@ -8,7 +8,7 @@ import pytest
 from gltf_validator import assert_valid, needs_validator
 
 import data_synth
-from brdffit import fit, load_samples
+from brdffit import fit, load_samples, save_samples
 from brdffit.cli import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -25,7 +25,9 @@ def results(tmp_path_factory):
         folder / "metal.json"
     )
     ward = {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.15}
-    fit(data_synth.synthesize("ward", ward, *geometry), "ward").save(folder / "ward.json")
+    ward_data = data_synth.synthesize("ward", ward, *geometry, noise=0.01, seed=2)
+    save_samples(ward_data, folder / "ward.csv")
+    fit(ward_data, "ward").save(folder / "ward.json")
     return folder
 
 
@@ -137,6 +139,8 @@ def test_render_without_mitsuba_names_the_extra(results, tmp_path, capsys, monke
         (["export", "{m}", "--to", "mitsuba", "-o", "{m}"], "is the input"),
         (["export", "{t}/none.json", "--to", "mitsuba", "-o", "{t}/x.xml"], "none.json: no such file"),
         (["export", "{m}", "--to", "gltf", "--format", "glb", "-o", "{t}/s.gltf"], "--format glb writes .glb files"),
+        (["export", "{m}", "--to", "merl", "--samples", "{t}/no.csv", "-o", "{t}/x.binary"], "no.csv: no such file"),
+        (["export", "{m}", "--to", "merl", "--samples", "{m}", "-o", "{m}"], "is the input"),
         (["render", "{m}", "-o", "{t}/s.jpg"], "-o {t}/s.jpg: the image must end in .png or .exr"),
         (["render", "{m}", "--spp", "0", "-o", "{t}/s.png"], "--spp 0 is not allowed"),
     ],
@@ -176,3 +180,15 @@ def test_gltf_and_glb_open_in_a_viewer(results, tmp_path, capsys, monkeypatch):
     for path in sorted(tmp_path.iterdir()):
         assert path.suffix == ".gltf" or path.read_bytes()[:4] == b"glTF"
         assert_valid(path)
+
+
+def test_samples_say_how_far_the_export_lies_from_the_data(results, tmp_path, capsys):
+    output = tmp_path / "ward.gltf"
+    argv = ["export", results / "ward.json", "--to", "gltf", "--samples", results / "ward.csv", "-o", output]
+    status, out, err = run(argv, capsys)
+    assert status == 0, err
+    said = out.splitlines()[2]
+    assert said.startswith("  at the data's 648 directions (ward.csv), evaluated by the glTF specification's BRDF")
+    assert "the fit itself: median error" in said
+    stored = json.loads(output.read_text())["materials"][0]["extras"]["brdffit"]["at_data"]
+    assert stored["n_pairs"] == 648 and f"median error {stored['median_error']:.2%}" in said

@@ -1,0 +1,122 @@
+"""An export's error at the data's own directions: the number brdffit stores equals what a user measures on the
+written file with the renderer's own evaluation (Mitsuba loading the XML; the glTF factors read back into the
+specification's BRDF); a scaled, too-dark export says so; a table export adds nothing to the fit's error; bad data
+is one line before anything is written."""
+
+import json
+import re
+
+import numpy as np
+import pytest
+from paths import EXAMPLE
+
+import data_synth
+from brdffit import BrdfInputError, FitResult, load_samples
+from brdffit.export.at_data import MAX_PAIRS, data_for
+from brdffit.export.gltf_material import GltfMaterial
+from brdffit.export.targets import export
+
+#: A copper-like conductor as the issue found it fitted: ks above 1, which Mitsuba's RGB reflectances cannot hold.
+COPPER = {"kd": [0.0, 0.0, 0.0], "ks": [2.77, 1.81, 1.50], "m": 0.2, "eta": 3.83, "k": 1e-3}
+COPPER_OPTIONS = {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"}
+#: Ngan et al. 2005's Ward fit of MERL's pickled oak (the shipped example's truth).
+OAK = {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}
+
+
+def result_of(model: str, params: dict, **options) -> FitResult:
+    """A result with known parameters, without fitting (the data below are made from it: the fit is exact)."""
+    return FitResult(model, options, ("r", "g", "b"), params, "log", 0.0, 0.0, 0, 0, True, quantity="brdf")
+
+
+def independent_median_error(values: np.ndarray, data: np.ndarray) -> float:
+    """The median of |export − data|/data over positive data, written out again, as a user would."""
+    positive = data > 0
+    return float(np.median(np.abs(values[positive] / data[positive] - 1.0)))
+
+
+@pytest.fixture(scope="module")
+def copper_data():
+    wi, wo = data_synth.hemisphere_grid(6, 12, 16)
+    return data_synth.synthesize("cook-torrance", COPPER, wi, wo, **COPPER_OPTIONS)
+
+
+def test_mitsuba_export_error_is_what_mitsuba_gives_on_the_written_file(tmp_path, copper_data):
+    mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")
+    mi.set_variant("scalar_rgb")
+    path = tmp_path / "copper.xml"
+    lines = export(result_of("cook-torrance", COPPER, **COPPER_OPTIONS), "mitsuba", path, samples=copper_data)
+    # Mitsuba holds reflectances up to 1: the export is scaled by 1/2.77, and the data say it is too dark.
+    said = next(line for line in lines if line.startswith("at the data's"))
+    assert f"evaluated by Mitsuba {mi.__version__}" in said and "the fit itself: median error 0.00%" in said
+    brightness = float(re.search(r"export/data ([0-9.]+)", said).group(1))
+    # Every albedo is scaled by 1/(max kd + max ks) = 1/2.77: the export is 0.361 times as bright everywhere (to the
+    # line's 3 decimals and Mitsuba's float32 GGX, 1e-4 relative at worst: within 1e-3).
+    assert brightness == pytest.approx(1 / 2.77, abs=1e-3)
+    # What a user measures on the file: Mitsuba loads it and evaluates it pair by pair.
+    bsdf = mi.load_file(str(path))
+    values = []
+    for light, viewer in zip(copper_data.wi, copper_data.wo, strict=True):
+        interaction = mi.SurfaceInteraction3f()
+        interaction.wi = mi.Vector3f(*viewer)
+        value = bsdf.eval(mi.BSDFContext(), interaction, mi.Vector3f(*light))
+        values.append([value[0] / light[2], value[1] / light[2], value[2] / light[2]])
+    measured = independent_median_error(np.array(values), copper_data.values)
+    stored = float(re.search(r"median error ([0-9.]+)%", said).group(1)) / 100
+    # The line rounds to 0.01 percentage points; the file was written in float64 and Mitsuba reads it in float32.
+    assert stored == pytest.approx(measured, abs=6e-5)
+    np.testing.assert_allclose(brightness, np.median(np.array(values) / copper_data.values), atol=6e-4)
+
+
+def test_gltf_export_error_is_what_the_files_material_gives(tmp_path):
+    data = load_samples(EXAMPLE)
+    path = tmp_path / "oak.gltf"
+    lines = export(result_of("ward", OAK), "gltf", path, samples=EXAMPLE)
+    stored = json.loads(path.read_text())["materials"][0]["extras"]["brdffit"]["at_data"]
+    assert lines[1] == "at the data's" + lines[1].split("at the data's", 1)[1]  # said second, after the grid's error
+    assert stored["n_pairs"] == len(data.values) and stored["source"] == str(EXAMPLE)
+    # The material as a viewer reads it: its factors from the file, through the specification's BRDF.
+    factors = json.loads(path.read_text())["materials"][0]
+    pbr, extensions = factors["pbrMetallicRoughness"], factors.get("extensions", {})
+    material = GltfMaterial(
+        pbr["baseColorFactor"][:3],
+        pbr["metallicFactor"],
+        pbr["roughnessFactor"],
+        extensions.get("KHR_materials_specular", {}).get("specularFactor"),
+        extensions.get("KHR_materials_specular", {}).get("specularColorFactor"),
+        extensions.get("KHR_materials_ior", {}).get("ior"),
+    )
+    measured = independent_median_error(material.brdf(data.wi, data.wo), data.values)
+    assert stored["median_error"] == pytest.approx(measured, rel=1e-9)  # the same numbers, JSON round trip
+    # measured: 4.8% against the fit's 0.67% (Ward's lobe is not glTF's; the data's noise is 1%)
+    assert stored["fit_median_error"] < 0.01 < stored["median_error"] < 0.1
+
+
+def test_a_merl_table_adds_little_to_the_fits_error(tmp_path):
+    lines = export(result_of("ward", OAK), "merl", tmp_path / "oak.binary", samples=EXAMPLE)
+    said = lines[1]
+    export_error, fit_error = (float(x) for x in re.findall(r"median error ([0-9.]+)%", said))
+    # Interpolating the table between bins costs little where the data lie (measured: 0.67% both, the data's noise).
+    assert abs(export_error - fit_error) < 0.2 and "export/data 1.00" in said
+
+
+def test_bad_data_is_one_line_before_anything_is_written(tmp_path, copper_data):
+    result = result_of("cook-torrance", COPPER, **COPPER_OPTIONS)
+    grey = data_synth.synthesize("lambert", {"rho_d": [0.5]}, copper_data.wi, copper_data.wo)
+    dark = data_synth.synthesize("lambert", {"rho_d": [0.0, 0.0, 0.0]}, copper_data.wi, copper_data.wo)
+    for samples, message in [
+        (grey, "channels value are not the result's (r, g, b); give the data the fit was made from"),
+        (dark, "no positive value to compare an export with"),
+        (tmp_path / "none.csv", "none.csv: no such file"),
+    ]:
+        with pytest.raises(BrdfInputError) as error:
+            export(result, "merl", tmp_path / "x.binary", samples=samples)
+        assert message in str(error.value) and "\n" not in str(error.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_large_data_are_compared_on_a_seeded_subset(copper_data):
+    wi, wo = data_synth.uniform_random(MAX_PAIRS + 10, seed=3)
+    big = data_synth.synthesize("lambert", {"rho_d": [0.5, 0.4, 0.3]}, wi, wo)
+    result = result_of("lambert", {"rho_d": [0.5, 0.4, 0.3]})
+    first, again = data_for(result, big), data_for(result, big)
+    assert len(first.values) == MAX_PAIRS and np.array_equal(first.wi, again.wi)
