@@ -56,6 +56,8 @@ def test_compare_tries_what_the_entries_say():
         "cook-torrance:fresnel=dielectric",
         "cook-torrance:fresnel=conductor",
         "cook-torrance:fresnel=none",
+        "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith",
+        "cook-torrance:fresnel=dielectric,distribution=ggx,shadowing=smith",
         "blinn-phong",
         "phong",
         "lafortune:lobes=1",

@@ -84,11 +84,20 @@ def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shad
     return LobeModel("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", options)
 
 
-#: Cook-Torrance in the registry: compared with each Fresnel term; exact in Mitsuba with Smith shadowing and a
-#: conductor, dielectric or no Fresnel term (``brdffit/export/mitsuba.py``).
+#: The microfacet model renderers implement (GGX with Smith shadowing: Mitsuba's ``roughconductor``, glTF's
+#: lobe), which ``brdffit compare`` tries beside Cook and Torrance's own, with a conductor's and a dielectric's
+#: Fresnel term: each exports to Mitsuba exactly.
+RENDERER_OPTIONS = ("distribution=ggx", "shadowing=smith")
+
+#: Cook-Torrance in the registry: compared with each Fresnel term, and as the renderers' microfacet model
+#: (:data:`RENDERER_OPTIONS`); exact in Mitsuba with Smith shadowing and a conductor, dielectric or no Fresnel term
+#: (``brdffit/export/mitsuba.py``).
 COOK_TORRANCE = ModelEntry(
     cook_torrance,
-    compare=tuple(f"cook-torrance:fresnel={kind}" for kind in FRESNEL),
+    compare=(
+        *(f"cook-torrance:fresnel={kind}" for kind in FRESNEL),
+        *(f"cook-torrance:fresnel={kind},{','.join(RENDERER_OPTIONS)}" for kind in ("conductor", "dielectric")),
+    ),
     choices={
         "distribution": {name: kind.summary for name, kind in DISTRIBUTIONS.items()},
         "shadowing": dict(SHADOWING),
