@@ -340,3 +340,16 @@ def _same_file(one: Path, other: Path) -> bool:
         return os.path.samefile(one, other)
     except OSError:
         return os.path.realpath(one) == os.path.realpath(other)
+
+
+def fit_file(path: str):
+    """The fit a file holds (a :class:`~brdffit.FitResult`): a result file's, or a comparison file's best, what
+    ``export`` and ``render`` take; JAX is imported only for a comparison."""
+    from ..fitting.single.result import FitResult, is_comparison, read_json_object
+
+    content = read_json_object(path, "brdffit result or comparison file")
+    if not is_comparison(content):
+        return FitResult.from_dict(content, path)
+    from ..fitting.comparison.compare import Comparison
+
+    return Comparison.from_dict(content, path).best.result

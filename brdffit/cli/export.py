@@ -8,13 +8,17 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import model_files, output_file
+from .arguments import fit_file, model_files, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     from ..export.targets import TARGETS
 
-    parser.add_argument("result", metavar="RESULT.json", help="a result file of brdffit fit")
+    parser.add_argument(
+        "result",
+        metavar="RESULT.json",
+        help="a result file of brdffit fit, or a comparison file of brdffit compare -o (its best model)",
+    )
     parser.add_argument(
         "--to",
         required=True,
@@ -41,11 +45,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..export.targets import TARGETS, export, export_format
-    from ..fitting.single.result import load_result
 
     kind = export_format(args.to, args.format, args.output)
     default = Path(args.result).stem + TARGETS[args.to].formats[kind]
-    result = load_result(args.result)
+    result = fit_file(args.result)
     inputs = [args.result, *model_files(result.model_options), *([args.samples] if args.samples else [])]
     path = output_file(args.output or default, "-o", inputs)
     enable_compilation_cache()

@@ -97,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _results(path: str) -> list:
     """The fits a file holds: a result file's one, or a comparison file's best (and those within one s.e.)."""
-    from ..fitting.comparison.compare import Comparison, is_comparison
-    from ..fitting.single.result import FitResult, read_json_object
+    from ..fitting.comparison.compare import Comparison
+    from ..fitting.single.result import FitResult, is_comparison, read_json_object
 
     try:
         content = read_json_object(path, "brdffit result or comparison file")

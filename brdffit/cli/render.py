@@ -4,11 +4,15 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import model_files, output_file
+from .arguments import fit_file, model_files, output_file
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("result", metavar="RESULT.json", help="a result file of brdffit fit")
+    parser.add_argument(
+        "result",
+        metavar="RESULT.json",
+        help="a result file of brdffit fit, or a comparison file of brdffit compare -o (its best model)",
+    )
     parser.add_argument(
         "-o",
         "--output",
@@ -30,7 +34,6 @@ def run(args: argparse.Namespace) -> int:
     from ..checks import whole_number
     from ..errors import Argument, BrdfInputError
     from ..export.mitsuba_render import EXPOSURE, IMAGE_SUFFIXES, checked_exposure, mitsuba, render_sphere
-    from ..fitting.single.result import load_result
 
     whole_number("size", args.size, 16, 4096)
     whole_number("spp", args.spp, 1)
@@ -38,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     output = args.output or f"{Path(args.result).stem}.mitsuba.png"
     if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
-    result = load_result(args.result)
+    result = fit_file(args.result)
     path = output_file(output, "-o", [args.result, *model_files(result.model_options)])
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure)

@@ -4,7 +4,7 @@ evaluates it.
 An approximation's grid error (``approximate.py``) says how far the renderer's model lies from the *fit*, over a
 grid of the fit's choosing. What a user is hurt by is how far the renderer, given the exported file, lies from the
 *data*: a fit's own error, an approximation's, and anything the renderer does differently (Mitsuba's Beckmann
-``G1``, a scale into its range, a table's bins) all add up there. So, given the data, each export is evaluated at
+``G1``, a refit into its range, a table's bins) all add up there. So, given the data, each export is evaluated at
 the data's direction pairs by its consumer, or by the nearest thing to it brdffit has:
 
 * Mitsuba 3: Mitsuba itself (``scalar_rgb``), loading the exported BSDF, where it is installed; else brdffit's

@@ -277,15 +277,15 @@ def fit_material(wi, wo, values, loss: str = "log") -> tuple[GltfMaterial, list[
     gain = 1.0 - extended_rmse / core_rmse
     if gain >= EXTENSION_GAIN:
         return extended_material, [
-            f"{' and '.join(extended_material.extensions)} used: they lower the rmse from {core_rmse:.4g} to"
-            f" {extended_rmse:.4g} 1/sr ({gain:.1%}, at least {EXTENSION_GAIN:.0%} asked)",
+            f"{' and '.join(extended_material.extensions)} used: they lower the fitting grid's rmse from"
+            f" {core_rmse:.4g} to {extended_rmse:.4g} 1/sr ({gain:.1%}, at least {EXTENSION_GAIN:.0%} asked)",
             *_unconverged(extended),
         ]
     if gain <= 0:  # the extended fit ended no better (a local optimum of more parameters): said as it is
-        why = f"do not lower the rmse ({extended_rmse:.4g} 1/sr with them, {core_rmse:.4g} without)"
+        why = f"do not lower the fitting grid's rmse ({extended_rmse:.4g} 1/sr with them, {core_rmse:.4g} without)"
     else:
         why = (
-            f"would lower the rmse by only {gain:.1%} (from {core_rmse:.4g} to {extended_rmse:.4g} 1/sr;"
+            f"would lower the fitting grid's rmse by only {gain:.1%} (from {core_rmse:.4g} to {extended_rmse:.4g} 1/sr;"
             f" {EXTENSION_GAIN:.0%} asked)"
         )
     return core_material, [f"no extensions: KHR_materials_specular and KHR_materials_ior {why}", *_unconverged(core)]

@@ -18,9 +18,10 @@ brdffit                         Mitsuba 3
 Mitsuba's ``blendbsdf`` averages: ``(1 − w)·first + w·second``. The export divides the albedos by the weights,
 ``reflectance = kd/(1 − w)`` and ``specular_reflectance = ks/w``, with ``w = max ks / (max kd + max ks)`` over the
 channels, which keeps both within [0, 1] whenever ``max kd + max ks ≤ 1``; Mitsuba refuses RGB reflectances above 1
-("Invalid RGB reflectance value … must be in the range [0, 1]"), so a fit beyond that is scaled into range and the
-error said. Mitsuba's Beckmann ``G1`` is Walter et al.'s rational approximation (2007, eq. 27), within 0.5% of
-the exact ``erf`` form brdffit uses.
+("Invalid RGB reflectance value … must be in the range [0, 1]"), so a fit beyond that is never scaled into range
+(which would darken the material quietly): Mitsuba's model is refitted to the fitted BRDF with its albedos held
+within the range, as an approximation is, and its error said. Mitsuba's Beckmann ``G1`` is Walter et al.'s
+rational approximation (2007, eq. 27), within 0.5% of the exact ``erf`` form brdffit uses.
 
 Every other model (Ward, Phong, Lafortune, the V-groove and height-correlated shadowing, Schlick's Fresnel) has no
 Mitsuba counterpart: the export fits Mitsuba's model (GGX and Beckmann ``roughconductor`` with a diffuse term,
@@ -36,6 +37,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
+from ..fitting.options import Holding
 from ..fitting.single.result import FitResult
 from ..physics.models.registry import MODELS, get_model
 from ..physics.models.specs import spec_of
@@ -57,19 +59,15 @@ STAND_INS = (
 @dataclass(frozen=True)
 class MitsubaExport:
     """A Mitsuba 3 BSDF as ``mitsuba.load_dict`` takes it (``bsdf``), the fit it was made from (``source``, a model
-    spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it,
-    ``refitted``), how far that lies from the source (``approximation``, None when exact) and what a user must know
-    (``notes``); ``scale``: the factor the exported fit's albedos were scaled by into Mitsuba's range (the BSDF is
-    ``scale`` times ``exported``); ``at_data``: how far the BSDF lies from the data at its directions, when given
-    (``at_data.py``)."""
+    spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it), how far
+    that lies from the source (``approximation``, None when exact) and what a user must know (``notes``);
+    ``at_data``: how far the BSDF lies from the data at its directions, when given (``at_data.py``)."""
 
     bsdf: dict[str, Any]
     source: str
     exported: FitResult
     approximation: "Approximation | None" = None
     notes: list[str] = field(default_factory=list)
-    refitted: bool = False
-    scale: float = 1.0
     at_data: "DataError | None" = None
 
     @property
@@ -77,8 +75,8 @@ class MitsubaExport:
         return self.approximation is None
 
     def brdf(self, wi, wo) -> np.ndarray:
-        """The BSDF's BRDF (N, C) in 1/sr, by brdffit's model of it: ``scale`` times the exported fit's."""
-        return self.scale * np.asarray(self.exported.predict(wi, wo))
+        """The BSDF's BRDF (N, C) in 1/sr, by brdffit's model of it: the exported fit's."""
+        return np.asarray(self.exported.predict(wi, wo))
 
     def compared_with(self, result: FitResult, samples: "Samples") -> "MitsubaExport":
         """This export of ``result`` with :attr:`at_data` measured on ``samples`` (``at_data.data_for``'s data):
@@ -115,8 +113,6 @@ class MitsubaExport:
         if self.exact:
             beckmann = self.exported.model_options.get("distribution") == "beckmann"
             how = "exact" + (" but for Mitsuba's Beckmann G1 (Walter's approximation, within 0.5%)" if beckmann else "")
-        elif not self.refitted:
-            how = f"exact but for the scale into Mitsuba's range: {self.approximation.line()}"
         else:
             how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
             how += self.approximation.line()
@@ -125,39 +121,77 @@ class MitsubaExport:
 
 
 def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
-    """The Mitsuba 3 BSDF of ``result`` (module docstring): exact where Mitsuba has the model, else the better of
-    Mitsuba's GGX and Beckmann ``roughconductor`` (with ``diffuse``) fitted to the fitted BRDF. An exact export
-    maps parameters only (no JAX is imported); the others fit (``approximate.py``)."""
+    """The Mitsuba 3 BSDF of ``result`` (module docstring): exact where Mitsuba has the model and its albedos lie in
+    Mitsuba's range, else the better of Mitsuba's GGX and Beckmann ``roughconductor`` (with ``diffuse``) fitted to the
+    fitted BRDF, within that range. An exact export maps parameters only (no JAX is imported); the others fit
+    (``approximate.py``). Nothing is ever scaled: a material Mitsuba cannot hold is refitted, and the error said."""
     source = spec_of(result.model, result.model_options)
     notes = _channel_notes(result)
     exact = _exact_bsdf(result)
-    if exact is not None:
-        bsdf, scale = exact
-        if scale == 1.0:
-            return MitsubaExport(bsdf, source, result, None, notes)
-        from .approximate import approximation_error
-
-        notes.append(
-            f"its albedos exceed what Mitsuba's RGB reflectances hold (kd + ks up to {1 / scale:.3g}):"
-            f" scaled by {scale:.3g}"
-        )
-        approximation = approximation_error(result, _scaled(result, scale))
-        return MitsubaExport(bsdf, source, result, approximation, notes, scale=scale)
+    if exact is not None and _in_range(result):
+        return MitsubaExport(exact, source, result, None, notes)
     from .approximate import approximation_error, refit
 
-    candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
+    if exact is not None:  # the model Mitsuba has, refitted within its range
+        notes.append(
+            f"its albedos exceed what Mitsuba's RGB reflectances hold ({_range_text(result)}): Mitsuba's model"
+            " refitted within that range, not scaled"
+        )
+        model = get_model(result.model, **result.model_options)
+        candidates = [refit(result, model, _range_holding(result))]
+    else:
+        candidates = [refit(result, "cook-torrance", **options) for options in STAND_INS]
+        candidates = [
+            pair if _in_range(pair[0]) else refit(result, pair[0].model, _range_holding(pair[0]), **options)
+            for pair, options in zip(candidates, STAND_INS, strict=True)
+        ]
     exported, _ = min(candidates, key=lambda pair: pair[1].rmse)
-    bsdf, scale = cook_torrance_bsdf(exported)
-    if scale != 1.0:
-        notes.append(f"the Mitsuba model's albedos exceed Mitsuba's RGB range: scaled by {scale:.3g}")
-    approximation = approximation_error(result, _scaled(exported, scale))
+    approximation = approximation_error(result, exported.predict)
     notes += approximation.warnings("Mitsuba's microfacet model")
-    return MitsubaExport(bsdf, source, exported, approximation, notes, refitted=True, scale=scale)
+    return MitsubaExport(_exact_bsdf(exported), source, exported, approximation, notes)
 
 
-def _exact_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:
-    """The BSDF of ``result`` by its model's exact mapping onto Mitsuba (its registry entry's ``exports``), with the
-    factor its albedos were scaled by; None where the model, or these options of it, have no exact counterpart."""
+def _albedo_maxima(result: FitResult) -> tuple[float, float]:
+    """The largest diffuse and specular albedo of ``result`` over the channels (0 for a model without lobes)."""
+    model = get_model(result.model, **result.model_options)
+    params = model.dictionary.to_params(result.params)
+    return float(np.max(params.diffuse)), float(np.max(params.specular, initial=0.0))
+
+
+#: How far inside Mitsuba's range a refit's albedos are held: their sum within it after the blend's division.
+_RANGE_MARGIN = 1e-9
+
+
+def _in_range(result: FitResult) -> bool:
+    """Whether Mitsuba holds ``result``'s albedos as they are: ``max kd + max ks ≤ 1`` (module docstring)."""
+    return sum(_albedo_maxima(result)) <= 1.0
+
+
+def _range_text(result: FitResult) -> str:
+    model = get_model(result.model, **result.model_options)
+    names = model.diffuse_name + (f" + {model.specular_name}" if model.n_lobes else "")
+    return f"{names} up to {sum(_albedo_maxima(result)):.3g}, at most 1"
+
+
+def _range_holding(result: FitResult) -> Holding:
+    """Bounds that keep a refit of ``result``'s model within Mitsuba's range: the diffuse and specular albedos
+    share it as ``result``'s largest ones do (``max kd + max ks ≤ 1``); an albedo that is 0 stays 0."""
+    model = get_model(result.model, **result.model_options)
+    diffuse, specular = _albedo_maxima(result)
+    top = 1.0 - _RANGE_MARGIN
+    if not model.n_lobes:
+        return Holding(bounds={model.diffuse_name: (0.0, top)})
+    share = specular / (diffuse + specular)
+    if share >= 1.0 - _RANGE_MARGIN:
+        return Holding(fixed={model.diffuse_name: 0.0}, bounds={model.specular_name: (0.0, top)})
+    if share <= _RANGE_MARGIN:
+        return Holding(fixed={model.specular_name: 0.0}, bounds={model.diffuse_name: (0.0, top)})
+    return Holding(bounds={model.diffuse_name: (0.0, (1.0 - share) * top), model.specular_name: (0.0, share * top)})
+
+
+def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
+    """The BSDF of ``result`` by its model's exact mapping onto Mitsuba (its registry entry's ``exports``); None where
+    the model, or these options of it, have no exact counterpart."""
     mapping = MODELS[result.model].exact_export("mitsuba") if result.model in MODELS else None
     return None if mapping is None else mapping(result)
 
@@ -187,19 +221,16 @@ def _channel_notes(result: FitResult) -> list[str]:
     return []
 
 
-def lambert_bsdf(result: FitResult) -> tuple[dict[str, Any], float]:
-    """The Mitsuba ``diffuse`` BSDF of a Lambertian ``result``, and the factor its albedo was scaled by (1 unless
-    Mitsuba's [0, 1] range forced it): the ``lambert`` model's exact export."""
-    diffuse = np.asarray(_rgb(result.params["rho_d"]))
-    scale = min(1.0, 1.0 / max(diffuse.max(), 1e-300))
-    return {"type": "diffuse", "reflectance": _rgb_value(diffuse * scale)}, scale
+def lambert_bsdf(result: FitResult) -> dict[str, Any]:
+    """The Mitsuba ``diffuse`` BSDF of a Lambertian ``result`` (albedos at most 1, :func:`mitsuba_bsdf` sees to it):
+    the ``lambert`` model's exact export."""
+    return {"type": "diffuse", "reflectance": _rgb_value(np.asarray(_rgb(result.params["rho_d"])))}
 
 
-def cook_torrance_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:
+def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
     """The Mitsuba dictionary of a Cook-Torrance ``result`` with Smith shadowing and a conductor, dielectric or no
-    Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``), and the factor its albedos were scaled by
-    (1 unless Mitsuba's [0, 1] range forced it); None for other options (the ``cook-torrance`` model's exact
-    export)."""
+    Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``; ``max kd + max ks ≤ 1``,
+    :func:`mitsuba_bsdf` sees to it); None for other options (the ``cook-torrance`` model's exact export)."""
     params, options = result.params, get_model(result.model, **result.model_options).model_options
     if options["shadowing"] != "smith" or options["fresnel"] not in ("conductor", "dielectric", "none"):
         return None
@@ -211,27 +242,19 @@ def cook_torrance_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None
     else:
         specular["eta"] = float(params["eta"])
         specular["k"] = float(params.get("k", 0.0))
-    total = kd.max() + ks.max()
-    scale = min(1.0, 1.0 / max(total, 1e-300))
-    kd, ks = kd * scale, ks * scale
     weight = ks.max() / max(kd.max() + ks.max(), 1e-300)
     if weight >= 1.0 or kd.max() == 0.0:
-        return specular | {"specular_reflectance": _rgb_value(ks)}, scale
+        return specular | {"specular_reflectance": _rgb_value(ks)}
     diffuse = {"type": "diffuse", "reflectance": _rgb_value(kd / (1.0 - weight))}
     if weight == 0.0:
-        return diffuse, scale
+        return diffuse
     specular["specular_reflectance"] = _rgb_value(ks / weight)
-    return {"type": "blendbsdf", "weight": float(weight), "diffuse": diffuse, "specular": specular}, scale
+    return {"type": "blendbsdf", "weight": float(weight), "diffuse": diffuse, "specular": specular}
 
 
 def _rgb_value(values: np.ndarray) -> dict[str, Any]:
     """Mitsuba's ``rgb`` texture of three numbers (plain floats: the Python form writes them as such)."""
     return {"type": "rgb", "value": [float(value) for value in values]}
-
-
-def _scaled(result: FitResult, scale: float):
-    """``result``'s BRDF times ``scale``, as ``brdf(wi, wo)``."""
-    return lambda wi, wo: scale * result.predict(wi, wo)
 
 
 def _xml(node: dict[str, Any], indent: str, version: str | None = None, name: str | None = None) -> list[str]:

@@ -192,3 +192,18 @@ def test_samples_say_how_far_the_export_lies_from_the_data(results, tmp_path, ca
     assert "the fit itself: median error" in said
     stored = json.loads(output.read_text())["materials"][0]["extras"]["brdffit"]["at_data"]
     assert stored["n_pairs"] == 648 and f"median error {stored['median_error']:.2%}" in said
+
+
+def test_a_comparison_file_exports_its_best_model(results, tmp_path, capsys):
+    """``export`` and ``render`` take ``compare -o``'s file as well as a result: its best model, read with the quantity
+    and angle limit the comparison fitted (kept in the file), so that ``--samples`` reads the data as it did."""
+    data = results / "ward.csv"
+    status, _, err = run(["compare", data, "--models", "lambert,ward", "-o", tmp_path / "cmp.json"], capsys)
+    assert status == 0, err
+    comparison = json.loads((tmp_path / "cmp.json").read_text())
+    assert comparison["best"] == "ward" and comparison["quantity"] == "brdf"
+    out_path = tmp_path / "best.gltf"
+    status, out, err = run(["export", tmp_path / "cmp.json", "--to", "gltf", "-o", out_path, "--samples", data], capsys)
+    assert status == 0, err
+    stored = json.loads(out_path.read_text())["materials"][0]["extras"]["brdffit"]
+    assert stored["source"]["model"] == "ward" and "at the data's" in out

@@ -45,13 +45,13 @@ def test_mitsuba_export_error_is_what_mitsuba_gives_on_the_written_file(tmp_path
     mi.set_variant("scalar_rgb")
     path = tmp_path / "copper.xml"
     lines = export(result_of("cook-torrance", COPPER, **COPPER_OPTIONS), "mitsuba", path, samples=copper_data)
-    # Mitsuba holds reflectances up to 1: the export is scaled by 1/2.77, and the data say it is too dark.
+    # Mitsuba holds reflectances up to 1 (kd + ks is 2.77 here): Mitsuba's model is refitted within that range.
     said = next(line for line in lines if line.startswith("at the data's"))
     assert f"evaluated by Mitsuba {mi.__version__}" in said and "the fit itself: median error 0.00%" in said
     brightness = float(re.search(r"export/data ([0-9.]+)", said).group(1))
-    # Every albedo is scaled by 1/(max kd + max ks) = 1/2.77: the export is 0.361 times as bright everywhere (to the
-    # line's 3 decimals and Mitsuba's float32 GGX, 1e-4 relative at worst: within 1e-3).
-    assert brightness == pytest.approx(1 / 2.77, abs=1e-3)
+    # Scaled by 1/2.77 it was 0.361 times as bright everywhere; refitted, its median brightness is the data's within
+    # 2% (measured: 0.993; the highlight's peak is what it cannot reach).
+    assert brightness == pytest.approx(1.0, abs=0.02)
     # What a user measures on the file: Mitsuba loads it and evaluates it pair by pair.
     bsdf = mi.load_file(str(path))
     values = []

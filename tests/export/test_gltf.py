@@ -313,8 +313,9 @@ GLTF_LIKE_COOK_TORRANCE = {"kd": [0.3, 0.26, 0.18], "ks": [1.0, 1.0, 1.0], "m": 
 def test_a_cook_torrance_ggx_smith_fit_exports_with_a_small_error():
     options = {"fresnel": "schlick", "distribution": "ggx", "shadowing": "smith-correlated"}
     material, approximation = fit_gltf(result_of("cook-torrance", GLTF_LIKE_COOK_TORRANCE, **options))
-    # measured: rmse 0.0025 1/sr (0.6% of the BRDF's rms), directional albedo within 0.92% (θi = 80°)
-    assert approximation.relative_rmse < 0.01 and approximation.albedo_error < 0.015
+    # measured: rmse 1.4% of the BRDF's rms over the hemisphere and the plane of incidence (0.6% over the hemisphere
+    # alone: the (1 − F) of glTF's diffuse term differs most at grazing mirror pairs), directional albedo within 0.92%
+    assert approximation.relative_rmse < 0.02 and approximation.albedo_error < 0.015
     assert material.extensions == () and material.metallic < 0.01
     np.testing.assert_allclose(material.roughness, 0.3, atol=0.005)
     np.testing.assert_allclose(material.base_color, [0.3, 0.26, 0.18], rtol=0.05)

@@ -11,6 +11,7 @@ from paths import EXAMPLE
 
 import data_synth
 from brdffit import FitResult, evaluate, fit, load_samples
+from brdffit.export.approximate import approximation_error
 from brdffit.export.mitsuba import mitsuba_bsdf
 
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")
@@ -112,7 +113,10 @@ def test_an_approximate_export_says_how_far_it_lies(tmp_path):
     oak = fit(load_samples(EXAMPLE), "ward")
     exported = mitsuba_bsdf(oak)
     assert not exported.exact and exported.exported.model == "cook-torrance"
-    assert 0 < exported.approximation.rmse < 0.05 and 0 < exported.approximation.albedo_error < 0.5
+    # The error grid has the plane of incidence, where GGX at grazing angles outshines Ward (measured: rmse 0.065 1/sr,
+    # largest at θi 86°, θo 89° in the mirror plane), which the error says.
+    assert 0 < exported.approximation.rmse < 0.1 and 0 < exported.approximation.albedo_error < 0.5
+    assert exported.approximation.largest["phi_o"] == pytest.approx(180.0)
     xml = exported.to_xml()
     assert re.search(
         r"<!-- approximate: cook-torrance:fresnel=conductor,distribution=(ggx|beckmann),shadowing=smith", xml
@@ -124,14 +128,21 @@ def test_an_approximate_export_says_how_far_it_lies(tmp_path):
     mi.load_string(xml)  # Mitsuba takes it
 
 
-def test_albedos_beyond_mitsubas_range_are_scaled_and_said():
-    """Mitsuba refuses RGB reflectances above 1: kd + ks = 1.6 is scaled into range, and the export says so."""
+def test_albedos_beyond_mitsubas_range_are_refitted_not_scaled():
+    """Mitsuba refuses RGB reflectances above 1: kd + ks = 1.6 is not scaled into range (a darker material called
+    exact) but refitted within it, said, and the error of what Mitsuba evaluates is reported."""
     params = {"kd": [0.8, 0.8, 0.8], "ks": [0.8, 0.8, 0.8], "m": 0.3, "eta": 0.2, "k": 3.9}
     result = result_of("cook-torrance", params, fresnel="conductor", distribution="ggx", shadowing="smith")
     exported = mitsuba_bsdf(result)
-    assert not exported.exact and any("scaled by 0.625" in note for note in exported.notes)
-    assert exported.approximation.albedo_error == pytest.approx(1 - 0.625, rel=1e-6)
-    mi.load_string(exported.to_xml())
+    assert not exported.exact and any("refitted within that range, not scaled" in note for note in exported.notes)
+    refitted = exported.exported.params
+    assert max(refitted["kd"]) + max(refitted["ks"]) <= 1.0
+    # The refit lies closer to the fit than the scaled copy did (measured: rmse 0.191 against 0.259 1/sr).
+    scaled = approximation_error(result, lambda wi, wo: 0.625 * result.predict(wi, wo))
+    assert exported.approximation.rmse < 0.8 * scaled.rmse
+    # What Mitsuba evaluates is the refit (its float32 GGX: 1e-4 relative), so the stored error is Mitsuba's.
+    bsdf = mi.load_string(exported.to_xml())
+    np.testing.assert_allclose(mitsuba_brdf(bsdf, WI, WO), exported.brdf(WI, WO), rtol=1e-4, atol=1e-7)
 
 
 def test_mitsubas_beckmann_g1_is_within_its_documented_approximation():

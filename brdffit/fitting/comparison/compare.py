@@ -120,6 +120,8 @@ class ModelScore:
             warnings=list(entry["warnings"]),
             fixed=dict(entry.get("fixed", {})),
             bounds=dict(entry.get("bounds", {})),
+            quantity=None if comparison.get("quantity") is None else str(comparison["quantity"]),
+            max_theta=None if comparison.get("max_theta") is None else float(comparison["max_theta"]),
         )
         return cls(
             entry["spec"],
@@ -174,6 +176,8 @@ class Comparison:
             "samples": self.source,
             "n_samples": self.n_samples,
             "channels": list(self.channels),
+            "quantity": self.best.result.quantity,
+            "max_theta": self.best.result.max_theta,
             "loss": self.loss,
             "folds": self.folds,
             "fold_kind": self.fold_kind,
@@ -274,11 +278,6 @@ def compare(
         bar.close()
     ranked = sorted(scores, key=lambda score: (math.isnan(score.cv_loss), score.cv_loss))
     return Comparison(samples.source, samples.n_samples, samples.channels, loss, split.count, split.kind, seed, ranked)
-
-
-def is_comparison(content: dict[str, Any]) -> bool:
-    """Whether a JSON object is a comparison file (rather than a result file)."""
-    return "criterion" in content and "models" in content
 
 
 def load_comparison(path: str | os.PathLike) -> Comparison:

@@ -235,6 +235,11 @@ def load_result(path: str | os.PathLike) -> FitResult:
     return FitResult.from_dict(read_json_object(path, "brdffit result file"), str(path))
 
 
+def is_comparison(content: dict[str, Any]) -> bool:
+    """Whether a JSON object is a comparison file (``brdffit compare -o``) rather than a result file."""
+    return "criterion" in content and "models" in content
+
+
 def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
     """The JSON object in the file ``path``, or a one-line error naming the file and ``what`` it should be."""
     path = Path(path)
