@@ -19,6 +19,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="the image: .png, or .exr for the linear radiance (default: RESULT's stem + .mitsuba.png, here)",
     )
+    parser.add_argument(
+        "--samples",
+        metavar="DATA",
+        help="the data the fit was made from: the PNG shows the render beside the fit's sphere and the data's own, at"
+        " one exposure, and how far the export lies from the data is printed",
+    )
     parser.add_argument("--size", type=int, default=256, metavar="PIXELS", help="image width and height (default 256)")
     parser.add_argument("--spp", type=int, default=64, metavar="N", help="samples per pixel (default 64)")
     parser.add_argument(
@@ -42,9 +48,10 @@ def run(args: argparse.Namespace) -> int:
     if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     result = fit_file(args.result)
-    path = output_file(output, "-o", [args.result, *model_files(result.model_options)])
+    inputs = [args.result, *model_files(result.model_options), *([args.samples] if args.samples else [])]
+    path = output_file(output, "-o", inputs)
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
-    exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure)
+    exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=args.samples)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
     for line in exported.comment_lines()[1:]:
         print(f"  {line}")

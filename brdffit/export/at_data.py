@@ -82,10 +82,10 @@ class DataError:
         )
 
 
-def data_for(result: FitResult, samples: "Samples | str | os.PathLike") -> Samples:
+def data_for(result: FitResult, samples: "Samples | str | os.PathLike", subset: bool = True) -> Samples:
     """The data an export of ``result`` is compared with: ``samples`` (a :class:`~brdffit.Samples`, or a file read
     as the fit read it: its ``quantity``), limited to the fit's ``max_theta``, with the result's channels (a one-line
-    error otherwise); at most :data:`MAX_PAIRS` pairs (a seeded random subset)."""
+    error otherwise); with ``subset``, at most :data:`MAX_PAIRS` pairs (a seeded random subset)."""
     if not isinstance(samples, Samples):
         samples = load_samples(samples, quantity=result.quantity)
     samples = samples.within(result.max_theta)
@@ -96,7 +96,7 @@ def data_for(result: FitResult, samples: "Samples | str | os.PathLike") -> Sampl
         )
     if not np.any(samples.values > 0):
         raise BrdfInputError(f"{samples.source}: no positive value to compare an export with")
-    if len(samples.values) > MAX_PAIRS:
+    if subset and len(samples.values) > MAX_PAIRS:
         keep = np.sort(np.random.default_rng(SUBSET_SEED).choice(len(samples.values), MAX_PAIRS, replace=False))
         samples = samples.select(keep)
     return samples

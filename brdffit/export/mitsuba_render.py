@@ -10,18 +10,28 @@ reflects 0.4 times the light of another renders 0.4 times as bright, where expos
 percentile of luminance to white, ``exposure="auto"``, as brdffit's figures do) would show both alike. A PNG is the
 exposed image, clipped and sRGB-encoded (``views/render.py``); an OpenEXR file (``.exr``) is the linear radiance
 itself, unexposed, for a user's own tone mapping.
+
+Given the data (``samples``), the PNG shows three spheres side by side at the one exposure: Mitsuba's render of the
+export, brdffit's render of the fit (``views/render.py``: the same light, an orthographic camera) and the data's own
+sphere (each pixel's nearest sample; lit pixels no sample is near are striped grey): an export that renders too dark
+or a highlight the fit misses shows at once.
 """
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._files import atomic_path
 from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
+from .at_data import data_for
 from .mitsuba import MitsubaExport, mitsuba_bsdf
 from .mitsuba_eval import mitsuba
+
+if TYPE_CHECKING:
+    from ..data.samples import Samples
 
 #: The exposure every image gets by default: π, so that a white Lambertian surface facing the light (radiance 1/π
 #: under the scene's unit irradiance) is display white; a darker or brighter material looks darker or brighter.
@@ -37,18 +47,29 @@ def render_sphere(
     size: int = 256,
     spp: int = 64,
     exposure: float | str = EXPOSURE,
+    samples: "Samples | str | os.PathLike | None" = None,
 ) -> MitsubaExport:
     """Render a sphere of ``result``'s Mitsuba BSDF with Mitsuba and write it to ``path`` (PNG, or OpenEXR for
     ``.exr``; atomically); returns the export (exact or how far it lies). ``exposure``: the factor radiance is
     multiplied by before display (:data:`EXPOSURE` by default, the same for every image), or ``"auto"``: this
-    image's own (its 99th percentile of luminance to white). An OpenEXR file holds the radiance, unexposed."""
+    image's own (its 99th percentile of luminance to white). An OpenEXR file holds the radiance, unexposed.
+    ``samples``: the data the fit was made from (read as the fit read them): the PNG then shows the render beside the
+    fit's sphere and the data's (module docstring), and the export says how far it lies from them
+    (:attr:`MitsubaExport.at_data`)."""
     exposure = checked_exposure(exposure)
     if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(
             Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
         )
+    if samples is not None and Path(path).suffix.lower() != ".png":
+        raise BrdfInputError(
+            Argument.given("path", str(path)), ": the render beside the data is a .png (an .exr holds one image)"
+        )
     mi = mitsuba()
+    data = None if samples is None else data_for(result, samples, subset=False)  # before the work: a bad file fails
     exported = mitsuba_bsdf(result)
+    if data is not None:
+        exported = exported.compared_with(result, data)
     scene = mi.load_dict(
         {
             "type": "scene",
@@ -71,9 +92,48 @@ def render_sphere(
     radiance = np.asarray(mi.render(scene), dtype=float)
     if Path(path).suffix.lower() == ".exr":
         write_exr(mi, radiance, path)
-    else:
+    elif data is None:
         write_png(radiance, path, exposure)
+    else:
+        write_beside_the_data(radiance, result, data, path, exposure)
     return exported
+
+
+def write_beside_the_data(
+    radiance: np.ndarray, result: FitResult, samples: "Samples", path: str | os.PathLike, exposure: float | str
+) -> Path:
+    """Mitsuba's ``radiance`` (H, W, 3) beside brdffit's sphere of ``result`` and the sphere of the data ``samples``
+    (``views/render.py``; one or three channels, as the export), all times one ``exposure`` (``"auto"``: that of
+    Mitsuba's image), as one PNG (atomically)."""
+    from matplotlib.figure import Figure
+
+    from ..views.figures import label, save_figure
+    from ..views.render import display_rgb, exposure_for, render_measured, sphere_normals, to_srgb
+    from ..views.render import render_sphere as render_fit
+    from ..views.sphere import disc_image, measured_image
+
+    size = radiance.shape[0]
+    factor = exposure_for(radiance) if exposure == "auto" else float(exposure)
+    fit_rgb, _ = display_rgb(
+        render_fit(result.model, result.params, size=size, channels=result.channels, **result.model_options),
+        result.channels,
+    )
+    found = render_measured(samples, size=size)
+    data_rgb, _ = display_rgb(found.radiance, samples.channels)
+    inside, _ = sphere_normals(size)
+    panels = [
+        ("Mitsuba's render of the export", to_srgb(radiance, factor)),
+        ("brdffit's sphere of the fit", disc_image(fit_rgb, factor, inside)),
+        (f"the data ({found.data_fraction:.0%} of the lit disc)", measured_image(found, data_rgb, factor)),
+    ]
+    figure = Figure(figsize=(3 * 2.6 + 0.2, 2.6 + 0.6), layout="constrained")
+    for axis, (title, image) in zip(figure.subplots(1, 3), panels, strict=True):
+        axis.imshow(image, interpolation="nearest")
+        axis.set_title(title, fontsize=9)
+        axis.set_axis_off()
+    exposed = "each at its own exposure" if exposure == "auto" else f"all at exposure {factor:.3g}"
+    figure.suptitle(f"{label(result)}: one light from the upper left, {exposed}", fontsize=8)
+    return save_figure(figure, path)
 
 
 def write_png(linear_rgb: np.ndarray, path: str | os.PathLike, exposure: float | str = EXPOSURE) -> Path:

@@ -115,10 +115,10 @@ def sphere(
     axes = figure.subplots(len(rows), n_columns, squeeze=False)
     for row, (lighting, fitted, measured) in enumerate(rows):
         exposure = exposure_for([rgb for _, rgb in fitted])
-        panels = [(title, _image(rgb, exposure, inside)) for title, rgb in fitted]
+        panels = [(title, disc_image(rgb, exposure, inside)) for title, rgb in fitted]
         if measured is not None:
             found, rgb = measured
-            panels.append((f"measured ({found.data_fraction:.0%} of lit disc)", _measured_image(found, rgb, exposure)))
+            panels.append((f"measured ({found.data_fraction:.0%} of lit disc)", measured_image(found, rgb, exposure)))
         for column, axis in enumerate(axes[row]):
             axis.set_axis_off()
             if column < len(panels):
@@ -136,15 +136,15 @@ def sphere(
     return figure
 
 
-def _image(linear_rgb: np.ndarray, exposure: float, inside: np.ndarray) -> np.ndarray:
+def disc_image(linear_rgb: np.ndarray, exposure: float, inside: np.ndarray) -> np.ndarray:
     """RGBA (size, size, 4): the tone-mapped sphere, transparent outside the disc."""
     return np.concatenate([to_srgb(linear_rgb, exposure), inside[..., None].astype(float)], axis=-1)
 
 
-def _measured_image(measured: MeasuredSphere, linear_rgb: np.ndarray, exposure: float) -> np.ndarray:
-    """:func:`_image` of the measured sphere, with lit pixels that have no data striped in two greys."""
+def measured_image(measured: MeasuredSphere, linear_rgb: np.ndarray, exposure: float) -> np.ndarray:
+    """:func:`disc_image` of the measured sphere, with lit pixels that have no data striped in two greys."""
     inside, _ = sphere_normals(linear_rgb.shape[0])
-    image = _image(linear_rgb, exposure, inside)
+    image = disc_image(linear_rgb, exposure, inside)
     rows, columns = np.indices(inside.shape)
     stripes = np.where((rows + columns) // (STRIPE_PIXELS // 2) % 2 == 0, *NO_DATA_GREYS)
     no_data = measured.lit & ~measured.has_data

@@ -2,6 +2,7 @@
 
 import builtins
 import json
+import re
 
 import numpy as np
 import pytest
@@ -74,6 +75,24 @@ def test_render_writes_a_png(results, tmp_path, capsys):
     status, out, err = run(["render", results / "metal.json", "-o", output, "--size", 32, "--spp", 4], capsys)
     assert status == 0, err
     assert output.read_bytes().startswith(PNG) and out.startswith(f"wrote {output}: Mitsuba 3 rendered a sphere")
+
+
+def test_render_beside_the_data(results, tmp_path, capsys):
+    """``--samples``: the render beside the fit's sphere and the data's, at one exposure, and the export's error at
+    the data's directions; an .exr holds one image, so it is refused with the data, before any work."""
+    pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
+    import matplotlib.image
+
+    output = tmp_path / "beside.png"
+    argv = ["render", results / "ward.json", "--samples", results / "ward.csv", "--size", 32, "--spp", 4]
+    status, out, err = run([*argv, "-o", output], capsys)
+    assert status == 0, err
+    assert re.search(r"at the data's [0-9,]+ directions \(ward.csv\), evaluated by Mitsuba", out), out
+    image = matplotlib.image.imread(output)
+    assert image.shape[1] > 2 * image.shape[0]  # three panels side by side
+    status, out, err = run([*argv, "-o", tmp_path / "beside.exr"], capsys)
+    assert status == 2 and out == "" and err.count("\n") == 1 and "an .exr holds one image" in err, err
+    assert not (tmp_path / "beside.exr").exists()
 
 
 def test_renders_share_one_exposure_so_that_they_compare(tmp_path):
