@@ -5,6 +5,7 @@ from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import model_files, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -26,6 +27,21 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``render`` reads (the result, the basis its model names) and writes (the image)."""
+    from ..fitting.single.result import load_result
+
+    return Files.of(
+        inputs={"RESULT.json": args.result, "the result's basis": model_files(load_result(args.result).model_options)},
+        outputs={"-o": _output(args)},
+    )
+
+
+def _output(args: argparse.Namespace) -> str:
+    """The image: ``-o``, by default RESULT's stem + ``.mitsuba.png``, here."""
+    return args.output or f"{Path(args.result).stem}.mitsuba.png"
+
+
 def run(args: argparse.Namespace) -> int:
     from ..checks import whole_number
     from ..errors import Argument, BrdfInputError
@@ -35,11 +51,11 @@ def run(args: argparse.Namespace) -> int:
     whole_number("size", args.size, 16, 4096)
     whole_number("spp", args.spp, 1)
     exposure = EXPOSURE if args.exposure is None else checked_exposure(args.exposure)
-    output = args.output or f"{Path(args.result).stem}.mitsuba.png"
+    output = _output(args)
     if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     result = load_result(args.result)
-    path = output_file(output, "-o", [args.result, *model_files(result.model_options)])
+    path = output_file(output, "-o")
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
