@@ -5,6 +5,9 @@ is stale, unreadable or cannot be named."""
 import json
 import subprocess
 import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import jax.numpy as jnp
@@ -128,3 +131,40 @@ def test_a_warm_process_fits_without_tracing_the_solver(tmp_path):
     (cold_cost, cold_traced), (warm_cost, warm_traced) = outputs
     assert cold_traced == "True" and warm_traced == "False"
     assert float(warm_cost) == float(cold_cost)
+
+
+def test_threads_that_ask_for_a_program_while_it_is_published_get_the_compiled_call(programs, monkeypatch):
+    """Issue 29, item 1: a thread that asks for a program while another is storing it gets the compiled call, never
+    the raw ``Exported`` ("'Exported' object is not callable" in batch fits with the cache on). The first thread's
+    ``jax.jit`` of the exported program is held open (0.3 s) and the others, released together by a barrier, ask
+    for the same program meanwhile: exactly the moment where the raw program was visible to them."""
+    real_jit = jax.jit
+    compiling = threading.Event()
+
+    def slow_jit(fun, *args, **kwargs):
+        if isinstance(getattr(fun, "__self__", None), jax.export.Exported):
+            compiling.set()
+            time.sleep(0.3)
+        return real_jit(fun, *args, **kwargs)
+
+    lazy_jax = stored_programs.jax  # brdffit's stand-in for JAX: it holds copies of JAX's names once looked up
+    assert lazy_jax.jit is real_jit
+    monkeypatch.setattr(lazy_jax, "jit", slow_jit)
+    x = np.linspace(0.0, 1.0, 9)
+    expected = 2.0 * np.sum(np.sin(x))
+    late = 15
+    barrier = threading.Barrier(late)
+
+    def first():
+        return float(scaled_sum(np.asarray(2.0), x))
+
+    def meanwhile():
+        assert compiling.wait(timeout=60)
+        barrier.wait(timeout=60)
+        return float(scaled_sum(np.asarray(2.0), x))
+
+    with ThreadPoolExecutor(late + 1) as pool:
+        futures = [pool.submit(first)] + [pool.submit(meanwhile) for _ in range(late)]
+        results = [future.result() for future in futures]
+    assert results == pytest.approx([expected] * (late + 1), rel=1e-15)
+    assert len(stored_files(programs)) == 1

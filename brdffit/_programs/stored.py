@@ -33,7 +33,8 @@ from .keys import key_of
 #: A stored program's file: one line of JSON (the named tuples its trees hold) and the serialized program.
 SUFFIX = ".jaxprogram"
 
-_lock = threading.Lock()
+_lock = threading.Lock()  # held while a program is loaded or exported, and while it is published in ``_loaded``
+_MISSING = object()  # not in ``_loaded`` (None there means: cannot be stored)
 _loaded: dict[str, Callable | None] = {}  # signature → compiled call, None when it cannot be stored
 _registered: set[type] = set()
 _lock_count = threading.Lock()
@@ -69,14 +70,19 @@ def stored_program(
     signature = _signature(identity, args, static_argnums)
     if signature is None:
         return None
-    if signature in _loaded:
-        return _loaded[signature]
+    # Double-checked: a program already published is read without waiting (a dict lookup is atomic); only what
+    # is final is ever published, under the lock, so a reader never sees a half-made entry (issue 29: the raw
+    # ``Exported``, published before its compiled call replaced it, reached other threads as "not callable").
+    program = _loaded.get(signature, _MISSING)
+    if program is not _MISSING:
+        return program
     with _lock:
-        if signature not in _loaded:
-            _loaded[signature] = _load_or_export(folder / f"{signature}{SUFFIX}", jitted, args, static_argnums)
-            if _loaded[signature] is not None:
-                _loaded[signature] = jax.jit(_loaded[signature].call, compiler_options=compile_options)
-        return _loaded[signature]
+        program = _loaded.get(signature, _MISSING)
+        if program is _MISSING:
+            exported = _load_or_export(folder / f"{signature}{SUFFIX}", jitted, args, static_argnums)
+            program = None if exported is None else jax.jit(exported.call, compiler_options=compile_options)
+            _loaded[signature] = program
+        return program
 
 
 def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:

@@ -1,13 +1,15 @@
 """The ``brdffit`` command line: the parser, and a module per command that it loads on demand.
 
-Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``report.py``, ``synth.py``, ``models.py``,
-``info.py``, ``convert.py``, ``basis.py``) has ``configure(parser)``, which adds its arguments, and
-``run(args) -> int``.
+Each command module (``fit.py``, ``compare.py``, ``plot.py``, ``report.py``, ``export.py``, ``render.py``,
+``synth.py``, ``models.py``, ``info.py``, ``convert.py``, ``basis.py``) has ``configure(parser)``, which adds its
+arguments, ``files(args)``, the files it reads and writes (``files.py``: checked before it runs, so that no output
+is an input or another output), and ``run(args) -> int``.
 Only the command being run is imported and configured, so ``brdffit --help`` and ``--version`` import no JAX
 and no solver.
 
 Exit status: 0 success; 1 a fit did not converge (its result is still written, with ``converged: false``);
-2 bad input or usage, reported in one line on stderr, with nothing written; 130 interrupted (Ctrl-C), with
+2 bad input or usage, reported in one line on stderr, with nothing written (in a batch of fits, also a dataset whose
+fit is not finite: its line, no file for it, the others written); 130 interrupted (Ctrl-C), with
 nothing half-written (every file is written to a temporary name and renamed).
 """
 
@@ -56,6 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser(_command_in(argv)).parse_args(argv)
         with warnings.catch_warnings():
             _warn_in_one_line()
+            args.declared_files(args).check()
             return args.run(args)
     except BrdfInputError as error:
         print(f"brdffit: error: {error.spelled(spell)}", file=sys.stderr)
@@ -115,7 +118,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         if name == command:
             module = importlib.import_module(f".{name}", __name__)
             module.configure(subparser)
-            subparser.set_defaults(run=module.run)
+            subparser.set_defaults(run=module.run, declared_files=module.files)
     return parser
 
 

@@ -8,7 +8,6 @@ typed it.
 import argparse
 import json
 import os
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -301,27 +300,28 @@ def json_argument(value: str, option: str) -> Any:
         raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
 
 
+def json_file(value: str | None) -> str | None:
+    """The file a :func:`json_argument` reads; None for inline JSON or no value."""
+    return None if not value or value.lstrip().startswith("{") else value
+
+
 def model_files(model_options: dict[str, Any]) -> list[str]:
     """The files a model's options name (the data-driven model's basis), which no output may overwrite."""
     basis = model_options.get("basis")
     return [str(basis)] if basis else []
 
 
-def output_file(value: str | os.PathLike, option: str, inputs: Sequence[str | os.PathLike] = ()) -> Path:
+def output_file(value: str | os.PathLike, option: str) -> Path:
     """The file ``option`` writes, checked before any work; returns the path to write to.
 
     A symbolic link is followed: the file it points to is replaced (atomically) and the link kept. The
-    target must not be one of ``inputs`` (the user's data is never overwritten), nor a folder, a device or
-    anything else that is not a regular file, and its folder must exist and be writable.
+    target must not be a folder, a device or anything else that is not a regular file, and its folder must
+    exist and be writable. That it is no input and no other output is checked for every command at once
+    (``files.py``).
     """
     path = Path(value)
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
     where = f"{option} {value}"
-    for given in inputs:
-        if _same_file(target, Path(given)):
-            raise BrdfInputError(
-                f"{where}: is the input {given}; give another output name (inputs are never overwritten)"
-            )
     if target.is_dir():
         raise BrdfInputError(f"{where}: is a folder; give a file name")
     if target.exists() and not target.is_file():
@@ -332,14 +332,6 @@ def output_file(value: str | os.PathLike, option: str, inputs: Sequence[str | os
     if not os.access(folder, os.W_OK):
         raise BrdfInputError(f"{where}: folder {folder} is not writable")
     return target
-
-
-def _same_file(one: Path, other: Path) -> bool:
-    """Whether two paths name the same file (either may not exist yet)."""
-    try:
-        return os.path.samefile(one, other)
-    except OSError:
-        return os.path.realpath(one) == os.path.realpath(other)
 
 
 def fit_file(path: str):

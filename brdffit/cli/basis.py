@@ -13,6 +13,7 @@ from pathlib import Path
 from ..errors import BrdfInputError
 from . import EXIT_OK
 from .arguments import output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -58,6 +59,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
     directions.set_defaults(action=_directions)
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``basis build`` reads (the library's tables) and writes (``-o``); what ``basis directions`` reads (the
+    basis) and writes (``-o``)."""
+    if args.action is _build:
+        output = None if args.output == "-" else args.output
+        return Files.of(inputs={"LIB": library_files(args.library)}, outputs={"-o": output})
+    return Files.of(inputs={"BASIS": args.basis}, outputs={"-o": args.output})
+
+
 def run(args: argparse.Namespace) -> int:
     return args.action(args)
 
@@ -87,7 +97,7 @@ def _build(args: argparse.Namespace) -> int:
     files = library_files(args.library)
     if args.output == "-":
         raise BrdfInputError("-o -: a basis is a binary file; give a file name (basis.npz)")
-    output = output_file(args.output, "-o", files)
+    output = output_file(args.output, "-o")
     started = time.perf_counter()
     with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=None, leave=False) as bar:
         basis = build_basis(files, components=args.components, mapping=args.mapping, progress=bar.update)
@@ -100,7 +110,7 @@ def _directions(args: argparse.Namespace) -> int:
     from ..datadriven.basis import load_basis
     from ..datadriven.directions import choose_directions, write_directions
 
-    output = output_file(args.output, "-o", [args.basis])
+    output = output_file(args.output, "-o")
     basis = load_basis(args.basis)
     from tqdm.auto import tqdm
 

@@ -5,6 +5,7 @@ import sys
 
 from . import EXIT_OK
 from .arguments import add_comparison_options, comparison_arguments, load, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -17,14 +18,21 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``compare`` reads (the samples, ``--basis``) and writes (``-o``, unless standard output)."""
+    return Files.of(
+        inputs={"SAMPLES": args.samples, "--basis": args.basis},
+        outputs={"-o": None if args.output == "-" else args.output},
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..fitting.comparison.compare import compare
 
     enable_compilation_cache()
     arguments = comparison_arguments(args)
-    inputs = [args.samples, *([args.basis] if args.basis else [])]
-    output = None if args.output in (None, "-") else output_file(args.output, "-o", inputs)
+    output = None if args.output in (None, "-") else output_file(args.output, "-o")
     comparison = compare(load(args.samples, args), **arguments, progress=None)
     stream = sys.stderr if args.output == "-" else sys.stdout
     print(comparison.table(), file=stream)

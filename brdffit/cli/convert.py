@@ -7,6 +7,7 @@ from pathlib import Path
 from ..errors import BrdfInputError
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -18,6 +19,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``convert`` reads (``IN``) and writes (``OUT``)."""
+    return Files.of(inputs={"IN": args.input}, outputs={"OUT": args.output})
+
+
 def run(args: argparse.Namespace) -> int:
     from ..data.load import FORMATS, format_of_output
 
@@ -25,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     kind = format_of_output(output)
     if kind is None:
         raise BrdfInputError(f"{output}: unknown output format; give one of: {_suffixes(FORMATS)}")
-    output = output_file(output, "OUT", [args.input])
+    output = output_file(output, "OUT")
     if FORMATS[kind].write is None:
         return _tabulate(args, output)
     if Path(args.input).suffix.lower() == ".json":

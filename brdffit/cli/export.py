@@ -9,6 +9,7 @@ from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import fit_file, model_files, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -42,15 +43,33 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``export`` reads (the result, the basis its model names, ``--samples``) and writes (``-o``)."""
+    return Files.of(
+        inputs={
+            "RESULT.json": args.result,
+            "the result's basis": model_files(fit_file(args.result).model_options),
+            "--samples": args.samples,
+        },
+        outputs={"-o": _output(args)},
+    )
+
+
+def _output(args: argparse.Namespace) -> str:
+    """The file: ``-o``, by default RESULT's stem with the suffix of the target's format, here."""
+    from ..export.targets import TARGETS, export_format
+
+    kind = export_format(args.to, args.format, args.output)
+    return args.output or Path(args.result).stem + TARGETS[args.to].formats[kind]
+
+
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..export.targets import TARGETS, export, export_format
 
     kind = export_format(args.to, args.format, args.output)
-    default = Path(args.result).stem + TARGETS[args.to].formats[kind]
     result = fit_file(args.result)
-    inputs = [args.result, *model_files(result.model_options), *([args.samples] if args.samples else [])]
-    path = output_file(args.output or default, "-o", inputs)
+    path = output_file(_output(args), "-o")
     enable_compilation_cache()
     lines = export(result, args.to, path, kind, args.samples)
     print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")

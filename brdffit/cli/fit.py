@@ -9,20 +9,21 @@ import sys
 from pathlib import Path
 
 from ..errors import Argument, BrdfInputError
-from . import EXIT_NOT_CONVERGED, EXIT_OK
+from . import EXIT_BAD_INPUT, EXIT_NOT_CONVERGED, EXIT_OK
 from .arguments import (
     add_holding_options,
     add_loading_options,
     add_model_options,
     holding_arguments,
     json_argument,
+    json_file,
     load,
-    model_files,
     model_options,
     output_file,
     read_options,
 )
 from .cluster import cluster_client
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -104,6 +105,21 @@ def configure(parser: argparse.ArgumentParser) -> None:
     errors.add_argument("--corner", metavar="FILE", help="corner plot of the posterior (.png, .pdf or .svg)")
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``fit`` reads (the samples, ``--start``, ``--basis``) and writes (results, ``--chain``, ``--corner``)."""
+    from ..physics.models.registry import get_model
+
+    model = get_model(args.model, **model_options(args))
+    return Files.of(
+        inputs={"SAMPLES": args.samples, "--start": json_file(args.start), "--basis": args.basis},
+        outputs={
+            "-o": output_paths(args.samples, args.output, model),
+            "--chain": args.chain,
+            "--corner": args.corner,
+        },
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..fitting.objective.losses import get_loss
@@ -113,9 +129,7 @@ def run(args: argparse.Namespace) -> int:
     model = get_model(args.model, **model_options(args))
     get_loss(args.loss)
     mcmc = _uncertainty_settings(args)
-    inputs = [*args.samples, *([args.start] if args.start and not args.start.lstrip().startswith("{") else [])]
-    inputs += model_files(model.model_options)
-    outputs = output_paths(args.samples, args.output, model, inputs)
+    outputs = output_paths(args.samples, args.output, model)
     start = _start(args.start)
     held = holding_arguments(args)
     _check_holding(model, held)
@@ -133,17 +147,25 @@ def run(args: argparse.Namespace) -> int:
             results = _fit(args, model, samples, start, mcmc, held, client=client)
     else:
         results = _fit(args, model, samples, start, mcmc, held)
+    # A fit that is not finite (data out of float64's range) has no result file: one fit is an error; in a batch,
+    # that dataset's error line, the others written, and the exit status of bad input.
+    problems = [result.non_finite() for result in results]
+    if len(results) == 1 and problems[0] is not None:
+        raise BrdfInputError(f"{args.samples[0]}: {problems[0]}")
     if outputs is None:  # -o -: the result file on standard output, everything else on standard error
         sys.stdout.write(results[0].to_json())
     else:
         outputs[0].parent.mkdir(parents=True, exist_ok=True)
-        for result, output in zip(results, outputs, strict=True):
-            result.save(output)
+        for result, output, problem in zip(results, outputs, problems, strict=True):
+            if problem is None:
+                result.save(output)
     if args.corner:
         from ..views.corner import corner_plot
 
         corner_plot(results[0], args.corner)
-    _report(args, results, outputs)
+    _report(args, results, outputs, problems)
+    if any(problem is not None for problem in problems):
+        return EXIT_BAD_INPUT
     return EXIT_OK if all(result.converged for result in results) else EXIT_NOT_CONVERGED
 
 
@@ -173,8 +195,9 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, held: dict
     return api.fit_batch(samples, model, args.loss, threads=args.threads, **options)
 
 
-def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None) -> None:
-    """The table (one input) or a line per input, then a warning line for each thing a user must know.
+def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None, problems: list[str | None]) -> None:
+    """The table (one input) or a line per input, then a warning line for each thing a user must know, and an error
+    line for each input whose fit is not finite (``problems``: none written).
 
     On standard output, unless the result file went there (``-o -``): then on standard error.
     """
@@ -185,8 +208,12 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None)
         if any(written):
             print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
     else:
-        print(summary(args.samples, results, outputs), file=stream)
-    for path, result in zip(args.samples, results, strict=True):
+        written = [None if problem else output for output, problem in zip(outputs, problems, strict=True)]
+        print(summary(args.samples, results, written), file=stream)
+    for path, result, problem in zip(args.samples, results, problems, strict=True):
+        if problem is not None:
+            print(f"brdffit: error: {path}: {problem}; not written", file=sys.stderr)
+            continue
         for message in [*result.warnings, *(result.uncertainty["warnings"] if result.uncertainty else [])]:
             print(f"brdffit: warning: {path}: {message}", file=sys.stderr)
         if not result.converged:
@@ -231,22 +258,22 @@ def _uncertainty_settings(args: argparse.Namespace):
     if (args.chain or args.corner) and len(args.samples) > 1:
         raise BrdfInputError(f"--chain and --corner take one samples file; got {len(args.samples)}")
     if args.chain:
-        args.chain = str(output_file(args.chain, "--chain", args.samples))
+        args.chain = str(output_file(args.chain, "--chain"))
     if args.corner:
         check_figure_path(args.corner, argument="corner")
-        args.corner = str(output_file(args.corner, "--corner", args.samples))
+        args.corner = str(output_file(args.corner, "--corner"))
         os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
     return MCMC(**given, seed=args.seed) if method == "mcmc" else None
 
 
-def output_paths(inputs: list[str], output: str | None, model, protected: list[str]) -> list[Path] | None:
+def output_paths(inputs: list[str], output: str | None, model) -> list[Path] | None:
     """The result file of each input (None: ``-o -``, standard output), checked before any work.
 
     One input: ``-o FILE``, by default ``<stem>.<model>[.<option>-<value>].json`` here (the options that change
     the result are in the name, so fits of one file with other options do not overwrite each other). ``-o``
     ending in ``/``, or several inputs: a folder, created (after every check) if missing, holding one such
-    file per input. An existing folder without the ``/`` is refused: it would be ambiguous. No output may
-    be one of the ``protected`` files (the inputs).
+    file per input. An existing folder without the ``/`` is refused: it would be ambiguous. That no output is
+    an input is checked with every other file of the command (:func:`files`).
     """
     if output == "-":
         if len(inputs) > 1:
@@ -259,7 +286,7 @@ def output_paths(inputs: list[str], output: str | None, model, protected: list[s
                 f"-o {output}: is a folder; give a file name, or {output.rstrip(os.sep)}/ to write"
                 f" {default_name(inputs[0], model)} into it"
             )
-        return [output_file(output or default_name(inputs[0], model), "-o", protected)]
+        return [output_file(output or default_name(inputs[0], model), "-o")]
     folder = Path(output) if output else Path(".")
     if folder.exists() and not folder.is_dir():
         raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
@@ -274,7 +301,7 @@ def output_paths(inputs: list[str], output: str | None, model, protected: list[s
         if out in seen:
             raise BrdfInputError(f"{seen[out]} and {path} would both write {out}; give them different names")
         seen[out] = path
-    return [output_file(out, "-o", protected) if out.parent.exists() else out for out in outputs]
+    return [output_file(out, "-o") if out.parent.exists() else out for out in outputs]
 
 
 def default_name(path: str, model) -> str:
@@ -287,11 +314,12 @@ def default_name(path: str, model) -> str:
 
 
 def summary(inputs: list[str], results, outputs) -> str:
-    """One line per input: steps, cost, rmse, convergence and the file written."""
+    """One line per input: steps, cost, rmse, convergence and the file written (None: not written)."""
     width = max(len(path) for path in inputs)
     lines = [f"{'samples'.ljust(width)}  steps  {'cost':>12}  {'rmse (1/sr)':>12}  status     result"]
     for path, result, output in zip(inputs, results, outputs, strict=True):
         status = "converged" if result.converged else "NOT conv."
+        output = "(not written)" if output is None else output
         lines.append(
             f"{path.ljust(width)}  {result.n_steps:5d}  {result.cost:12.6g}  {result.rmse:12.4g}  {status:9s}  {output}"
         )

@@ -4,12 +4,18 @@ import argparse
 
 from . import EXIT_OK
 from .arguments import add_loading_options, load
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("input", metavar="FILE", help="samples file (any format), or a basis file (.npz)")
     add_loading_options(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
+
+
+def files(args: argparse.Namespace) -> Files:
+    """What ``info`` reads (``FILE``); it writes nothing."""
+    return Files.of(inputs={"FILE": args.input})
 
 
 def run(args: argparse.Namespace) -> int:

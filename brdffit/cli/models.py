@@ -4,10 +4,16 @@ import argparse
 
 from . import EXIT_OK
 from .arguments import flag
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     """No arguments."""
+
+
+def files(args: argparse.Namespace) -> Files:
+    """``models`` reads and writes no file."""
+    return Files()
 
 
 def run(args: argparse.Namespace) -> int:

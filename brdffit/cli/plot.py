@@ -13,6 +13,7 @@ from ..errors import BrdfInputError
 from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -53,23 +54,42 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
 
-def run(args: argparse.Namespace) -> int:
+def files(args: argparse.Namespace) -> Files:
+    """What ``plot`` reads (the result files and the samples) and writes (each figure)."""
+    *_, outputs = _figures(args)
+    return Files.of(inputs={"FILE": args.files}, outputs={"-o": outputs})
+
+
+def _figures(args: argparse.Namespace):
+    """The kinds of figure asked for, the fits ``(path, result)`` the result files hold, the figures
+    ``(kind, index of the fit or None)`` and the file of each, all checked."""
     from ..checks import choice
     from ..views.plots import KINDS
-    from ..views.residuals import colour_limit
     from ..views.sphere import LIGHTINGS
 
     if len(args.files) < 2:
         raise BrdfInputError("give one or more result files, then the samples file they were fitted to")
     *result_paths, samples_path = args.files
     kinds = list(KINDS) if args.kind == "all" else [choice("kind", args.kind, [*KINDS, "all"])]
-    incidences = _incidences(args.incidences)
     choice("lights", args.lights, LIGHTINGS)
     _not_a_result(samples_path)
     fits = [(path, fit) for path in result_paths for fit in _results(path)]
     results = [fit for _, fit in fits]
     figures = [(kind, index) for kind in kinds for index in (range(len(results)) if kind == "residuals" else [None])]
-    outputs = output_paths(figures, results, args.output, samples_path, args.files)
+    return kinds, fits, figures, output_paths(figures, results, args.output, samples_path)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..views.figures import check_figure_path
+    from ..views.plots import KINDS
+    from ..views.residuals import colour_limit
+
+    incidences = _incidences(args.incidences)
+    kinds, fits, figures, outputs = _figures(args)
+    if _names_a_folder(args.output) is False:  # -o FILE: a suffix matplotlib writes
+        check_figure_path(args.output, argument="output")
+    results = [fit for _, fit in fits]
+    samples_path = args.files[-1]
     max_theta = _read_as_fitted(args, fits, samples_path)
     samples = load(samples_path, args).within(max_theta)
     for path, fit in fits:
@@ -159,11 +179,15 @@ def _incidences(text: str | None):
     return angles
 
 
-def output_paths(figures, results, output: str | None, samples_path: str, inputs) -> list[Path]:
-    """Where each figure goes, checked before any work: ``-o FILE`` for one figure, a folder (``-o OUTDIR/``, or
-    the current folder) for several, named ``SAMPLES-stem.KIND[.SPEC].png``."""
-    from ..views.figures import check_figure_path
+def _names_a_folder(output: str | None) -> bool | None:
+    """Whether ``-o`` names a folder (a trailing ``/``, or an existing folder); None when not given."""
+    return None if output is None else output.endswith(("/", os.sep)) or Path(output).is_dir()
 
+
+def output_paths(figures, results, output: str | None, samples_path: str) -> list[Path]:
+    """Where each figure goes, checked before any work: ``-o FILE`` for one figure, a folder (``-o OUTDIR/``, or
+    the current folder) for several, named ``SAMPLES-stem.KIND[.SPEC].png``. (A file's suffix is checked by
+    ``run``, after the check that it is no input.)"""
     stem = Path(samples_path).stem
     several_results = len(results) > 1
 
@@ -173,14 +197,13 @@ def output_paths(figures, results, output: str | None, samples_path: str, inputs
         which = f".{label(results[index]).replace(':', '-')}" if index is not None and several_results else ""
         return f"{stem}.{kind}{which}.png"
 
-    as_folder = output is not None and (output.endswith(("/", os.sep)) or Path(output).is_dir())
+    as_folder = bool(_names_a_folder(output))
     if as_folder and Path(output).exists() and not Path(output).is_dir():
         raise BrdfInputError(f"-o {output}: {output.rstrip('/' + os.sep)} is a file; give a folder (OUTDIR/)")
     if len(figures) > 1 and output is not None and not as_folder:
         raise BrdfInputError(f"-o {output}: {len(figures)} figures need a folder; give OUTDIR/")
     if output is not None and not as_folder:
-        path = output_file(output, "-o", inputs)
-        check_figure_path(output, argument="output")
+        path = output_file(output, "-o")
         return [path]
     folder = Path(output) if output else Path(".")
     if not folder.exists():  # created after every check, as fit's -o OUTDIR/
@@ -188,4 +211,4 @@ def output_paths(figures, results, output: str | None, samples_path: str, inputs
         if not os.access(existing, os.W_OK):
             raise BrdfInputError(f"-o {output}: folder {existing} is not writable")
         return [folder / name(kind, index) for kind, index in figures]
-    return [output_file(folder / name(kind, index), "-o", inputs) for kind, index in figures]
+    return [output_file(folder / name(kind, index), "-o") for kind, index in figures]

@@ -5,6 +5,7 @@ from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import fit_file, model_files, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -36,6 +37,23 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``render`` reads (the result, the basis its model names, ``--samples``) and writes (the image)."""
+    return Files.of(
+        inputs={
+            "RESULT.json": args.result,
+            "the result's basis": model_files(fit_file(args.result).model_options),
+            "--samples": args.samples,
+        },
+        outputs={"-o": _output(args)},
+    )
+
+
+def _output(args: argparse.Namespace) -> str:
+    """The image: ``-o``, by default RESULT's stem + ``.mitsuba.png``, here."""
+    return args.output or f"{Path(args.result).stem}.mitsuba.png"
+
+
 def run(args: argparse.Namespace) -> int:
     from ..checks import whole_number
     from ..errors import Argument, BrdfInputError
@@ -44,12 +62,11 @@ def run(args: argparse.Namespace) -> int:
     whole_number("size", args.size, 16, 4096)
     whole_number("spp", args.spp, 1)
     exposure = EXPOSURE if args.exposure is None else checked_exposure(args.exposure)
-    output = args.output or f"{Path(args.result).stem}.mitsuba.png"
+    output = _output(args)
     if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     result = fit_file(args.result)
-    inputs = [args.result, *model_files(result.model_options), *([args.samples] if args.samples else [])]
-    path = output_file(output, "-o", inputs)
+    path = output_file(output, "-o")
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=args.samples)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")

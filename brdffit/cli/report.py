@@ -5,6 +5,7 @@ from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import add_comparison_options, comparison_arguments, load, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -19,6 +20,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``report`` reads (the samples, ``--basis``) and writes (the page)."""
+    return Files.of(inputs={"SAMPLES": args.samples, "--basis": args.basis}, outputs={"-o": _output(args)})
+
+
+def _output(args: argparse.Namespace) -> str:
+    """The page: ``-o``, by default ``SAMPLES-stem.report.html`` here."""
+    return args.output or f"{Path(args.samples).stem}.report.html"
+
+
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..uncertainty.methods import check_options
@@ -27,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
     enable_compilation_cache()
     arguments = comparison_arguments(args)
     check_options(args.uncertainty)
-    output = args.output or f"{Path(args.samples).stem}.report.html"
-    path = output_file(output, "-o", [args.samples, *([args.basis] if args.basis else [])])
+    output = _output(args)
+    path = output_file(output, "-o")
     check_report_path(output, argument="output")
     report(load(args.samples, args), **arguments, uncertainty=args.uncertainty, path=path, progress=None)
     print(f"wrote {output}")

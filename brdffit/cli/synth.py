@@ -5,7 +5,8 @@ import inspect
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_model_options, json_argument, model_files, model_options, output_file
+from .arguments import add_model_options, json_argument, json_file, model_files, model_options, output_file
+from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -54,6 +55,19 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="FILE", help="samples file to write")
 
 
+def files(args: argparse.Namespace) -> Files:
+    """What ``synth`` reads (``--params``, ``--directions``, the basis the model names) and writes (``-o``)."""
+    model, _, _ = _model_and_params(args)
+    return Files.of(
+        inputs={
+            "--params": json_file(args.params),
+            "--directions": args.directions,
+            "--basis": model_files(model.model_options),
+        },
+        outputs={"-o": args.output},
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from data_synth import GEOMETRIES, synthesize
 
@@ -62,8 +76,6 @@ def run(args: argparse.Namespace) -> int:
 
     enable_compilation_cache()
     model, params, channels = _model_and_params(args)
-    inputs = [args.params] if not args.params.lstrip().startswith("{") else []
-    inputs += model_files(model.model_options)
     given = {
         name: getattr(args, name)
         for name in ("n_incident", "n_theta", "n_phi", "n_samples", "spread")
@@ -75,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         if given or args.geometry is not None:
             what = "geometry" if args.geometry is not None else next(iter(given)).replace("_", "-")
             raise BrdfInputError(f"--{what} does not apply to --directions (the file gives the pairs)")
-        output = output_file(args.output, "-o", [*inputs, args.directions])
+        output = output_file(args.output, "-o")
         wi, wo = read_directions(args.directions)
     else:
         geometry = "hemisphere" if args.geometry is None else args.geometry
@@ -88,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
                 raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {geometry}")
         if "seed" in accepted:
             given["seed"] = args.seed
-        output = output_file(args.output, "-o", inputs)
+        output = output_file(args.output, "-o")
         wi, wo = make_geometry(**given)
     samples = synthesize(
         model.name,

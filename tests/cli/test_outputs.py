@@ -24,17 +24,6 @@ def samples(tmp_path):
     return path
 
 
-@pytest.fixture
-def no_fit(monkeypatch):
-    """Fail the test if a fit starts: the checks must come first."""
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("a fit ran before the bad output was reported")
-
-    monkeypatch.setattr(brdffit.api, "fit", refuse)
-    monkeypatch.setattr(brdffit.api, "fit_batch", refuse)
-
-
 def one_line_error(status, err, *pieces):
     assert status == 2 and err.startswith("brdffit: error: ") and err.count("\n") == 1, err
     for piece in pieces:

@@ -9,9 +9,19 @@ import pytest
 from catalogue import CASES, case_id
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from paths import EXAMPLE
 
 import data_synth
-from brdffit import FitWarning, UncertaintyWarning, evaluate, fit, get_model, laplace_uncertainty, load_result
+from brdffit import (
+    BrdfInputError,
+    FitWarning,
+    UncertaintyWarning,
+    evaluate,
+    fit,
+    get_model,
+    laplace_uncertainty,
+    load_result,
+)
 from brdffit.cli import main
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.options import MAX_STEPS
@@ -67,3 +77,28 @@ def test_a_fresnel_at_its_edges_is_representable(tmp_path):
         fresnel = back.params.get("f0", back.params.get("eta"))
         assert fresnel == pytest.approx(1.0, abs=1e-11)
         model.dictionary.to_params(back.params)  # accepted
+
+
+@pytest.mark.parametrize(
+    ("entry", "value", "piece"),
+    [
+        ("stderr", [0.1, 0.2], "uncertainty.stderr must be a JSON object"),
+        ("covariance", "none", "uncertainty.covariance must be a JSON object"),
+        ("diagnostics", 3, "uncertainty.diagnostics must be a JSON object"),
+        ("warnings", {"a": 1}, "uncertainty.warnings must be a JSON list"),
+        ("warning_codes", [1, 2], "uncertainty.warning_codes must be a JSON list of strings"),
+    ],
+)
+def test_a_malformed_uncertainty_block_is_one_line(tmp_path, capsys, entry, value, piece):
+    """Issue 29, item 7: the uncertainty block's types are checked (the check once compared types by identity,
+    ``dict[str, Any] is dict[str, Any]``, which is never true, and let every block through)."""
+    content = fit(EXAMPLE, "lambert", uncertainty="laplace").to_dict()
+    content["uncertainty"][entry] = value
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(content))
+    with pytest.raises(BrdfInputError, match=piece):
+        load_result(path)
+    status = main(["export", str(path), "--to", "merl", "-o", str(tmp_path / "t.binary")])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1 and piece in err, err
+    assert not (tmp_path / "t.binary").exists()

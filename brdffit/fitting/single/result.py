@@ -8,6 +8,7 @@ fit went (``fit``: loss, cost, rmse, counts, convergence) and, when asked for, t
 import json
 import math
 import os
+import typing
 from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -52,10 +53,16 @@ class Uncertainty(Mapping[str, Any]):
             raise BrdfInputError(f"{source}: 'uncertainty' must be an object with a 'method'")
         values = {}
         for item in fields(cls):
-            empty = {} if item.type is dict[str, Any] else [] if item.type is list[str] else None
-            value = content.get(item.name, empty)
-            if empty is not None and not isinstance(value, type(empty)):
-                raise BrdfInputError(f"{source}: uncertainty.{item.name} must be a JSON {type(empty).__name__}")
+            kind = typing.get_origin(item.type) or item.type  # dict[str, Any] → dict (``is`` never matches an alias)
+            if kind is str:
+                values[item.name] = content[item.name]
+                continue
+            value = content.get(item.name, kind())
+            json_name = {dict: "object", list: "list"}[kind]
+            if not isinstance(value, kind):
+                raise BrdfInputError(f"{source}: uncertainty.{item.name} must be a JSON {json_name}")
+            if typing.get_args(item.type) == (str,) and not all(isinstance(entry, str) for entry in value):
+                raise BrdfInputError(f"{source}: uncertainty.{item.name} must be a JSON list of strings")
             values[item.name] = value
         return cls(**values)
 
@@ -170,8 +177,25 @@ class FitResult:
             result["uncertainty"] = self.uncertainty.to_dict()
         return result
 
+    def non_finite(self) -> str | None:
+        """What of the result is not a finite number (``"the fit's rmse is inf, …"``), which no result file holds; None
+        when every number is finite. Data out of float64's range make it so: a value whose square overflows
+        (above ~1.3e154), a sigma whose inverse square does (below ~7.5e-155)."""
+        found = first_non_finite(self.to_dict())
+        if found is None:
+            return None
+        where, value = found
+        return (
+            f"the fit's {where} is {value}, not a finite number: values or sigma beyond float64's range"
+            " (a value whose square overflows, a sigma whose inverse square does)"
+        )
+
     def to_json(self) -> str:
-        """The result file's text: indented objects, lists of numbers on one line."""
+        """The result file's text: indented objects, lists of numbers on one line. A result that is not finite
+        (:meth:`non_finite`) is a :class:`~brdffit.errors.BrdfInputError`: no file claims to be JSON and is not."""
+        problem = self.non_finite()
+        if problem is not None:
+            raise BrdfInputError(problem)
         return json_text(self.to_dict()) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
@@ -252,6 +276,24 @@ def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
     if not isinstance(content, dict):
         raise BrdfInputError(f"{path}: not a {what} (not a JSON object)")
     return content
+
+
+def first_non_finite(value: Any, where: str = "") -> tuple[str, float] | None:
+    """The first number in ``value`` (nested dicts and lists) that is an infinity or NaN, with where it is
+    (``rmse``, ``params.rho_s[0]``; a result's ``fit`` object is named by its fields alone), or None."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return where, value
+    if isinstance(value, dict):
+        items = ((f"{where}.{key}" if where and where != "fit" else str(key), item) for key, item in value.items())
+    elif isinstance(value, list | tuple):
+        items = ((f"{where}[{index}]", item) for index, item in enumerate(value))
+    else:
+        return None
+    for inner, item in items:
+        found = first_non_finite(item, inner)
+        if found is not None:
+            return found
+    return None
 
 
 def json_text(value: Any, indent: str = "") -> str:
