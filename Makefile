@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca lint format docs examples clean
+.PHONY: demo test test-heavy bench bench-pca bench-renderers lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +41,11 @@ LIBRARY ?= $(HOME)/.cache/brdffit-library
 bench-pca: $(STAMP)
 	$(BIN)/python -m data_synth.library $(LIBRARY) --analytic 60 --mitsuba 40
 	$(BIN)/python benchmarks/pca.py $(LIBRARY)
+
+# Into the renderer (issue 28): materials made by Mitsuba 3's BSDFs, compared, fitted and exported, each export
+# evaluated by Mitsuba at the data's directions (~10 minutes); writes benchmarks/results/renderers.{json,md}.
+bench-renderers: $(STAMP)
+	$(BIN)/python benchmarks/renderers.py
 
 lint: $(STAMP)
 	$(BIN)/ruff format --check .
