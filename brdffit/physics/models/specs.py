@@ -3,7 +3,8 @@
 ``ward``, ``cook-torrance:fresnel=conductor``, ``lafortune:lobes=2``. A value without its key is the value of
 the one option that accepts it (``lafortune:2``, ``cook-torrance:conductor``). The canonical spec of a model
 (:func:`spec_of`) names, with its key, every option that differs from its default, in the model's order:
-``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``.
+``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``;
+``cook-torrance:distribution=ggx,shadowing=smith,anisotropic=true`` (a yes or no is ``true`` or ``false``).
 """
 
 import os
@@ -26,7 +27,10 @@ def spec_of(name: str, options: dict[str, Any]) -> str:
 
 
 def _shown(key: str, value: Any) -> Any:
-    """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it."""
+    """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it; a yes or
+    no as ``true`` or ``false``."""
+    if isinstance(value, bool):
+        return str(value).lower()
     return os.path.basename(str(value)) if key in file_options() else value
 
 
