@@ -218,7 +218,9 @@ class MappedShapeLobe(Lobe):
 
 
 class MappedLobe(MappedShapeLobe):
-    """A :class:`MappedShapeLobe` whose every shape is a lobe of its own: the usual base of a family."""
+    """A lobe whose every shape parameter lives in a :class:`~brdffit.physics.domains.MappedDomain` (the solver
+    moves each through its domain's map, the walkers move the values themselves: :class:`MappedShapeLobe`) and whose
+    every shape is a lobe of its own: the usual base of a family."""
 
     def canonical(self, shape: Shape) -> dict[str, Any]:
         return dict(shape)

@@ -19,14 +19,14 @@ def spec_of(name: str, options: dict[str, Any]) -> str:
     """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
     defaults = model_option_defaults(name) if name in MODELS else {}
     written = ",".join(
-        f"{key}={_shown(key, value)}"
+        f"{key}={shown_value(key, value)}"
         for key, value in options.items()
         if defaults.get(key) != value and key not in recorded_options()
     )
     return f"{name}:{written}" if written else name
 
 
-def _shown(key: str, value: Any) -> Any:
+def shown_value(key: str, value: Any) -> Any:
     """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it; a yes or
     no as ``true`` or ``false``."""
     if isinstance(value, bool):
