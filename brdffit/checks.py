@@ -30,6 +30,20 @@ def choice(name: str, value, choices: Iterable[str], verb: str = "is not allowed
     return value
 
 
+#: How a yes-or-no option is written in a spec or on the command line (``anisotropic=true``), any case.
+BOOLEAN_WORDS = {"true": True, "false": False}
+
+
+def boolean(name: str, value) -> bool:
+    """``value`` as a bool: True or False, or the words ``true`` and ``false`` (any case) as a spec or a flag
+    writes them; anything else is ``name='yes' is not allowed; give true or false``."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.lower() in BOOLEAN_WORDS:
+        return BOOLEAN_WORDS[value.lower()]
+    raise not_allowed(name, value, "give true or false")
+
+
 def angle_up_to_90(name: str, value: float) -> float:
     """An angle in degrees in (0, 90]: a zenith limit, a spread about a direction."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 90:

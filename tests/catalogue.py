@@ -58,12 +58,37 @@ CASES = [
         {"fresnel": "dielectric", "distribution": "beckmann", "shadowing": "smith-correlated"},
         {"kd": [0.3, 0.26, 0.18], "ks": [0.41, 0.35, 0.23], "m": 0.2, "eta": 1.5},
     ),
+    (  # brushed gold: anisotropic GGX with separable Smith (Mitsuba's roughconductor with alpha_u, alpha_v)
+        "cook-torrance",
+        {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith", "anisotropic": True},
+        {
+            "kd": [0.01, 0.01, 0.01],
+            "ks": [1.0, 0.8, 0.4],
+            "alpha_u": 0.08,
+            "alpha_v": 0.3,
+            "phi_t": 30.0,
+            "eta": 0.2,
+            "k": 3.9,
+        },
+    ),
+    (  # a brushed lacquer: anisotropic Beckmann with height-correlated Smith, tangent at -60°
+        "cook-torrance",
+        {"fresnel": "dielectric", "distribution": "beckmann", "shadowing": "smith-correlated", "anisotropic": True},
+        {
+            "kd": [0.3, 0.26, 0.18],
+            "ks": [0.41, 0.35, 0.23],
+            "alpha_u": 0.1,
+            "alpha_v": 0.25,
+            "phi_t": -60.0,
+            "eta": 1.5,
+        },
+    ),
 ]
 
 
 def case_id(case) -> str:
     model, options, _ = case
-    return model + "".join(f"-{value}" for value in options.values())
+    return model + "".join(f"-{key if value is True else value}" for key, value in options.items())
 
 
 def parametrize_cases(cases=CASES):

@@ -38,12 +38,12 @@ def spell(argument: Argument) -> str:
 
 
 #: The model options as flags: each model takes some (``brdffit models`` lists them).
-MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "lobes", "basis", "ridge")
+MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "lobes", "basis", "ridge")
 
 
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
-    """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--lobes``, ``--basis``,
-    ``--ridge``)."""
+    """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--anisotropic``,
+    ``--lobes``, ``--basis``, ``--ridge``)."""
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models.registry import MODELS
@@ -60,6 +60,12 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
             metavar="KIND",
             help=f"cook-torrance's {what}: {', '.join(kinds)} (default {next(iter(kinds))})",
         )
+    command.add_argument(
+        "--anisotropic",
+        metavar="true|false",
+        help="cook-torrance: anisotropic roughness alpha_u, alpha_v and the tangent's azimuth phi_t in place of m"
+        " (default false)",
+    )
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
     command.add_argument("--basis", metavar="FILE", help="pca: the basis file (from brdffit basis build)")
     command.add_argument(

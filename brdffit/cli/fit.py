@@ -308,8 +308,9 @@ def default_name(path: str, model) -> str:
     """``<stem>.<model>[.<option>-<value>…].json`` with the options that differ from their defaults:
     ``tape.lafortune.lobes-2.json``, ``oak.cook-torrance.fresnel-conductor.json``, ``oak.ward.json``."""
     from ..physics.models.registry import chosen_options
+    from ..physics.models.specs import shown_value
 
-    options = "".join(f".{key}-{value}" for key, value in chosen_options(model).items())
+    options = "".join(f".{key}-{shown_value(key, value)}" for key, value in chosen_options(model).items())
     return f"{Path(path).stem}.{model.name}{options}.json"
 
 

@@ -13,7 +13,14 @@ brdffit                         Mitsuba 3
 ``fresnel="dielectric"``        ``eta``, ``k = 0`` (the conductor formula with ``k = 0`` is the dielectric one)
 ``fresnel="none"``              ``material="none"``
 ``ks``, ``kd``                  ``specular_reflectance``, ``diffuse.reflectance``, joined by ``blendbsdf``
+``anisotropic=True``            ``alpha_u``, ``alpha_v``; the tangent is the shape's ``dp/du`` (see below)
 ==============================  ==================================================================================
+
+Mitsuba's BSDFs have no tangent rotation: an anisotropic ``roughconductor``'s ``alpha_u`` lies along the shape's
+``dp/du``. The export of an anisotropic fit is therefore exact in the frame turned by ``phi_t``: with the mesh's
+tangent (its UVs' ``u``) along the fit's tangent, at ``phi_t`` from the data's ``+x``. The note and the file's
+comment say so, and ``export --samples`` evaluates Mitsuba at the data's directions turned by ``−phi_t``: the error
+a user gets with the tangent so aligned.
 
 Mitsuba's ``blendbsdf`` averages: ``(1 − w)·first + w·second``. The export divides the albedos by the weights,
 ``reflectance = kd/(1 − w)`` and ``specular_reflectance = ks/w``, with ``w = max ks / (max kd + max ks)`` over the
@@ -39,6 +46,7 @@ from .._version import __version__
 from ..errors import Argument, BrdfInputError
 from ..fitting.options import Holding
 from ..fitting.single.result import FitResult
+from ..physics.geometry import in_turned_frame
 from ..physics.models.registry import MODELS, get_model
 from ..physics.models.specs import spec_of
 
@@ -78,9 +86,16 @@ class MitsubaExport:
         """The BSDF's BRDF (N, C) in 1/sr, by brdffit's model of it: the exported fit's."""
         return np.asarray(self.exported.predict(wi, wo))
 
+    @property
+    def tangent_azimuth(self) -> float | None:
+        """The azimuth (degrees from the data's ``+x``) at which the BSDF's tangent, Mitsuba's ``dp/du``, must lie:
+        an anisotropic fit's ``phi_t``; None for an isotropic BSDF."""
+        return self.exported.params["phi_t"] if _anisotropic(self.exported) else None
+
     def compared_with(self, result: FitResult, samples: "Samples") -> "MitsubaExport":
         """This export of ``result`` with :attr:`at_data` measured on ``samples`` (``at_data.data_for``'s data):
-        evaluated by Mitsuba itself where it is installed, else by :meth:`brdf`."""
+        evaluated by Mitsuba itself where it is installed (at the data's directions in the frame of the BSDF's
+        tangent, :attr:`tangent_azimuth`), else by :meth:`brdf`."""
         from .at_data import data_error
         from .mitsuba_eval import mitsuba_brdf, mitsuba_version
 
@@ -88,7 +103,13 @@ class MitsubaExport:
         if version is None:
             error = data_error(result, samples, self.brdf, "brdffit's model of the BSDF (Mitsuba is not installed)")
         else:
-            error = data_error(result, samples, lambda wi, wo: mitsuba_brdf(self.bsdf, wi, wo), f"Mitsuba {version}")
+            turn = np.radians(self.tangent_azimuth or 0.0)
+            error = data_error(
+                result,
+                samples,
+                lambda wi, wo: mitsuba_brdf(self.bsdf, in_turned_frame(wi, turn), in_turned_frame(wo, turn)),
+                f"Mitsuba {version}",
+            )
         return dataclasses.replace(self, at_data=error)
 
     def to_xml(self) -> str:
@@ -129,7 +150,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     notes = _channel_notes(result)
     exact = _exact_bsdf(result)
     if exact is not None and _in_range(result):
-        return MitsubaExport(exact, source, result, None, notes)
+        return MitsubaExport(exact, source, result, None, notes + _tangent_notes(result))
     from .approximate import approximation_error, refit
 
     if exact is not None:  # the model Mitsuba has, refitted within its range
@@ -147,7 +168,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
         ]
     exported, _ = min(candidates, key=lambda pair: pair[1].rmse)
     approximation = approximation_error(result, exported.predict)
-    notes += approximation.warnings("Mitsuba's microfacet model")
+    notes += _tangent_notes(exported) + approximation.warnings("Mitsuba's microfacet model")
     return MitsubaExport(_exact_bsdf(exported), source, exported, approximation, notes)
 
 
@@ -196,6 +217,23 @@ def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
     return None if mapping is None else mapping(result)
 
 
+def _anisotropic(result: FitResult) -> bool:
+    return result.model == "cook-torrance" and bool(result.model_options.get("anisotropic", False))
+
+
+def _tangent_notes(result: FitResult) -> list[str]:
+    """Where an anisotropic BSDF's tangent must lie for the export to be the fit (module docstring)."""
+    if not _anisotropic(result):
+        return []
+    phi_t = float(result.params["phi_t"])
+    where = "along the data's +x" if phi_t == 0.0 else f"at phi_t = {phi_t:.6g}° from the data's +x"
+    return [
+        f"anisotropic: Mitsuba's alpha_u lies along the shape's tangent (dp/du), which must lie {where}"
+        + ("" if phi_t == 0.0 else f" (turn the mesh's UVs, or its tangent, by {phi_t:.6g}°)")
+        + "; the BSDF is the fit in that frame"
+    ]
+
+
 def _rgb(values) -> list[float]:
     """Albedos as Mitsuba's linear RGB: three channels as they are, one as grey."""
     values = [float(value) for value in values]
@@ -236,7 +274,10 @@ def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
         return None
     kd, ks = np.asarray(_rgb(params["kd"])), np.asarray(_rgb(params["ks"]))
     specular: dict[str, Any] = {"type": "roughconductor", "distribution": options["distribution"]}
-    specular["alpha"] = float(params["m"])
+    if options["anisotropic"]:  # along the tangent and the bitangent; the tangent's azimuth: _tangent_notes
+        specular["alpha_u"], specular["alpha_v"] = float(params["alpha_u"]), float(params["alpha_v"])
+    else:
+        specular["alpha"] = float(params["m"])
     if options["fresnel"] == "none":
         specular["material"] = "none"
     else:

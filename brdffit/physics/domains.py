@@ -217,6 +217,43 @@ class Interval(Domain):
         return jnp.where((x >= self.lower) & (x <= self.upper), 0.0, -jnp.inf)
 
 
+@final
+@dataclass(frozen=True)
+class AxisAzimuth(MappedDomain):
+    """The azimuth of an axis, in degrees, in ``(−90, 90]``: an axis and its opposite are one (an anisotropic lobe's
+    tangent, whose lobe is π-periodic in it). Reached from the real line (radians) by wrapping,
+    ``x = 90 − ((90 − degrees(u)) mod 180)``: the lobe is the same on both sides of the seam at ±90°, so the
+    solver moves across it freely; uniform prior."""
+
+    @property
+    def text(self) -> str:
+        return "(-90, 90] degrees"
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        return -90.0, 90.0
+
+    def contains(self, x) -> bool:
+        x = np.asarray(x, dtype=float)
+        return bool(np.all(np.isfinite(x) & (x > -90.0) & (x <= 90.0)))
+
+    def wrapped(self, degrees):
+        """``degrees`` (any real, numpy or JAX) as the same axis's azimuth in ``(−90, 90]``."""
+        xp = namespace(degrees)
+        return 90.0 - xp.mod(90.0 - degrees, 180.0)
+
+    def to_physical(self, u):
+        return self.wrapped(jnp.degrees(u))
+
+    def to_unconstrained(self, x) -> np.ndarray:
+        xp = namespace(x)
+        return xp.radians(xp.asarray(x, dtype=float))
+
+    def log_prior(self, x):
+        """Uniform on (−90, 90]."""
+        return jnp.where((x > -90.0) & (x <= 90.0), 0.0, -jnp.inf)
+
+
 NON_NEGATIVE = Positive(allow_zero=True)
 POSITIVE = Positive()
 UNIT_INTERVAL = UnitInterval()
@@ -226,3 +263,5 @@ ALBEDO = Positive(allow_zero=True, plausible_max=1.0)
 ROUGHNESS = Positive(plausible_max=2.0)
 #: A cosine-power exponent: beyond 10⁴ a lobe is narrower than any gonioreflectometer resolves (0.6°).
 EXPONENT = Positive(plausible_max=1e4)
+#: The azimuth of an anisotropic lobe's tangent (degrees from +x, in (−90, 90]).
+AXIS_AZIMUTH = AxisAzimuth()

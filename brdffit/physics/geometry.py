@@ -105,6 +105,16 @@ def _rotated(v, theta_h, phi_h):
     return xp.stack([cos_p * x - sin_p * y, sin_p * x + cos_p * y, z], axis=-1)
 
 
+def in_turned_frame(w: Directions, azimuth) -> Directions:
+    """Directions ``w`` as seen in the frame turned by ``azimuth`` (radians) about the normal: their components along
+    ``t = (cos a, sin a, 0)``, ``b = (−sin a, cos a, 0)`` and ``z``. An anisotropic lobe's tangent ``t`` at azimuth
+    ``a``: ``w·t`` and ``w·b`` are its tangent-frame slopes' numerators. numpy or JAX."""
+    xp = namespace(w, azimuth)
+    cos_a, sin_a = xp.cos(azimuth), xp.sin(azimuth)
+    x, y = w[..., 0], w[..., 1]
+    return xp.stack([cos_a * x + sin_a * y, cos_a * y - sin_a * x, w[..., 2]], axis=-1)
+
+
 def mirror_direction(w: Directions) -> Directions:
     """Mirror image of ``w`` about the normal: ``(-x, -y, z)``."""
     xp = namespace(w)

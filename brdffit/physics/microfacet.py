@@ -20,6 +20,21 @@ with ``a = 1/(m tan θ)``:
 
 * Beckmann: ``Λ = (erf(a) − 1)/2 + exp(−a²)/(2a√π)``, through ``erf``, not Walter's rational approximation;
 * GGX: ``Λ = (−1 + sqrt(1 + 1/a²))/2``.
+
+Each ``Λ`` is one function of ``1/a² = m² tan²θ`` (``*_slope_lambda``), which the isotropic and the anisotropic lobe
+both call.
+
+Anisotropic distributions (Heitz 2014, §5.2–5.4): roughness ``αu`` along a tangent ``t``, ``αv`` along the bitangent
+``b``; with the half vector's tangent-frame components ``x = h·t``, ``y = h·b`` and
+``s = (x²/αu² + y²/αv²)/ch²``:
+
+* Beckmann: ``D = exp(−s) / (π αu αv ch⁴)``;
+* GGX: ``D = 1 / (π αu αv ch⁴ (1 + s)²)``.
+
+Their Smith ``Λ`` is the isotropic one with the direction's own roughness ``α(φ) = sqrt(cos²φ αu² + sin²φ αv²)``
+(``φ`` its azimuth from ``t``), i.e. ``1/a² = α(φ)² tan²θ = (x² αu² + y² αv²)/z²`` from its tangent-frame components
+``(x, y, z)``: no division by ``sin θ``, so normal incidence is finite, with finite slopes. With ``αu = αv = m``
+both reduce to the isotropic ones.
 """
 
 from collections.abc import Callable
@@ -47,31 +62,79 @@ def ggx_distribution(cos_theta_h, m):
     return m * m / (jnp.pi * cos2 * cos2 * spread * spread)
 
 
+def beckmann_anisotropic_distribution(x, y, cos_theta_h, alpha_u, alpha_v):
+    """Anisotropic Beckmann ``exp(−(x²/αu² + y²/αv²)/ch²) / (π αu αv ch⁴)``, in 1/sr; ``x = h·t``, ``y = h·b``."""
+    cos2 = cos_theta_h * cos_theta_h
+    return jnp.exp(-_slope_spread(x, y, cos2, alpha_u, alpha_v)) / (jnp.pi * alpha_u * alpha_v * cos2 * cos2)
+
+
+def ggx_anisotropic_distribution(x, y, cos_theta_h, alpha_u, alpha_v):
+    """Anisotropic GGX ``1 / (π αu αv ch⁴ (1 + (x²/αu² + y²/αv²)/ch²)²)``, in 1/sr; ``x = h·t``, ``y = h·b``
+    (Heitz 2014, eq. 85)."""
+    cos2 = cos_theta_h * cos_theta_h
+    spread = 1.0 + _slope_spread(x, y, cos2, alpha_u, alpha_v)
+    return 1.0 / (jnp.pi * alpha_u * alpha_v * cos2 * cos2 * spread * spread)
+
+
+def _slope_spread(x, y, cos2, alpha_u, alpha_v):
+    """``(x²/αu² + y²/αv²)/ch²``: the half vector's slopes, each over its roughness, squared and summed."""
+    return ((x / alpha_u) ** 2 + (y / alpha_v) ** 2) / cos2
+
+
+def beckmann_slope_lambda(slope2):
+    """Smith's ``Λ`` for the Beckmann distribution as a function of ``slope2 = 1/a² = α² tan²θ`` (exact, ``erf``)."""
+    # 1/a² below 1/A_MAX²: a at its maximum (the sqrt never sees 0, so the slope stays finite at the normal)
+    a = 1.0 / jnp.sqrt(jnp.maximum(slope2, 1.0 / (BECKMANN_A_MAX * BECKMANN_A_MAX)))
+    return 0.5 * (jnp.exp(-a * a) / (a * jnp.sqrt(jnp.pi)) - jsp.erfc(a))
+
+
+def ggx_slope_lambda(slope2):
+    """Smith's ``Λ`` for the GGX distribution as a function of ``slope2 = 1/a² = α² tan²θ``:
+    ``(−1 + sqrt(1 + slope2))/2``."""
+    return 0.5 * (jnp.sqrt(1.0 + slope2) - 1.0)
+
+
 def beckmann_lambda(cos_theta, m):
     """Smith's ``Λ`` for the Beckmann distribution at a direction of zenith cosine ``cos_theta`` (exact, ``erf``)."""
-    floor = 1.0 / (BECKMANN_A_MAX * m)  # tan θ below it: a at its maximum (the sqrt never sees 0: finite slopes)
-    a = 1.0 / (m * jnp.sqrt(jnp.maximum(tan2_from_cos(cos_theta), floor * floor)))
-    return 0.5 * (jnp.exp(-a * a) / (a * jnp.sqrt(jnp.pi)) - jsp.erfc(a))
+    return beckmann_slope_lambda(m * m * tan2_from_cos(cos_theta))
 
 
 def ggx_lambda(cos_theta, m):
     """Smith's ``Λ`` for the GGX distribution: ``(−1 + sqrt(1 + m² tan²θ))/2``."""
-    return 0.5 * (jnp.sqrt(1.0 + m * m * tan2_from_cos(cos_theta)) - 1.0)
+    return ggx_slope_lambda(m * m * tan2_from_cos(cos_theta))
+
+
+def anisotropic_slope2(w, alpha_u, alpha_v):
+    """``α(φ)² tan²θ = (x² αu² + y² αv²)/z²`` of directions ``w`` (…, 3) given in the tangent frame: the ``1/a²``
+    of the anisotropic Smith ``Λ``."""
+    x, y, z = w[..., 0], w[..., 1], w[..., 2]
+    return ((x * alpha_u) ** 2 + (y * alpha_v) ** 2) / (z * z)
 
 
 @dataclass(frozen=True)
 class Distribution:
-    """A microfacet distribution: ``density(cos θh, m)`` in 1/sr and Smith's ``smith_lambda(cos θ, m)``."""
+    """A microfacet distribution: ``density(cos θh, m)`` in 1/sr and Smith's ``smith_lambda(cos θ, m)``; anisotropic,
+    ``anisotropic_density(h·t, h·b, cos θh, αu, αv)``; and its ``Λ`` as a function of ``1/a²``, ``slope_lambda``."""
 
     summary: str
     density: Callable
     smith_lambda: Callable
+    anisotropic_density: Callable
+    slope_lambda: Callable
 
 
 #: The distributions, by the name the ``distribution`` option takes; the first is the default.
 DISTRIBUTIONS = {
-    "beckmann": Distribution("Beckmann 1963", beckmann_distribution, beckmann_lambda),
-    "ggx": Distribution("GGX (Trowbridge-Reitz 1975)", ggx_distribution, ggx_lambda),
+    "beckmann": Distribution(
+        "Beckmann 1963",
+        beckmann_distribution,
+        beckmann_lambda,
+        beckmann_anisotropic_distribution,
+        beckmann_slope_lambda,
+    ),
+    "ggx": Distribution(
+        "GGX (Trowbridge-Reitz 1975)", ggx_distribution, ggx_lambda, ggx_anisotropic_distribution, ggx_slope_lambda
+    ),
 }
 
 
@@ -84,7 +147,20 @@ def shadowing(kind: str, distribution: Distribution, m, cos_i, cos_o, cos_theta_
     """The masking-shadowing term ``kind`` (:data:`SHADOWING`) of ``distribution`` with roughness ``m``."""
     if kind == "v-groove":
         return v_groove_shadowing(cos_i, cos_o, cos_theta_h, cos_beta)
-    lambda_i, lambda_o = distribution.smith_lambda(cos_i, m), distribution.smith_lambda(cos_o, m)
+    return smith_shadowing(kind, distribution.smith_lambda(cos_i, m), distribution.smith_lambda(cos_o, m))
+
+
+def anisotropic_shadowing(kind: str, distribution: Distribution, alpha_u, alpha_v, wi, wo, cos_theta_h, cos_beta):
+    """The masking-shadowing term ``kind`` of an anisotropic ``distribution``; ``wi``, ``wo`` (N, 3) in the tangent
+    frame. The V-groove term depends on the half vector alone, not on the roughness: it applies as it is."""
+    if kind == "v-groove":
+        return v_groove_shadowing(wi[:, 2], wo[:, 2], cos_theta_h, cos_beta)
+    lambda_i = distribution.slope_lambda(anisotropic_slope2(wi, alpha_u, alpha_v))
+    return smith_shadowing(kind, lambda_i, distribution.slope_lambda(anisotropic_slope2(wo, alpha_u, alpha_v)))
+
+
+def smith_shadowing(kind: str, lambda_i, lambda_o):
+    """Smith's masking-shadowing of ``Λ(wi)``, ``Λ(wo)``: separable (``smith``) or height-correlated."""
     if kind == "smith":
         return 1.0 / ((1.0 + lambda_i) * (1.0 + lambda_o))
     return 1.0 / (1.0 + lambda_i + lambda_o)

@@ -189,3 +189,23 @@ def test_the_bucket_screen_of_padded_stacks_equals_each_fit_screened_alone(oak):
         (alone,) = screen_bucket(model, params[k : k + 1], samples[k : k + 1], 1)
         assert together[k].albedo_open == alone.albedo_open
         np.testing.assert_allclose(together[k].lobe_shares, alone.lobe_shares, rtol=1e-12, atol=1e-15)
+
+
+def test_an_anisotropy_that_in_plane_data_cannot_determine_is_named():
+    """Directions all in one plane of incidence see an anisotropic lobe in that plane alone: its tangent's azimuth
+    phi_t and its mirror image about the plane fit alike. The fit says so, naming phi_t; data out of the plane (the
+    hemisphere grid) earn no such line, and an isotropic model none on in-plane data."""
+    options = {"fresnel": "none", "distribution": "ggx", "shadowing": "smith", "anisotropic": True}
+    truth = {"kd": [0.1] * 3, "ks": [0.5] * 3, "alpha_u": 0.1, "alpha_v": 0.3, "phi_t": 30.0}
+    model = get_model("cook-torrance", **options)
+    params = model.dictionary.to_params(truth)
+    in_plane = data_synth.synthesize("cook-torrance", truth, *data_synth.in_plane(4, 45), **options)
+    (line,) = [line for line in caveats(model, in_plane, params) if "phi_t" in line]
+    assert line.startswith("every direction lies in one plane of incidence (azimuth 0°): the data cannot determine")
+    hemisphere = data_synth.synthesize("cook-torrance", truth, *data_synth.hemisphere_grid(4, 18, 18), **options)
+    assert not any("plane of incidence" in line for line in caveats(model, hemisphere, params))
+    isotropic = get_model("cook-torrance", fresnel="none")
+    round_lobe = isotropic.dictionary.to_params({"kd": [0.1] * 3, "ks": [0.5] * 3, "m": 0.2})
+    assert not any("plane of incidence" in line for line in caveats(isotropic, in_plane, round_lobe))
+    with pytest.warns(FitWarning, match=r"cannot determine phi_t, the tangent's azimuth"):
+        fit(in_plane, "cook-torrance", **options)

@@ -7,7 +7,9 @@
   ends on an end of its domain: the optimum is against the bound;
 * the model's directional albedo exceeds 1 at some incidence: it reflects more light than it receives (one line
   per channel);
-* a fit with more lobes ends worse than one with fewer: it stopped in a local minimum.
+* a fit with more lobes ends worse than one with fewer: it stopped in a local minimum;
+* an anisotropic model fitted to data whose every direction lies in one plane of incidence: the data cannot
+  determine its anisotropy (an anisotropic Cook-Torrance lobe's tangent azimuth ``phi_t``, named).
 """
 
 from collections.abc import Sequence
@@ -41,6 +43,9 @@ SCREEN_GRID = 64
 SCREEN_BELOW = 0.95
 #: The screen's allowance for a lobe its grid samples too sparsely: the BRDF's peak over this many cells.
 SCREEN_PEAK_CELLS = 16
+#: Directions whose azimuths all lie within this many degrees of one plane through the normal lie in that plane
+#: (a gonioreflectometer's in-plane scan, with its positioning jitter).
+IN_PLANE_DEGREES = 0.5
 
 
 @float64
@@ -56,7 +61,7 @@ def caveats(
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
-    found = _not_reciprocal(samples)
+    found = _not_reciprocal(samples) + _anisotropy_undetermined(model, samples)
     if not isinstance(model, LobeModel):  # no lobes to share the model, none peaked at the mirror to screen
         screened = Screened(ALBEDO_INCIDENCE, np.zeros(0))
     elif screened is None:
@@ -89,6 +94,42 @@ def _not_reciprocal(samples: Samples) -> list[str]:
         f" of f(a→b)/f(b→a) is {found.as_read:.3g}; read as {found.best} it is {found.ratios[found.best]:.3g}"
         f": read them with --quantity {found.best} (quantity='{found.best}' in Python)"
     ]
+
+
+def _anisotropy_undetermined(model: Model, samples: Samples) -> list[str]:
+    """An anisotropic lobe model fitted to directions that all lie in one plane of incidence: such data see the lobe
+    in that plane alone, where a tangent and its mirror image about the plane look alike and the two roughnesses
+    enter only in combination."""
+    if not isinstance(model, LobeModel) or model.isotropic or not model.n_lobes:
+        return []
+    plane = _plane_of_incidence(np.concatenate([samples.wi, samples.wo]))
+    if plane is None:
+        return []
+    names = model.lobe.names
+    if "phi_t" in names:
+        what = "phi_t, the tangent's azimuth (its mirror image about that plane fits alike), nor alpha_u, alpha_v apart"
+    else:
+        what = f"its anisotropy ({', '.join(names)})"
+    return [
+        f"every direction lies in one plane of incidence (azimuth {plane:.3g}°): the data cannot determine {what};"
+        " measure out of that plane, or fit an isotropic model"
+    ]
+
+
+def _plane_of_incidence(directions: np.ndarray) -> float | None:
+    """The azimuth (degrees, in [0, 180)) of the one plane through the normal that holds every direction (N, 3)
+    within :data:`IN_PLANE_DEGREES`, or None where there is none; directions along the normal lie in every plane."""
+    horizontal = directions[:, :2]
+    length = np.hypot(horizontal[:, 0], horizontal[:, 1])
+    horizontal = horizontal[length > 1e-9] / length[length > 1e-9, None]
+    if not len(horizontal):
+        return None
+    # The plane's direction: the principal axis of the horizontal unit vectors (a line: u and −u alike).
+    axis = np.linalg.eigh(horizontal.T @ horizontal)[1][:, -1]
+    off = np.abs(horizontal[:, 0] * axis[1] - horizontal[:, 1] * axis[0])  # |sin| of each one's angle to the plane
+    if np.max(off) > np.sin(np.radians(IN_PLANE_DEGREES)):
+        return None
+    return float(np.degrees(np.arctan2(axis[1], axis[0])) % 180.0)
 
 
 def _dead_lobes(model: LobeModel, params: Params, shares: np.ndarray) -> list[str]:

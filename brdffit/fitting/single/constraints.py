@@ -73,6 +73,12 @@ class Constraints:
         """How many parameters the fit determines: the unconstrained vector's entries less the fixed ones."""
         return int(self.free.sum())
 
+    @property
+    def held_shapes(self) -> set[str]:
+        """The lobe-shape parameters (by their names within a lobe: ``m``, ``alpha_u``) fixed or bounded."""
+        targets = (_target(self.model, name) for name in (*self.fixed, *self.bounds))
+        return {target.parameter for target in targets if target.kind == "shape"}
+
     # ------------------------------------------------------------------ the solver's and the walkers' forms
     def hold(self) -> Hold:
         """The solver's :class:`Hold` (numpy float64 arrays (k,)) over the unconstrained vector."""

@@ -1,4 +1,5 @@
-"""A solve as a :class:`FitResult`: its parameters moved onto their domains, its caveats, how it ended.
+"""A solve as a :class:`FitResult`: its parameters moved onto their domains and into their canonical form, its caveats,
+how it ended.
 
 Every fit ends here, whichever way it was solved: one dataset or a batch of many (``stacked.py``), a model of several
 lobes (``fit.py``), the data-driven model's own solve (``datadriven/fit.py``).
@@ -10,7 +11,7 @@ import numpy as np
 
 from ..._jax import jax
 from ...data.samples import Samples
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
 from ..objective.losses import Loss
 from ..solver.compiled import Solved, failure_message
@@ -28,6 +29,19 @@ def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
     if not np.all(np.isfinite(physical) & (physical > low) & (physical < high)):  # else every domain holds it
         physical = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
     return model.physical.to_params(physical, n_channels)
+
+
+def canonical_params(model: Model, params: Params, constraints: Constraints | None = None) -> Params:
+    """``params`` (numpy) with each lobe's shape in its family's canonical form (``Lobe.canonical``: an anisotropic
+    lobe's ``alpha_u ≤ alpha_v``), unless that would move a shape parameter ``constraints`` hold: the user's naming
+    wins."""
+    if not isinstance(model, LobeModel) or not model.n_lobes:
+        return params
+    shape = model.lobe.canonical({name: np.asarray(value) for name, value in params.shape.items()})
+    held = set() if constraints is None else constraints.held_shapes
+    if any(not np.array_equal(shape[name], params.shape[name]) for name in held):
+        return params
+    return Params(params.diffuse, params.specular, shape)
 
 
 def result_of(
@@ -51,6 +65,7 @@ def result_of(
     solve's :func:`final_params`, when the caller has them."""
     converged = bool(solved.converged)
     params = final_params(model, solved, samples.n_channels) if params is None else params
+    params = canonical_params(model, params, constraints)
     if constraints is not None:
         params = constraints.with_fixed(params)
         more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]

@@ -381,7 +381,10 @@ def _nested(names: dict[str, Any]) -> dict[str, Any]:
 
 
 def _shown(key: str, value) -> str:
-    """A model option as the table's first line shows it: a file's digest by its first 12 digits."""
+    """A model option as the table's first line shows it: a file's digest by its first 12 digits, a yes or no as
+    ``true`` or ``false`` (as a spec writes it)."""
+    if isinstance(value, bool):
+        return str(value).lower()
     return f"{value[:12]}…" if key.endswith("_sha256") and isinstance(value, str) else str(value)
 
 

@@ -157,6 +157,10 @@ class LafortuneLobe(Lobe):
             shape["cz"] = float(np.sqrt(max(0.0, 1.0 - 2.0 * cxy * cxy)))
         return self.checked_shape(shape, where)
 
+    def canonical(self, shape):
+        """A lobe's direction and exponent are one lobe each (``2 cxy² + cz² = 1`` fixes the rest)."""
+        return dict(shape)
+
     def coordinate_index(self, name):
         """``cxy`` and ``cz`` are both the direction's angle ψ; ``n`` is ``ln n``'s or ``n``'s coordinate."""
         return {"cxy": 0, "cz": 0, "n": 1}[name]

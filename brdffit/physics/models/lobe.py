@@ -9,7 +9,8 @@ one angle ``ψ`` in the last two (``lafortune.py``).
 
 Abstract classes here, final concrete classes in the family modules (equinox's abstract/final pattern: an
 abstract class may implement methods, a concrete one never overrides them). Most families are a
-:class:`MappedLobe`; Lafortune's is a :class:`Lobe` with coordinates of its own.
+:class:`MappedLobe`; Lafortune's is a :class:`Lobe` with coordinates of its own; the anisotropic microfacet lobe
+a :class:`MappedShapeLobe` with a canonical form of its own (``cook_torrance.py``).
 """
 
 from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
@@ -163,6 +164,11 @@ class Lobe(ABC):
         domains), the family's first grid shape elsewhere; ``where`` prefixes errors (``lobes[1].``)."""
 
     @abstractmethod
+    def canonical(self, shape: Shape) -> dict[str, Any]:
+        """``shape`` (numpy, a (K,) array per name) in the family's canonical form: where two shapes give the same
+        lobe (an anisotropic lobe's ``α_u ↔ α_v`` with its tangent turned by 90°), the one a fit reports."""
+
+    @abstractmethod
     def coordinate_index(self, name: str) -> int:
         """Which of the solver's (and the walkers') shape coordinates carries the shape parameter ``name``: a user
         who fixes or bounds ``name`` holds that coordinate."""
@@ -181,9 +187,10 @@ class Lobe(ABC):
         return dataclass_key(self)
 
 
-class MappedLobe(Lobe):
+class MappedShapeLobe(Lobe):
     """A lobe whose every shape parameter lives in a :class:`~brdffit.physics.domains.MappedDomain`: the solver
-    moves each through its domain's map, the walkers move the values themselves."""
+    moves each through its domain's map, the walkers move the values themselves. Most families are a
+    :class:`MappedLobe`; the anisotropic microfacet lobe, whose shapes come in twins, says its canonical one."""
 
     @property
     @abstractmethod
@@ -208,3 +215,12 @@ class MappedLobe(Lobe):
             if not domain.contains(shape[name]):
                 raise BrdfInputError(f"{where}{name} = {shape[name]!r} is outside its domain {domain.text}")
         return {name: float(shape[name]) for name in self.names}
+
+
+class MappedLobe(MappedShapeLobe):
+    """A lobe whose every shape parameter lives in a :class:`~brdffit.physics.domains.MappedDomain` (the solver
+    moves each through its domain's map, the walkers move the values themselves: :class:`MappedShapeLobe`) and whose
+    every shape is a lobe of its own: the usual base of a family."""
+
+    def canonical(self, shape: Shape) -> dict[str, Any]:
+        return dict(shape)

@@ -3,7 +3,8 @@
 ``ward``, ``cook-torrance:fresnel=conductor``, ``lafortune:lobes=2``. A value without its key is the value of
 the one option that accepts it (``lafortune:2``, ``cook-torrance:conductor``). The canonical spec of a model
 (:func:`spec_of`) names, with its key, every option that differs from its default, in the model's order:
-``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``.
+``cook-torrance`` is Beckmann, V-groove and Schlick; ``cook-torrance:distribution=ggx,shadowing=smith``;
+``cook-torrance:distribution=ggx,shadowing=smith,anisotropic=true`` (a yes or no is ``true`` or ``false``).
 """
 
 import os
@@ -18,15 +19,18 @@ def spec_of(name: str, options: dict[str, Any]) -> str:
     """The canonical spec of model ``name`` with ``options``: ``lafortune:lobes=2``, ``cook-torrance``."""
     defaults = model_option_defaults(name) if name in MODELS else {}
     written = ",".join(
-        f"{key}={_shown(key, value)}"
+        f"{key}={shown_value(key, value)}"
         for key, value in options.items()
         if defaults.get(key) != value and key not in recorded_options()
     )
     return f"{name}:{written}" if written else name
 
 
-def _shown(key: str, value: Any) -> Any:
-    """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it."""
+def shown_value(key: str, value: Any) -> Any:
+    """An option's value in a spec: a file (the data-driven model's basis) by its name, as a label shows it; a yes or
+    no as ``true`` or ``false``."""
+    if isinstance(value, bool):
+        return str(value).lower()
     return os.path.basename(str(value)) if key in file_options() else value
 
 
