@@ -197,7 +197,8 @@ def lambert_bsdf(result: FitResult) -> tuple[dict[str, Any], float]:
 
 def cook_torrance_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None:
     """The Mitsuba dictionary of a Cook-Torrance ``result`` with Smith shadowing and a conductor, dielectric or no
-    Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``), and the factor its albedos were scaled by
+    Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``; a conductor's ``eta`` and ``k`` per
+    channel as ``rgb`` values), and the factor its albedos were scaled by
     (1 unless Mitsuba's [0, 1] range forced it); None for other options (the ``cook-torrance`` model's exact
     export)."""
     params, options = result.params, get_model(result.model, **result.model_options).model_options
@@ -208,9 +209,12 @@ def cook_torrance_bsdf(result: FitResult) -> tuple[dict[str, Any], float] | None
     specular["alpha"] = float(params["m"])
     if options["fresnel"] == "none":
         specular["material"] = "none"
+    elif options["fresnel"] == "conductor":  # one complex index per channel, as Mitsuba's RGB textures
+        specular["eta"] = _rgb_value(np.asarray(_rgb(np.atleast_1d(params["eta"]))))
+        specular["k"] = _rgb_value(np.asarray(_rgb(np.atleast_1d(params["k"]))))
     else:
         specular["eta"] = float(params["eta"])
-        specular["k"] = float(params.get("k", 0.0))
+        specular["k"] = 0.0
     total = kd.max() + ks.max()
     scale = min(1.0, 1.0 / max(total, 1e-300))
     kd, ks = kd * scale, ks * scale

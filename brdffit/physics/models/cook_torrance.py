@@ -22,6 +22,7 @@ from ...checks import choice
 from ..domains import ALBEDO, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL
 from ..geometry import half_vector
+from ..metals import metal_grid
 from ..microfacet import DISTRIBUTIONS, SHADOWING, shadowing
 from .grids import ROUGHNESS_GRID
 from .lobe import MappedLobe
@@ -65,6 +66,16 @@ class CookTorranceLobe(MappedLobe):
             shapes = [shape | {name: start} for shape in shapes for start in starts]
         return tuple(shapes)
 
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        return FRESNEL[self.fresnel].per_channel
+
+    def channel_grid(self, channels):
+        """A conductor's measured metals (``metals.py``) in ``channels``, at every roughness of the grid."""
+        if self.fresnel != "conductor":
+            return ()
+        return tuple({"m": m} | metal for m in ROUGHNESS_GRID for metal in metal_grid(channels))
+
     def __call__(self, shape, wi, wo):
         cos_i, cos_o = wi[:, 2], wo[:, 2]
         h = half_vector(wi, wo)
@@ -72,8 +83,10 @@ class CookTorranceLobe(MappedLobe):
         cos_beta = jnp.sum(wi * h, axis=-1)
         distribution = DISTRIBUTIONS[self.distribution]
         masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cos_beta)
-        fresnel = FRESNEL[self.fresnel].reflectance(cos_beta, shape)
-        return fresnel * distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
+        unit = distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
+        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
+            return FRESNEL[self.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
+        return FRESNEL[self.fresnel].reflectance(cos_beta, shape) * unit
 
 
 def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shadowing: str = "v-groove") -> LobeModel:
@@ -81,7 +94,10 @@ def cook_torrance(fresnel: str = "schlick", distribution: str = "beckmann", shad
     ``distribution`` beckmann (default) or ggx; ``shadowing`` v-groove (default), smith or smith-correlated."""
     lobe = CookTorranceLobe(fresnel, distribution, shadowing)
     options = (("fresnel", fresnel), ("distribution", distribution), ("shadowing", shadowing))
-    return LobeModel("cook-torrance", "Cook-Torrance 1982 (Walter 2007 normalisation)", lobe, 1, "kd", "ks", options)
+    # A conductor's reflectance is its Fresnel term: ks is held at 1 unless a user frees it (docs/holding.md).
+    held = (("ks", 1.0),) if fresnel == "conductor" else ()
+    summary = "Cook-Torrance 1982 (Walter 2007 normalisation)"
+    return LobeModel("cook-torrance", summary, lobe, 1, "kd", "ks", options, held=held)
 
 
 #: The microfacet model renderers implement (GGX with Smith shadowing: Mitsuba's ``roughconductor``, glTF's
