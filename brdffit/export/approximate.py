@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.samples import Samples
+from ..fitting.options import Holding
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from ..fitting.single.fit import fit_one
 from ..fitting.single.result import FitResult
@@ -101,9 +102,12 @@ def approximation_error(result: FitResult, brdf: Callable[[np.ndarray, np.ndarra
 
 
 def refit(result: FitResult, model: Model | str, **model_options) -> tuple[FitResult, Approximation]:
-    """``model`` fitted to ``result``'s BRDF on :func:`dense_grid` with ``result``'s loss, and how far it lies."""
+    """``model`` fitted to ``result``'s BRDF on :func:`dense_grid` with ``result``'s loss, and how far it lies; every
+    parameter the renderer's model has is free (a conductor's ``ks`` too, which a fit holds at 1 by default: the
+    renderer's ``specular_reflectance`` takes any value)."""
     model = get_model(model, **model_options)
-    fitted = fit_one(tabulated(result), model, result.loss)
+    freed = Holding(fixed={name: None for name, _ in getattr(model, "held", ())})
+    fitted = fit_one(tabulated(result), model, result.loss, holding=freed)
     return fitted, approximation_error(result, fitted.predict)
 
 
