@@ -241,11 +241,17 @@ def normal_equations(model: Model, loss: Loss, theta: Float[Array, " k"], proble
         cost, projected, gram, squared_error = sums
         n, c = r.shape
         error = jnp.where(chunk.real[:, None], values - chunk.measured.astype(jnp.float64), 0.0)
-        if basis.ndim == 3:  # a basis per channel (N, C, M): Q_c = Σ_n w²[n, c] B[n, c] B[n, c]ᵀ
+        if basis.ndim == 3:  # a basis per channel (N, C, M): Q_c = Σ_n (w B)[n, c] (w B)[n, c]ᵀ, R_c = Σ_n r (w B)
+            # One dot over the rows, batched over the channels: [r | w B]ᵀ (w B). As two einsums ("nc,ncm,ncl->cml"
+            # and "nc,ncm->cm") the contraction took twice as long (3 × 11,520 × 5: 1.14 ms, this 0.53 ms).
+            weighted = w[:, :, None] * basis
+            both = jax.lax.dot_general(
+                jnp.concatenate([r[:, :, None], weighted], axis=2), weighted, (((0,), (0,)), ((1,), (1,)))
+            )  # (C, 1 + M, M)
             return (
                 cost + jnp.sum(r * r),
-                projected + jnp.einsum("nc,ncm->cm", w * r, basis),
-                gram + jnp.einsum("nc,ncm,ncl->cml", w * w, basis, basis),
+                projected + both[:, 0],
+                gram + both[:, 1:],
                 squared_error + jnp.sum(error * error),
             ), None
         # Both sums come from one dot over the chunk's rows of row-major (n, ·) arrays: [w r | w² ⊗ B]ᵀ B.

@@ -30,6 +30,11 @@ from ..solver.hold import Hold, respected
 ALBEDO_FLOOR = 1e-3
 #: Starts are searched on at most this many samples; the winner is then refined on all of them.
 SEARCH_SAMPLES = 2**14
+#: A lobe with per-channel parameters (a conductor) is searched this many grid shapes at a time: its grid is larger
+#: (352 shapes with the measured metals on RGB data) and its bases C times larger, and all of them at once, (G, B, N,
+#: C), made the search memory-bound: on the pickled-oak example (10k samples × 3 channels, 2-core Xeon, loaded) the
+#: search took 1,075 ms at once, 383, 354, 342, 416, 567 and 508 ms in batches of 1, 2, 4, 8, 16 and 64.
+PER_CHANNEL_BATCH = 4
 #: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
 #: that a few samples see is still seen.
 BRIGHT_SHARE = 0.25
@@ -185,12 +190,22 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
         }
         if hold is not None:
             stacked = _held_shapes(model, stacked, hold, n_placed, n_channels)
-        lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N) or (G, N, C)
-        bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N) or (G, B, N, C)
+    if per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
+
+        def normal_equations_of(shape):
+            lobe = model.lobe(shape, problem.wi, problem.wo)  # (N, C)
+            return _normal_equations(jnp.concatenate([fixed, lobe[None]]), weight, problem.measured)
+
+        grams, rhs = jax.lax.map(normal_equations_of, stacked, batch_size=PER_CHANNEL_BATCH)
     else:
-        bases = fixed[None]
-    grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
-    held = None if hold is None else _held_albedos(hold, bases.shape[1], n_channels)
+        if model.n_lobes:
+            lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
+            bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
+        else:
+            bases = fixed[None]
+        grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
+    n_basis = rhs.shape[-1]
+    held = None if hold is None else _held_albedos(hold, n_basis, n_channels)
     albedos = jnp.swapaxes(nonnegative_least_squares(grams, rhs, held), 1, 2)  # (G, B, C)
     largest = jnp.maximum(jnp.max(albedos, axis=(1, 2), keepdims=True), 1e-6)
     albedos = jnp.maximum(albedos, ALBEDO_FLOOR * largest)
@@ -216,7 +231,8 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
         return respected(model.unconstrained.from_params(Params(albedo[0], specular, shape)), hold)
 
     thetas = jax.vmap(theta_of)(jnp.arange(len(grid)), albedos)
-    costs = jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
+    cost_of = lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2)
+    costs = jax.lax.map(cost_of, thetas, batch_size=PER_CHANNEL_BATCH) if per_channel else jax.vmap(cost_of)(thetas)
     return costs, thetas
 
 
