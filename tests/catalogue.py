@@ -23,8 +23,8 @@ CASES = [
     ),
     (
         "cook-torrance",
-        {"fresnel": "conductor"},
-        {"kd": [0.01, 0.01, 0.01], "ks": [0.9, 0.8, 0.6], "m": 0.2, "eta": 0.2, "k": 3.9},
+        {"fresnel": "conductor"},  # copper-like: an index per channel, ks 1 (held there by default)
+        {"kd": [0.01, 0.01, 0.01], "ks": [1.0, 1.0, 1.0], "m": 0.2, "eta": [0.2, 0.92, 1.1], "k": [3.9, 2.45, 2.14]},
     ),
     ("cook-torrance", {"fresnel": "none"}, {"kd": [0.3, 0.26, 0.18], "ks": [0.05, 0.04, 0.03], "m": 0.25}),
     ("blinn-phong", {}, {"rho_d": [0.2, 0.1, 0.05], "rho_s": [0.05, 0.05, 0.05], "n": 60.0}),
@@ -48,10 +48,16 @@ CASES = [
             ],
         },
     ),
-    (  # a renderer's metal: GGX with separable Smith (Mitsuba's roughconductor), gold-like index
+    (  # a renderer's metal: GGX with separable Smith (Mitsuba's roughconductor), Mitsuba's gold (metals.py)
         "cook-torrance",
         {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"},
-        {"kd": [0.01, 0.01, 0.01], "ks": [1.0, 0.8, 0.4], "m": 0.15, "eta": 0.2, "k": 3.9},
+        {
+            "kd": [0.01, 0.01, 0.01],
+            "ks": [1.0, 1.0, 1.0],
+            "m": 0.15,
+            "eta": [0.143, 0.375, 1.442],
+            "k": [3.98, 2.39, 1.6],
+        },
     ),
     (  # a plastic: Beckmann with height-correlated Smith
         "cook-torrance",

@@ -82,7 +82,8 @@ def model_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def add_holding_options(command: argparse.ArgumentParser) -> None:
-    """``--fix`` and ``--bounds``: parameters held at values or within ranges (``docs/holding.md``)."""
+    """``--fix``, ``--bounds`` and ``--free``: parameters held at values or within ranges, or freed from the model's
+    default holds (``docs/holding.md``)."""
     holding = command.add_argument_group("holding parameters (names as in the result file; docs/holding.md)")
     holding.add_argument(
         "--fix",
@@ -97,11 +98,18 @@ def add_holding_options(command: argparse.ArgumentParser) -> None:
         metavar="NAME=LO:HI[,…]",
         help="search parameters only within [LO, HI], inside their domains: m=0.05:0.3",
     )
+    holding.add_argument(
+        "--free",
+        action="append",
+        metavar="NAME[,…]",
+        help="fit a parameter the model holds by default: ks of a conductor (held at 1)",
+    )
 
 
 def holding_arguments(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
-    """``fixed`` and ``bounds`` as :func:`brdffit.fit` takes them, from ``--fix`` and ``--bounds`` (each may be given
-    more than once, each a comma-separated list); the names and values are checked against the model by the fit."""
+    """``fixed`` and ``bounds`` as :func:`brdffit.fit` takes them, from ``--fix``, ``--bounds`` and ``--free`` (a freed
+    name fixed at None; each flag may be given more than once, each a comma-separated list); the names and values
+    are checked against the model by the fit."""
     fixed: dict[str, Any] = {}
     for item in _held_items(args.fix, "--fix"):
         name, value = _name_and_text(item, "--fix", "NAME=VALUE (eta=1.5, kd=[0.1,0.2,0.3])")
@@ -109,6 +117,8 @@ def holding_arguments(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
             fixed[_new(name, fixed, "--fix")] = json.loads(value)
         except json.JSONDecodeError:
             raise BrdfInputError(f"--fix {item}: {value!r} is not a number or a list of numbers") from None
+    for name in _held_items(getattr(args, "free", None), "--free"):
+        fixed[_new(name, fixed, "--free")] = None  # None frees a default hold (constraints.py)
     bounds: dict[str, Any] = {}
     for item in _held_items(args.bounds, "--bounds"):
         name, value = _name_and_text(item, "--bounds", "NAME=LO:HI (m=0.05:0.3)")

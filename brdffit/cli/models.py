@@ -57,6 +57,9 @@ def describe_parameters(model) -> list[str]:
     """One line per parameter: its name, shape ([C] for one value per channel) and domain."""
     lines = [f"{model.diffuse_name}: [C] {model.diffuse.albedo_domain.text}"]
     if model.n_lobes:
-        lines.append(f"{model.specular_name}: [C] {model.lobe.albedo_domain.text}")
-        lines += [f"{name}: {domain.text}" for name, domain in model.lobe.parameters]
+        held = dict(getattr(model, "held", ()))
+        held_text = f" (held at {held[model.specular_name]:g} unless freed)" if model.specular_name in held else ""
+        lines.append(f"{model.specular_name}: [C] {model.lobe.albedo_domain.text}{held_text}")
+        per_channel = lambda name: "[C] " if name in model.lobe.channel_names else ""
+        lines += [f"{name}: {per_channel(name)}{domain.text}" for name, domain in model.lobe.parameters]
     return lines

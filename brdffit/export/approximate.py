@@ -156,10 +156,14 @@ REFIT_SOLVING = Solving(dtype="float32")
 def refit(
     result: FitResult, model: Model | str, holding: Holding = HOLDING_NOTHING, **model_options
 ) -> tuple[FitResult, Approximation]:
-    """``model`` fitted to ``result``'s BRDF on :func:`dense_grid` with ``result``'s loss, holding what ``holding``
-    holds (a renderer's range: ``{"ks": (0, 1)}``), and how far it lies. Solved in float32 and refined in float64
-    (:data:`REFIT_SOLVING`)."""
+    """``model`` fitted to ``result``'s BRDF on :func:`dense_grid` with ``result``'s loss, and how far it lies. Every
+    parameter the renderer's model has is free (a conductor's ``ks`` too, which a fit holds at 1 by default: the
+    renderer's ``specular_reflectance`` takes any value) but what ``holding`` holds (a renderer's range:
+    ``{"ks": (0, 1)}``). Solved in float32 and refined in float64 (:data:`REFIT_SOLVING`)."""
     model = get_model(model, **model_options)
+    held = holding.fixed.keys() | holding.bounds.keys()
+    freed = {name: None for name, _ in getattr(model, "held", ()) if name not in held}
+    holding = Holding(fixed=freed | dict(holding.fixed), bounds=holding.bounds)
     fitted = fit_one(tabulated(result), model, result.loss, solving=REFIT_SOLVING, holding=holding)
     return fitted, approximation_error(result, fitted.predict)
 

@@ -268,7 +268,8 @@ def lambert_bsdf(result: FitResult) -> dict[str, Any]:
 def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
     """The Mitsuba dictionary of a Cook-Torrance ``result`` with Smith shadowing and a conductor, dielectric or no
     Fresnel term (``roughconductor``, with ``diffuse`` in a ``blendbsdf``; ``max kd + max ks ≤ 1``,
-    :func:`mitsuba_bsdf` sees to it); None for other options (the ``cook-torrance`` model's exact export)."""
+    :func:`mitsuba_bsdf` sees to it; a conductor's ``eta`` and ``k`` per channel as ``rgb`` values); None for other
+    options (the ``cook-torrance`` model's exact export)."""
     params, options = result.params, get_model(result.model, **result.model_options).model_options
     if options["shadowing"] != "smith" or options["fresnel"] not in ("conductor", "dielectric", "none"):
         return None
@@ -280,9 +281,12 @@ def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
         specular["alpha"] = float(params["m"])
     if options["fresnel"] == "none":
         specular["material"] = "none"
+    elif options["fresnel"] == "conductor":  # one complex index per channel, as Mitsuba's RGB textures
+        specular["eta"] = _rgb_value(np.asarray(_rgb(np.atleast_1d(params["eta"]))))
+        specular["k"] = _rgb_value(np.asarray(_rgb(np.atleast_1d(params["k"]))))
     else:
         specular["eta"] = float(params["eta"])
-        specular["k"] = float(params.get("k", 0.0))
+        specular["k"] = 0.0
     weight = ks.max() / max(kd.max() + ks.max(), 1e-300)
     if weight >= 1.0 or kd.max() == 0.0:
         return specular | {"specular_reflectance": _rgb_value(ks)}

@@ -102,7 +102,7 @@ def density_of(result: FitResult, samples: Samples) -> Density:
     optimum = model.sampling.from_params(model.dictionary.to_params(result.params))
     n_values = int(_count_weighted(loss, problem))
     labels = model.sampling.labels(tuple(result.channels))
-    constraints = constraints_for(model, len(result.channels), result.fixed, result.bounds)
+    constraints = constraints_for(model, len(result.channels), result.fixed, result.bounds, defaults=False)
     if constraints is None:
         free, (low, high) = np.ones(optimum.size, bool), (np.full(optimum.size, -np.inf), np.full(optimum.size, np.inf))
     else:

@@ -342,7 +342,8 @@ def test_models_lists_every_model_with_domains(capsys):
     assert (
         "alpha: > 0" in out
         and "f0: [0, 1]" in out
-        and "--fresnel conductor: kd: [C] ≥ 0; ks: [C] ≥ 0; m: > 0; eta: > 0; k: ≥ 0" in out
+        and "--fresnel conductor: kd: [C] ≥ 0; ks: [C] ≥ 0 (held at 1 unless freed); m: > 0; eta: [C] > 0; k: [C] ≥ 0"
+        in out
     )
 
 

@@ -22,9 +22,8 @@ def results(tmp_path_factory):
     geometry = data_synth.hemisphere_grid(6, 9, 12)
     options = {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"}
     params = {"kd": [0.1], "ks": [0.6], "m": 0.2, "eta": 0.2, "k": 3.9}
-    fit(data_synth.synthesize("cook-torrance", params, *geometry, **options), "cook-torrance", **options).save(
-        folder / "metal.json"
-    )
+    metal = data_synth.synthesize("cook-torrance", params, *geometry, **options)
+    fit(metal, "cook-torrance", fixed={"ks": None}, **options).save(folder / "metal.json")  # ks 0.6: freed
     ward = {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.15}
     ward_data = data_synth.synthesize("ward", ward, *geometry, noise=0.01, seed=2)
     save_samples(ward_data, folder / "ward.csv")

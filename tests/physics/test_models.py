@@ -340,7 +340,9 @@ def test_structured_jacobian_equals_forward_mode(model, options, params, rng):
     theta = jnp.asarray(built.unconstrained.from_params(built.dictionary.to_params(params)))
     wi, wo = jnp.asarray(random_directions(rng, 300)), jnp.asarray(random_directions(rng, 300))
     values, basis = value_and_basis(built, theta, wi, wo, 3)
-    structured = jnp.einsum("nm,cmp->ncp", basis, jacobian_coefficients(built, theta, 3))
+    if basis.ndim == 2:  # shared by the channels; a lobe with per-channel parameters has one per channel
+        basis = jnp.broadcast_to(basis[:, None, :], (basis.shape[0], 3, basis.shape[1]))
+    structured = jnp.einsum("ncm,cmp->ncp", basis, jacobian_coefficients(built, theta, 3))
     plain = lambda t: built.brdf(built.unconstrained.to_params(t, 3), wi, wo)
     np.testing.assert_allclose(values, plain(theta), rtol=1e-14, atol=1e-300)
     reference = jax.jacfwd(plain)(theta)

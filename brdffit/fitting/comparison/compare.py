@@ -345,7 +345,7 @@ def _cross_validated(
         solve = compiled_solver(model, loss, solving.max_steps, "float64")  # the one fit_one compiled
         held_out_cost = _held_out_cost(model, loss)
         theta0 = model.unconstrained.from_params(model.dictionary.to_params(result.params))
-        constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds)
+        constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds, defaults=False)
         hold = None if constraints is None else constraints.hold()
     losses, converged = [], []
     for k in range(split.count):
@@ -399,7 +399,7 @@ def _held_out_cost(model: Model, loss: Loss):
 
 def _score(model: Model, result: FitResult, samples: Samples, fold_losses: list[float]) -> ModelScore:
     """AIC, BIC and the cross-validated loss of one fit (module docstring); ``k`` counts its free parameters."""
-    constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds)
+    constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds, defaults=False)
     k = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
     counted = samples.n_samples if samples.weight is None else int(np.sum(samples.weight > 0))
     n = counted * samples.n_channels

@@ -1,7 +1,8 @@
 """How many datasets are cut into units of work: buckets of datasets whose problems stack, and batches of a bucket.
 
-A *bucket* is a list of datasets whose problems stack: the same padded size (``problem.padded_size``), channel
-count and optional columns, all searched on a subset or none (:func:`bucket_key`). Each bucket is cut into batches
+A *bucket* is a list of datasets whose problems stack: the same padded size (``problem.padded_size``), channels
+(their names too: a conductor's measured starts are in the data's channels) and optional columns, all searched on
+a subset or none (:func:`bucket_key`). Each bucket is cut into batches
 (:func:`batches`) that the threads fit one at a time, each in the compiled programs of ``single/stacked.py``.
 """
 
@@ -24,6 +25,7 @@ class BucketKey(NamedTuple):
 
     padded_size: int
     n_channels: int
+    channels: tuple[str, ...]
     has_sigma: bool
     has_weight: bool
     searched_on_subset: bool
@@ -33,6 +35,7 @@ def bucket_key(samples: Samples) -> BucketKey:
     return BucketKey(
         padded_size(samples.n_samples),
         samples.n_channels,
+        samples.channels,
         samples.sigma is not None,
         samples.weight is not None,
         samples.n_samples > SEARCH_SAMPLES,

@@ -14,10 +14,17 @@ depend on the sample::
 Only the S shape coordinates of each lobe are differentiated (forward mode), once per sample, not per
 channel; the one-pass normal equations (``problem.normal_equations``) accumulate over the basis and never
 form the (N·C × k) Jacobian.
+
+A lobe with P parameters of one value per channel (``Lobe.channel_names``: a conductor's ``eta``, ``k``) is one
+lobe per channel, ``lobe_k[n, c]``, so the basis is per channel, (N, C, M) with ``M = 1 + K + K·(S + P)``:
+``[d, lobe_k[·, c], ∂lobe_k[·, c]/∂u_ks, ∂lobe_k[·, c]/∂u_kpc]``. Channel ``c``'s lobe depends on channel ``c``'s
+parameters alone, so one forward-mode tangent per parameter, set in every channel at once, gives all channels'
+derivatives: S + P tangents, as many as a lobe of shared parameters would take.
 """
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from ...physics.domains import ALBEDO
@@ -32,9 +39,12 @@ def value_and_basis(
     wo: Float[Array, "n 3"],
     n_channels: int,
     dtype=None,
-) -> tuple[Float[Array, "n C"], Float[Array, "n M"]]:
-    """BRDF values (N, C) and the basis (N, M) at the unconstrained ``theta``, in ``dtype`` (default: ``wi``'s)."""
+) -> tuple[Float[Array, "n C"], Float[Array, "n M"] | Float[Array, "n C M"]]:
+    """BRDF values (N, C) and the basis (N, M) at the unconstrained ``theta``, in ``dtype`` (default: ``wi``'s); a
+    basis (N, C, M) for a lobe with per-channel parameters (module docstring)."""
     dtype = dtype or wi.dtype
+    if model.n_lobes and model.lobe.channel_names:
+        return _per_channel_value_and_basis(model, theta, wi, wo, n_channels, dtype)
     visible, wi, wo = above_horizon(wi, wo)
     n, c = wi.shape[0], n_channels
     diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
@@ -63,13 +73,55 @@ def value_and_basis(
     return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None], basis, 0.0)
 
 
+def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: int, dtype):
+    """:func:`value_and_basis` of a lobe with per-channel parameters: the basis (N, C, M)."""
+    visible, wi, wo = above_horizon(wi, wo)
+    c, k = n_channels, model.n_lobes
+    shared, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
+    s, p = len(shared.names), len(per_channel.names)
+    diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
+    diffuse_term = model.diffuse({}, wi, wo).astype(dtype)  # (N,): the diffuse term of unit albedo
+    specular = ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
+    u_shared = theta[(1 + k) * c : (1 + k) * c + k * s].reshape(k, s)
+    u_channel = theta[(1 + k) * c + k * s :].reshape(k, p, c)
+    # The tangents: each shared coordinate, then each per-channel parameter in every channel at once.
+    tangents = (
+        jnp.concatenate([jnp.eye(s, dtype=theta.dtype), jnp.zeros((p, s), theta.dtype)]),
+        jnp.concatenate(
+            [jnp.zeros((s, p, c), theta.dtype), jnp.broadcast_to(jnp.eye(p, dtype=theta.dtype)[:, :, None], (p, p, c))]
+        ),
+    )
+
+    def lobe(v_shared, v_channel):
+        shape = shared.from_vector(v_shared) | per_channel.from_vector(v_channel)
+        return model.lobe(jax.tree.map(lambda x: x.astype(dtype), shape), wi, wo)  # (N, C)
+
+    def lobe_and_derivatives(v_shared, v_channel):
+        push = lambda d_shared, d_channel: jax.jvp(lobe, (v_shared, v_channel), (d_shared, d_channel))[1]
+        return lobe(v_shared, v_channel), jax.vmap(push)(*tangents).astype(dtype)  # (N, C), (S + P, N, C)
+
+    lobes, derivatives = jax.vmap(lobe_and_derivatives)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
+    values = diffuse_term[:, None] * diffuse + jnp.einsum("knc,kc->nc", lobes, specular)
+    n = wi.shape[0]
+    columns = [
+        jnp.broadcast_to(diffuse_term[:, None, None], (n, c, 1)),
+        jnp.transpose(lobes, (1, 2, 0)),
+        jnp.transpose(derivatives, (2, 3, 0, 1)).reshape(n, c, k * (s + p)),
+    ]
+    basis = jnp.concatenate(columns, axis=2)
+    return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None, None], basis, 0.0)
+
+
 def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channels: int) -> Float[Array, "C M k"]:
-    """``A`` (C, M, k) with ``∂f[n, c]/∂θ = Σ_m basis[n, m] · A[c, m]`` (see :func:`value_and_basis`).
+    """``A`` (C, M, k) with ``∂f[n, c]/∂θ = Σ_m basis[n, m] · A[c, m]`` (see :func:`value_and_basis`; ``basis[n, c,
+    m]`` for a lobe with per-channel parameters).
 
     Row 0 (the diffuse basis) carries ``d rho_d/du``; the lobe rows carry ``d rho_s/du``; the
     shape-derivative rows carry the specular albedos.
     """
     c, k = n_channels, model.n_lobes
+    if k and model.lobe.channel_names:
+        return _per_channel_coefficients(model, theta, c)
     eye_c = jnp.eye(c, dtype=theta.dtype)
     _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
     if not k:
@@ -89,4 +141,32 @@ def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channel
             jnp.concatenate([zeros(k * s, c), zeros(k * s, k * c), shape_rows.reshape(c, k * s, k * s)], axis=2),
         ],
         axis=1,
+    )
+
+
+def _per_channel_coefficients(model: LobeModel, theta, n_channels: int):
+    """:func:`jacobian_coefficients` for the per-channel basis: a derivative row ``(k, t)`` of channel ``c`` carries
+    ``specular[k, c]`` at the entry of θ it differentiates: shared coordinate ``t`` of lobe ``k``, or per-channel
+    parameter ``t - S`` of lobe ``k`` in channel ``c``."""
+    c, k = n_channels, model.n_lobes
+    s, p = len(model.unconstrained.shared.names), len(model.unconstrained.per_channel.names)
+    size = model.unconstrained.size(c)
+    _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
+    u_specular = theta[c : (1 + k) * c].reshape(k, c)
+    specular, specular_slope = jax.jvp(ALBEDO.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
+    channel = np.arange(c)
+    lobe, tangent = np.meshgrid(np.arange(k), np.arange(s + p), indexing="ij")  # (K, S + P)
+    shared_entry = (1 + k) * c + lobe * s + tangent  # (K, S + P); used where tangent < s
+    channel_entry = (1 + k) * c + k * s + (lobe * p + tangent - s)[..., None] * c + channel  # (K, S + P, C)
+    entry = np.where((tangent < s)[..., None], shared_entry[..., None], channel_entry)  # (K, S + P, C)
+    rows = 1 + k + lobe * (s + p) + tangent  # (K, S + P)
+    coefficients = jnp.zeros((c, 1 + k + k * (s + p), size), theta.dtype)
+    coefficients = coefficients.at[channel, 0, channel].set(diffuse_slope)
+    lobe_rows = np.broadcast_to(1 + np.arange(k)[:, None], (k, c))
+    coefficients = coefficients.at[channel[None, :], lobe_rows, c + np.arange(k)[:, None] * c + channel].set(
+        specular_slope
+    )
+    on_channel = np.broadcast_to(channel, entry.shape)
+    return coefficients.at[on_channel, np.broadcast_to(rows[..., None], entry.shape), entry].set(
+        jnp.broadcast_to(specular[:, None, :], entry.shape)
     )

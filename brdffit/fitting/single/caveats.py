@@ -23,7 +23,7 @@ from ..._jax import float64
 from ..._programs import jit
 from ...data.reciprocity import reciprocity
 from ...data.samples import Samples
-from ...physics.domains import UnitInterval
+from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
@@ -148,7 +148,8 @@ def _lobe_shares(model: LobeModel, params: Params, wi, wo, real):
     if not model.n_lobes:
         return jnp.zeros(0)
     visible, wi, wo = above_horizon(wi, wo)
-    contributions = model.lobe_values(params.shape, wi, wo)[:, :, None] * params.specular[:, None, :]  # (K, N, C)
+    lobes = model.lobe_values(params.shape, wi, wo)  # (K, N), or (K, N, C) with per-channel shape parameters
+    contributions = (lobes if lobes.ndim == 3 else lobes[:, :, None]) * params.specular[:, None, :]  # (K, N, C)
     total = model.diffuse({}, wi, wo)[:, None] * params.diffuse + contributions.sum(axis=0)
     share = contributions / jnp.maximum(total, jnp.finfo(total.dtype).tiny)
     return (share * (visible & real)[None, :, None]).max(axis=(1, 2))
@@ -157,11 +158,15 @@ def _lobe_shares(model: LobeModel, params: Params, wi, wo, real):
 def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
     values = np.asarray(model.physical.from_params(params))
     found = []
-    for label, value, domain in zip(
-        model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True
+    # The albedos come first; a shape parameter of a domain ≥ 0 (a conductor's k) ends on its lower end as an
+    # albedo of 0 does not: its map exp(u) reaches 0 only in the limit, where the fit compensates elsewhere.
+    n_albedos = (1 + model.n_lobes) * len(channels) if isinstance(model, LobeModel) else len(values)
+    for index, (label, value, domain) in enumerate(
+        zip(model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True)
     ):
         low, high = domain.plausible
-        if isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE:
+        at_zero = index >= n_albedos and isinstance(domain, Positive) and domain.allow_zero and value < EDGE
+        if (isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE) or at_zero:
             found.append(
                 f"{label} = {value:.10g} lies on an end of its domain {domain.text}: the fit ended against the bound,"
                 " where the model may not describe the data"

@@ -1,9 +1,13 @@
 """What a user holds: fixed parameters and bounded ones, by the names of the result file.
 
 ``fixed={"eta": 1.5, "kd": 0, "lobes[1].cxy": 0.577}`` and ``bounds={"m": (0.05, 0.3)}``. Names are those of the
-result file's ``params``: an albedo (``kd``, ``rho_d``, ``lobes[0].rho_s``) takes one value for every channel or a
-list of one per channel, a lobe's shape parameter (``m``, ``eta``, ``alpha_x``, ``lobes[1].n``) one number. A
-bound is a range ``[lo, hi]`` inside the parameter's domain; an albedo's applies to each channel.
+result file's ``params``: an albedo (``kd``, ``rho_d``, ``lobes[0].rho_s``) and a shape parameter with one value per
+channel (a conductor's ``eta``, ``k``) take one value for every channel or a list of one per channel, a lobe's other
+shape parameters (``m``, a dielectric's ``eta``, ``alpha_x``, ``lobes[1].n``) one number. A bound is a range
+``[lo, hi]`` inside the parameter's domain; an albedo's and a per-channel parameter's applies to each channel.
+
+A model may hold parameters by default (``LobeModel.held``: a conductor's ``ks`` at 1, its Fresnel term being the
+reflectance); a user frees one with ``fixed={"ks": None}`` (``--free ks``), or fixes or bounds it otherwise.
 
 :class:`Constraints` checks them against a model (one-line errors) and turns them into what each part of brdffit needs:
 the solver's :class:`~brdffit.fitting.solver.hold.Hold` over the unconstrained vector, the mask of the coordinates the
@@ -123,10 +127,14 @@ class Constraints:
                 diffuse = np.broadcast_to(np.asarray(value, float), (c,)).copy()
             elif target.kind == "specular":
                 specular[target.lobe] = np.broadcast_to(np.asarray(value, float), (c,))
+            elif target.parameter in _per_channel(model):
+                given[target.lobe][target.parameter] = np.broadcast_to(np.asarray(value, float), (c,)).copy()
             else:
                 given[target.lobe][target.parameter] = float(value)
         shapes = [model.lobe.shape_holding(one, _prefix(model, k)) for k, one in enumerate(given)]
-        shape = {name: np.array([one[name] for one in shapes]) for name in (model.lobe.names if model.lobe else ())}
+        names = model.lobe.names if model.lobe else ()
+        one = lambda name, value: np.broadcast_to(value, (c,)) if name in _per_channel(model) else value
+        shape = {name: np.array([one(name, lobe[name]) for lobe in shapes]) for name in names}
         return Params(diffuse, specular, shape)
 
     # ------------------------------------------------------------------ a result
@@ -165,11 +173,21 @@ class Constraints:
 
 
 def constraints_for(
-    model: Model, n_channels: int, fixed: Mapping[str, Any] | None = None, bounds: Mapping[str, Any] | None = None
+    model: Model,
+    n_channels: int,
+    fixed: Mapping[str, Any] | None = None,
+    bounds: Mapping[str, Any] | None = None,
+    *,
+    defaults: bool = True,
 ) -> Constraints | None:
     """The :class:`Constraints` of ``fixed`` and ``bounds`` for ``model`` with ``n_channels`` channels, every name
-    and value checked; None when neither holds anything (the fit then runs as it always has)."""
+    and value checked; None when neither holds anything (the fit then runs as it always has).
+
+    ``defaults``: the model's default holds (``LobeModel.held``) apply but where ``fixed`` frees one (a value None)
+    or fixes or bounds it; False for what a result file recorded (``fit.fixed``: every hold the fit had)."""
     fixed, bounds = parameter_mapping(fixed, "fixed"), parameter_mapping(bounds, "bounds")
+    if defaults:
+        fixed = _with_default_holds(model, fixed, bounds)
     if not fixed and not bounds:
         return None
     if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
@@ -196,11 +214,28 @@ def constraints_for(
     placed = constraints._placed(checked_fixed)
     for name in checked_fixed:
         target = _target(model, name)
-        if target.kind == "shape":
+        if target.kind == "shape" and target.parameter not in _per_channel(model):
             checked_fixed[name] = float(placed.shape[target.parameter][target.lobe])
     if constraints.n_free == 0:
         raise BrdfInputError(Argument("fixed"), f": every parameter of {model.name} is fixed; nothing is left to fit")
     return constraints
+
+
+def _with_default_holds(model: Model, fixed: dict[str, Any], bounds: dict[str, Any]) -> dict[str, Any]:
+    """``fixed`` with ``model``'s default holds (``LobeModel.held``) added, but those the user names: a None frees
+    one (and is nothing for a parameter that is free anyway: ``compare`` passes one holding to every model), a value
+    fixes it there, a bound bounds it instead."""
+    held = dict(getattr(model, "held", ()))
+    for name, value in fixed.items():
+        if value is None:  # freed: a parameter of the model's (free already unless held by default)
+            _target(model, name, "fixed")
+    defaults = {name: value for name, value in held.items() if name not in fixed and name not in bounds}
+    return defaults | {name: value for name, value in fixed.items() if value is not None}
+
+
+def _per_channel(model: Model) -> tuple[str, ...]:
+    """The names of ``model``'s shape parameters with one value per channel (``Lobe.channel_names``)."""
+    return model.lobe.channel_names if getattr(model, "lobe", None) is not None else ()
 
 
 def parameter_names(model: Model) -> list[str]:
@@ -245,7 +280,11 @@ def _entries(model: Model, target: Target, n_channels: int) -> list[int]:
         return list(range(c))
     if target.kind == "specular":
         return list(range(c + target.lobe * c, c + (target.lobe + 1) * c))
-    s = len(model.unconstrained.shape.names)
+    s = len(model.unconstrained.shared.names)
+    if target.parameter in _per_channel(model):  # after every lobe's shared coordinates: lobe, parameter, channel
+        names = model.unconstrained.per_channel.names
+        first = (1 + k) * c + k * s + (target.lobe * len(names) + names.index(target.parameter)) * c
+        return list(range(first, first + c))
     return [(1 + k) * c + target.lobe * s + _coordinate(model, target)]
 
 
@@ -261,9 +300,10 @@ def _error(argument: str, text: str) -> BrdfInputError:
 
 
 def _fixed_value(model: Model, name: str, value: Any, n_channels: int):
-    """The fixed value checked: a list of ``n_channels`` albedos, or one number, inside the parameter's domain."""
+    """The fixed value checked: a list of ``n_channels`` values of an albedo or a per-channel shape parameter, or one
+    number, inside the parameter's domain."""
     target = _target(model, name, "fixed")
-    if target.kind == "shape":
+    if target.kind == "shape" and target.parameter not in _per_channel(model):
         number = _number(value, "fixed", name)
         if not target.domain.contains(number):
             raise _error("fixed", f"{name} = {number:g} is outside its domain {target.domain.text}")

@@ -172,7 +172,8 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
     if model.n_lobes:
         for k in range(model.n_lobes):
             for name, domain in model.lobe.parameters:
-                value, limit = float(params.shape[name][k]), START_FACTOR * domain.plausible[1]
+                # the largest channel's value for a per-channel parameter (a conductor's eta, k)
+                value, limit = float(np.max(params.shape[name][k])), START_FACTOR * domain.plausible[1]
                 if value > limit:
                     where = f"lobes[{k}].{name}" if model.lobes_as_list else name
                     raise BrdfInputError(

@@ -29,7 +29,7 @@ from ..objective.problem import Problem, build_problems, padded_size
 from ..options import Solving
 from ..solver.compiled import SAME_COST, best_index, solved_from
 from ..solver.hold import Hold, at_bounds
-from ..starts.grid import grid_starts, search_subset
+from ..starts.grid import grid_channels, grid_starts, search_subset
 from .caveats import screen_bucket, screen_program
 from .constraints import Constraints
 from .outcome import final_params, result_of
@@ -114,8 +114,9 @@ class StackedFit:
             search = build_problems(chosen, self.dtype, count)
         subset_race = search is not None and self.n_starts > 1
         compiling = None if subset_race else winners()
+        channels = grid_channels(model, self.samples[0].channels)  # a bucket's datasets share their channels
         thetas = np.asarray(
-            grid_starts(model, self.loss, self.n_starts, self.problems if search is None else search, holds)
+            grid_starts(model, self.loss, self.n_starts, self.problems if search is None else search, holds, channels)
         )
         self.on_stage("searched")
         if subset_race:

@@ -30,6 +30,11 @@ from ..solver.hold import Hold, respected
 ALBEDO_FLOOR = 1e-3
 #: Starts are searched on at most this many samples; the winner is then refined on all of them.
 SEARCH_SAMPLES = 2**14
+#: A lobe with per-channel parameters (a conductor) is searched this many grid shapes at a time: its grid is larger
+#: (352 shapes with the measured metals on RGB data) and its bases C times larger, and all of them at once, (G, B, N,
+#: C), made the search memory-bound: on the pickled-oak example (10k samples × 3 channels, 2-core Xeon, loaded) the
+#: search took 1,075 ms at once, 383, 354, 342, 416, 567 and 508 ms in batches of 1, 2, 4, 8, 16 and 64.
+PER_CHANNEL_BATCH = 4
 #: The part of the search subset taken as the brightest samples (the rest at random), so that a narrow lobe
 #: that a few samples see is still seen.
 BRIGHT_SHARE = 0.25
@@ -63,13 +68,20 @@ def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
 
 @float64
 def starting_points(
-    model: Model, loss: Loss, problem: Problem, n_starts: int, hold: Hold | None = None
+    model: Model,
+    loss: Loss,
+    problem: Problem,
+    n_starts: int,
+    hold: Hold | None = None,
+    channels: tuple[str, ...] | None = None,
 ) -> list[np.ndarray]:
     """Up to ``n_starts`` unconstrained start vectors of one problem, best first: lobes placed greedily on the grid;
-    every start respects ``hold`` (``hold.py``)."""
+    every start respects ``hold`` (``hold.py``); ``channels``: the data's channel names (:func:`grid_channels`)."""
     if model.n_lobes <= 1:
         stacked = jax.tree.map(lambda leaf: leaf[None], (problem, hold))
-        return list(np.asarray(grid_starts(model, loss, min(n_starts, len(_grid(model))), *stacked))[0])
+        channels = grid_channels(model, channels)
+        n_grid = len(_grid(model, channels))
+        return list(np.asarray(grid_starts(model, loss, min(n_starts, n_grid), *stacked, channels))[0])
     search = LobeSearch(model, loss, problem, hold)
     chosen: list[dict[str, float]] = []
     for _ in range(model.n_lobes):
@@ -79,18 +91,34 @@ def starting_points(
     return [thetas[index] for index in order[:n_starts]]
 
 
-@jit(static_argnums=(0, 1, 2))
-def grid_starts(model: Model, loss: Loss, n_starts: int, problems: Problem, holds: Hold | None = None):
+def grid_channels(model: Model, channels: tuple[str, ...] | None) -> tuple[str, ...] | None:
+    """The channel names the grid search of ``model`` depends on: the data's, for a lobe with per-channel parameters
+    (its measured starts, ``Lobe.channel_grid``, are in the data's channels), else None (every dataset, whatever its
+    channels' names, shares one compiled search)."""
+    has_channel_starts = model.n_lobes and model.lobe.channel_names and channels is not None
+    return tuple(channels) if has_channel_starts else None
+
+
+@jit(static_argnums=(0, 1, 2, 5))
+def grid_starts(
+    model: Model,
+    loss: Loss,
+    n_starts: int,
+    problems: Problem,
+    holds: Hold | None = None,
+    channels: tuple[str, ...] | None = None,
+):
     """The ``n_starts`` best grid starts (D, n_starts, k) of each of the stacked problems (D, N, …), best first
     (ties to the earlier grid shape), for models of at most one lobe: one program for every dataset of a batch.
-    ``holds`` (arrays (D, k)): what each dataset's fit holds (``hold.py``), or None.
+    ``holds`` (arrays (D, k)): what each dataset's fit holds (``hold.py``), or None. ``channels``: the datasets'
+    channel names, for the measured starts of a lobe with per-channel parameters (:func:`grid_channels`).
 
     The datasets are searched one after another inside the program (``lax.map``): the grid's lobe values are
     (G, N) per dataset, and all of them at once could outgrow memory where one at a time is small.
     """
 
     def best_of_one(pair):
-        costs, thetas = _candidates(model, loss, *pair, {})
+        costs, thetas = _candidates(model, loss, *pair, {}, channels)
         order = jnp.argsort(costs, stable=True)[:n_starts]
         return thetas[order]
 
@@ -118,9 +146,12 @@ class LobeSearch:
         return np.asarray(costs), list(np.asarray(thetas))
 
 
-def _grid(model: Model) -> tuple[dict[str, float], ...]:
-    """The lobe family's grid of shapes; one empty shape for a model without lobes (its one start)."""
-    return model.lobe.grid if model.n_lobes else ({},)
+def _grid(model: Model, channels: tuple[str, ...] | None = None) -> tuple[dict[str, float], ...]:
+    """The lobe family's grid of shapes, and its measured shapes in ``channels`` (``Lobe.channel_grid``) where
+    given; one empty shape for a model without lobes (its one start)."""
+    if not model.n_lobes:
+        return ({},)
+    return model.lobe.grid + (model.lobe.channel_grid(channels) if channels else ())
 
 
 @jit(static_argnums=(0, 1))
@@ -128,33 +159,53 @@ def _lobe_candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | No
     return _candidates(model, loss, problem, hold, chosen)
 
 
-def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict):
+def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict, channels=None):
     """Costs (G,) and unconstrained vectors (G, k) of the model with its next lobe at each grid shape (JAX).
 
     ``chosen``: the shapes (K₀,) of the lobes already placed, {} for none. Each candidate's albedos are the
     non-negative least-squares ones of the linearised loss, floored at :data:`ALBEDO_FLOOR` of their largest
     (the fit moves log-albedos); the lobes after the new one are off (albedo 0, any shape: the grid's first).
     With a ``hold``, the grid's shapes are moved onto what it allows, the albedos it fixes are held in the least
-    squares, and every vector respects it.
+    squares, and every vector respects it. A lobe with per-channel parameters (``Lobe.channel_names``) is one lobe
+    per channel: the bases are per channel, (G, B, N, C), and its grid's numbers stand for every channel, beside
+    the grid's measured shapes in ``channels`` (:func:`_grid`).
     """
     problem = prepared(loss, problem)
     n_channels = problem.measured.shape[1]
     weight = linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
-    grid = _grid(model)
+    grid = _grid(model, channels)
     n_placed = len(next(iter(chosen.values()), ()))
+    per_channel = model.lobe.channel_names if model.n_lobes else ()
     fixed = model.diffuse({}, problem.wi, problem.wo)[None].astype(problem.wi.dtype)  # the diffuse term's basis
+    if per_channel:  # (B₀, N, C)
+        fixed = jnp.broadcast_to(fixed[:, :, None], (*fixed.shape, n_channels))
     if chosen:
         fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
     if model.n_lobes:
-        stacked = {name: jnp.asarray([shape[name] for shape in grid]) for name in model.lobe.names}
+        stacked = {
+            name: jnp.asarray(
+                [np.broadcast_to(shape[name], (n_channels,)) if name in per_channel else shape[name] for shape in grid]
+            )
+            for name in model.lobe.names
+        }
         if hold is not None:
             stacked = _held_shapes(model, stacked, hold, n_placed, n_channels)
-        lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
-        bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
+    if per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
+
+        def normal_equations_of(shape):
+            lobe = model.lobe(shape, problem.wi, problem.wo)  # (N, C)
+            return _normal_equations(jnp.concatenate([fixed, lobe[None]]), weight, problem.measured)
+
+        grams, rhs = jax.lax.map(normal_equations_of, stacked, batch_size=PER_CHANNEL_BATCH)
     else:
-        bases = fixed[None]
-    grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
-    held = None if hold is None else _held_albedos(hold, bases.shape[1], n_channels)
+        if model.n_lobes:
+            lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
+            bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
+        else:
+            bases = fixed[None]
+        grams, rhs = jax.vmap(lambda basis: _normal_equations(basis, weight, problem.measured))(bases)
+    n_basis = rhs.shape[-1]
+    held = None if hold is None else _held_albedos(hold, n_basis, n_channels)
     albedos = jnp.swapaxes(nonnegative_least_squares(grams, rhs, held), 1, 2)  # (G, B, C)
     largest = jnp.maximum(jnp.max(albedos, axis=(1, 2), keepdims=True), 1e-6)
     albedos = jnp.maximum(albedos, ALBEDO_FLOOR * largest)
@@ -162,13 +213,14 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
 
     def theta_of(index, albedo):
         specular = jnp.concatenate([albedo[1:], jnp.zeros((n_off, n_channels))])
+        one = lambda name: (n_channels,) if name in per_channel else ()  # one value's shape
         shape = (
             {
                 name: jnp.concatenate(
                     [
-                        jnp.asarray(chosen.get(name, jnp.zeros(0))),
+                        jnp.asarray(chosen.get(name, jnp.zeros((0, *one(name))))),
                         jnp.asarray(stacked[name])[index][None],
-                        jnp.full(n_off, grid[0][name]),
+                        jnp.full((n_off, *one(name)), grid[0][name]),
                     ]
                 )
                 for name in model.lobe.names
@@ -179,18 +231,25 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
         return respected(model.unconstrained.from_params(Params(albedo[0], specular, shape)), hold)
 
     thetas = jax.vmap(theta_of)(jnp.arange(len(grid)), albedos)
-    costs = jax.vmap(lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2))(thetas)
+    cost_of = lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2)
+    costs = jax.lax.map(cost_of, thetas, batch_size=PER_CHANNEL_BATCH) if per_channel else jax.vmap(cost_of)(thetas)
     return costs, thetas
 
 
 def _held_shapes(model: Model, stacked: dict, hold: Hold, lobe: int, n_channels: int) -> dict:
     """The grid's shapes (G,) for lobe ``lobe``, each moved onto what ``hold`` allows (its fixed values, inside its
     bounds), through the solver's coordinates."""
-    coordinates = model.lobe.unconstrained
-    s = len(coordinates.names)
-    first = (1 + model.n_lobes) * n_channels + lobe * s
+    coordinates, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
+    k, s = model.n_lobes, len(coordinates.names)
+    first = (1 + k) * n_channels + lobe * s
     own = jax.tree.map(lambda leaf: leaf[first : first + s, None], hold)  # (S, 1): broadcast over the grid
-    return coordinates.from_vector(respected(coordinates.to_vector(stacked), own))
+    shapes = coordinates.from_vector(respected(coordinates.to_vector(stacked), own))
+    if per_channel is None:
+        return shapes
+    p = len(per_channel.names)
+    first = (1 + k) * n_channels + k * s + lobe * p * n_channels
+    own = jax.tree.map(lambda leaf: leaf[first : first + p * n_channels].reshape(p, 1, n_channels), hold)
+    return shapes | per_channel.from_vector(respected(per_channel.to_vector(stacked), own))  # (P, G, C)
 
 
 def _held_albedos(hold: Hold, n_basis: int, n_channels: int):
@@ -201,7 +260,11 @@ def _held_albedos(hold: Hold, n_basis: int, n_channels: int):
 
 
 def _normal_equations(basis, weight, measured):
-    """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``."""
+    """Per-channel normal equations (C, B, B), (C, B) of ``Σ_n w[n,c] (Σ_b x[b,c] basis[b,n] - y[n,c])²``; a basis
+    (B, N, C) has one per channel, ``basis[b, n, c]``."""
+    if basis.ndim == 3:
+        weighted = basis * weight[None]  # (B, N, C)
+        return jnp.einsum("bnc,dnc->cbd", weighted, basis), jnp.einsum("bnc,nc->cb", weighted, measured)
     weighted = basis[None, :, :] * weight.T[:, None, :]  # (C, B, N)
     return jnp.einsum("cbn,dn->cbd", weighted, basis), jnp.einsum("cbn,nc->cb", weighted, measured)
 

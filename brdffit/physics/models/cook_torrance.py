@@ -31,6 +31,7 @@ from ...checks import boolean, choice
 from ..domains import ALBEDO, AXIS_AZIMUTH, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL
 from ..geometry import half_vector, in_turned_frame
+from ..metals import metal_grid
 from ..microfacet import DISTRIBUTIONS, SHADOWING, anisotropic_shadowing, shadowing
 from .grids import ROUGHNESS_GRID
 from .lobe import MappedLobe, MappedShapeLobe
@@ -88,6 +89,16 @@ class CookTorranceLobe(MappedLobe):
             shapes = [shape | {name: start} for shape in shapes for start in starts]
         return tuple(shapes)
 
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        return FRESNEL[self.fresnel].per_channel
+
+    def channel_grid(self, channels):
+        """A conductor's measured metals (``metals.py``) in ``channels``, at every roughness of the grid."""
+        if self.fresnel != "conductor":
+            return ()
+        return tuple({"m": m} | metal for m in ROUGHNESS_GRID for metal in metal_grid(channels))
+
     def __call__(self, shape, wi, wo):
         cos_i, cos_o = wi[:, 2], wo[:, 2]
         h = half_vector(wi, wo)
@@ -95,8 +106,10 @@ class CookTorranceLobe(MappedLobe):
         cos_beta = jnp.sum(wi * h, axis=-1)
         distribution = DISTRIBUTIONS[self.distribution]
         masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cos_beta)
-        fresnel = FRESNEL[self.fresnel].reflectance(cos_beta, shape)
-        return fresnel * distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
+        unit = distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
+        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
+            return FRESNEL[self.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
+        return FRESNEL[self.fresnel].reflectance(cos_beta, shape) * unit
 
 
 @final
@@ -137,6 +150,18 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
         # non-metal takes fresnel="dielectric".
         return tuple(shape for shape in self.terms.with_fresnel_starts(shapes) if shape.get("k", 1.0) > 0.0)
 
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        return self.terms.channel_names
+
+    def channel_grid(self, channels):
+        """A conductor's measured metals (``metals.py``) in ``channels``, on round lobes of the roughness grid (the
+        scalar grid's anisotropic shapes find the tangent)."""
+        return tuple(
+            {"alpha_u": shape["m"], "alpha_v": shape["m"], "phi_t": 0.0} | {k: v for k, v in shape.items() if k != "m"}
+            for shape in self.terms.channel_grid(channels)
+        )
+
     def canonical(self, shape):
         """The twin with ``alpha_u ≤ alpha_v``: where ``alpha_u > alpha_v`` the two are exchanged and the tangent
         turned by 90° (the same lobe)."""
@@ -158,8 +183,10 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
         distribution = DISTRIBUTIONS[self.terms.distribution]
         density = distribution.anisotropic_density(h[:, 0], h[:, 1], h[:, 2], alpha_u, alpha_v)
         masking = anisotropic_shadowing(self.terms.shadowing, distribution, alpha_u, alpha_v, wi, wo, h[:, 2], cos_beta)
-        fresnel = FRESNEL[self.terms.fresnel].reflectance(cos_beta, shape)
-        return fresnel * density * masking / (4.0 * wi[:, 2] * wo[:, 2])
+        unit = density * masking / (4.0 * wi[:, 2] * wo[:, 2])
+        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
+            return FRESNEL[self.terms.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
+        return FRESNEL[self.terms.fresnel].reflectance(cos_beta, shape) * unit
 
 
 def cook_torrance(
@@ -173,13 +200,14 @@ def cook_torrance(
     lobe = CookTorranceLobe(fresnel, distribution, shadowing)
     options = (("fresnel", fresnel), ("distribution", distribution), ("shadowing", shadowing))
     options += (("anisotropic", anisotropic),)
+    # A conductor's reflectance is its Fresnel term: ks is held at 1 unless a user frees it (docs/holding.md).
+    held = (("ks", 1.0),) if fresnel == "conductor" else ()
     summary = "Cook-Torrance 1982 (Walter 2007 normalisation)"
     if anisotropic:
         summary += ", anisotropic (Heitz 2014)"
-        return LobeModel(
-            "cook-torrance", summary, AnisotropicCookTorranceLobe(lobe), 1, "kd", "ks", options, isotropic=False
-        )
-    return LobeModel("cook-torrance", summary, lobe, 1, "kd", "ks", options)
+        family = AnisotropicCookTorranceLobe(lobe)
+        return LobeModel("cook-torrance", summary, family, 1, "kd", "ks", options, isotropic=False, held=held)
+    return LobeModel("cook-torrance", summary, lobe, 1, "kd", "ks", options, held=held)
 
 
 #: The microfacet model renderers implement (GGX with Smith shadowing: Mitsuba's ``roughconductor``, glTF's

@@ -1,7 +1,9 @@
 """A model's parameters as one flat vector, in each of the three coordinate systems brdffit works in.
 
 Every flat vector is laid out ``[diffuse (C), specular (K·C, lobe by lobe), lobe shapes (K·S, lobe by
-lobe)]``; the systems differ only in how an albedo and a lobe's shape become coordinates:
+lobe), per-channel shapes (K·P·C: lobe, parameter, channel)]``, the last only for a lobe whose P last shape
+parameters take one value per channel (``Lobe.channel_names``: a conductor's ``eta``, ``k``; labels ``eta[r]``);
+the systems differ only in how an albedo and a lobe's shape become coordinates:
 
 =================  ===================================  ================================================
 system             albedos                              shape (``Lobe`` coordinates, ``lobe.py``)
@@ -17,7 +19,7 @@ reported in the *physical* one (labels ``rho_d[r]``, ``alpha``, ``lobes[0].cxy``
 """
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import final
 
 from ..._jax import namespace
@@ -45,26 +47,54 @@ class FlatCoordinates(ABC):
     def albedo_from_vector(self, u):
         """Albedos at coordinates ``u`` (JAX-traceable)."""
 
+    @property
+    def shared(self) -> ShapeCoordinates:
+        """The coordinates of the shape parameters all channels share (all of them, but a lobe's ``channel_names``)."""
+        return self._split()[0]
+
+    @property
+    def per_channel(self) -> ShapeCoordinates | None:
+        """The coordinates of the shape parameters with one value per channel, or None for a lobe without any."""
+        return self._split()[1]
+
+    def _split(self) -> tuple[ShapeCoordinates, ShapeCoordinates | None]:
+        lobe = self.model.lobe
+        if lobe is None or not lobe.channel_names:
+            return self.shape, None
+        # A lobe with per-channel parameters has elementwise coordinates over named parameters (lobe.py).
+        parameters = self.shape.parameters
+        shared = tuple(one for one in parameters if one[0] not in lobe.channel_names)
+        per_channel = tuple(one for one in parameters if one[0] in lobe.channel_names)
+        return replace(self.shape, parameters=shared), replace(self.shape, parameters=per_channel)
+
     def size(self, n_channels: int) -> int:
         """The vector's length for ``n_channels`` channels."""
         k = self.model.n_lobes
-        return (1 + k) * n_channels + (k * len(self.shape.names) if k else 0)
+        if not k:
+            return n_channels
+        n_per_channel = len(self.per_channel.names) if self.per_channel else 0
+        return (1 + k) * n_channels + k * len(self.shared.names) + k * n_per_channel * n_channels
 
     def labels(self, channels: tuple[str, ...]) -> list[str]:
-        """A name per entry: ``rho_d[r]``, …, ``lobes[0].rho_s[r]``, …, ``alpha`` or ``lobes[0].psi``."""
+        """A name per entry: ``rho_d[r]``, …, ``lobes[0].rho_s[r]``, …, ``alpha`` or ``lobes[0].psi``, ``eta[r]``."""
         model = self.model
         labels = [f"{model.diffuse_name}[{c}]" for c in channels]
         prefixes = [f"lobes[{k}]." if model.lobes_as_list else "" for k in range(model.n_lobes)]
         labels += [f"{prefix}{model.specular_name}[{c}]" for prefix in prefixes for c in channels]
-        shape_names = self.shape.names if model.n_lobes else ()
-        return labels + [f"{prefix}{name}" for prefix in prefixes for name in shape_names]
+        shape_names = self.shared.names if model.n_lobes else ()
+        labels += [f"{prefix}{name}" for prefix in prefixes for name in shape_names]
+        per_channel = self.per_channel.names if model.n_lobes and self.per_channel else ()
+        return labels + [f"{prefix}{name}[{c}]" for prefix in prefixes for name in per_channel for c in channels]
 
     def from_params(self, params: Params):
         """The flat vector of ``params`` (numpy for numpy parameters)."""
         xp = namespace(params.diffuse, params.specular, *params.shape.values())
         pieces = [self.albedo_to_vector(params.diffuse), self.albedo_to_vector(params.specular)]
         if self.model.n_lobes:
-            pieces.append(xp.transpose(self.shape.to_vector(params.shape)))  # (S, K) → lobe by lobe
+            shared, per_channel = self._split()
+            pieces.append(xp.transpose(shared.to_vector(params.shape)))  # (S, K) → lobe by lobe
+            if per_channel is not None:  # (P, K, C) → lobe, parameter, channel
+                pieces.append(xp.transpose(per_channel.to_vector(params.shape), (1, 0, 2)))
         return xp.concatenate([xp.ravel(xp.asarray(piece)) for piece in pieces])
 
     def to_params(self, vector, n_channels: int) -> Params:
@@ -75,8 +105,14 @@ class FlatCoordinates(ABC):
         specular = self.albedo_from_vector(vector[n_channels:n_albedos]).reshape(k, n_channels)
         if not k:
             return Params(diffuse, specular, {})
-        per_lobe = vector[n_albedos:].reshape(k, len(self.shape.names))
-        return Params(diffuse, specular, self.shape.from_vector(per_lobe.T))
+        shared, per_channel = self._split()
+        n_shared = k * len(shared.names)
+        per_lobe = vector[n_albedos : n_albedos + n_shared].reshape(k, len(shared.names))
+        shape = shared.from_vector(per_lobe.T)
+        if per_channel is not None:
+            rest = vector[n_albedos + n_shared :].reshape(k, len(per_channel.names), n_channels)
+            shape = shape | per_channel.from_vector(rest.transpose(1, 0, 2))  # (P, K, C)
+        return Params(diffuse, specular, shape)
 
 
 class BoundedFlatCoordinates(FlatCoordinates):
@@ -99,7 +135,8 @@ class BoundedFlatCoordinates(FlatCoordinates):
         if not k:
             return diffuse
         specular = [self.model.lobe.albedo_domain] * (k * n_channels)
-        return diffuse + specular + list(self.shape.domains) * k
+        per_channel = [d for d in self.per_channel.domains for _ in range(n_channels)] if self.per_channel else []
+        return diffuse + specular + list(self.shared.domains) * k + per_channel * k
 
 
 @final

@@ -1,8 +1,10 @@
 """A model's parameters as the result file writes them: a JSON object of names, numbers and lists.
 
 ``{"rho_d": [0.1, 0.2, 0.3], "rho_s": [...], "alpha": 0.12}``: per-channel albedos as lists in channel
-order (a single number is one channel), lobe shapes as numbers; models whose lobes come as a list
-(Lafortune) write ``{"rho_d": [...], "lobes": [{"rho_s": [...], "cxy": -0.6, "cz": 0.55, "n": 12.0}]}``.
+order (a single number is one channel), lobe shapes as numbers, but a shape parameter with one value per channel
+(``Lobe.channel_names``: a conductor's ``eta``, ``k``) as a list in channel order, like an albedo (read back, one
+number stands for every channel: result files written before it took a list still load); models whose lobes come
+as a list (Lafortune) write ``{"rho_d": [...], "lobes": [{"rho_s": [...], "cxy": -0.6, "cz": 0.55, "n": 12.0}]}``.
 """
 
 from collections.abc import Mapping
@@ -69,7 +71,7 @@ class ParameterDictionary:
                 f" but {model.diffuse_name} has {diffuse.size}"
             )
         shapes = [
-            model.lobe.checked_shape(_shape_numbers(lobe, model.lobe.names, prefix), prefix)
+            model.lobe.checked_shape(_shape_numbers(lobe, model.lobe, diffuse.size, prefix), prefix)
             for lobe, prefix in zip(lobes, prefixes, strict=True)
         ]
         shape = {name: np.array([one[name] for one in shapes]) for name in model.lobe.names}
@@ -83,7 +85,12 @@ class ParameterDictionary:
             return result
         lobes = [
             {model.specular_name: _floats(params.specular[k])}
-            | {name: float(params.shape[name][k]) for name in model.lobe.names}
+            | {
+                name: _floats(params.shape[name][k])
+                if name in model.lobe.channel_names
+                else float(params.shape[name][k])
+                for name in model.lobe.names
+            }
             for k in range(model.n_lobes)
         ]
         if model.lobes_as_list:
@@ -115,14 +122,28 @@ def _albedo(value: Any, where: str) -> np.ndarray:
     return array
 
 
-def _shape_numbers(values: Mapping[str, Any], names: tuple[str, ...], where: str) -> dict[str, float]:
+def _shape_numbers(values: Mapping[str, Any], lobe, n_channels: int, where: str) -> dict[str, Any]:
+    """The lobe's shape parameters: numbers, and lists of ``n_channels`` for its ``channel_names`` (one number
+    broadcast to every channel)."""
     numbers = {}
-    for name in names:
+    for name in lobe.names:
         value = values[name]
-        if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        if name in lobe.channel_names:
+            items = value if isinstance(value, list | tuple) else [value]
+            if not all(_is_number(item) for item in items) or len(items) not in (1, n_channels):
+                raise BrdfInputError(
+                    f"{where}{name} takes one number per channel ({n_channels}) or one for all, got {value!r}"
+                )
+            numbers[name] = np.broadcast_to(np.asarray(items, float), (n_channels,)).copy()
+            continue
+        if not _is_number(value):
             raise BrdfInputError(f"{where}{name} must be a single number, got {value!r}")
         numbers[name] = float(value)
     return numbers
+
+
+def _is_number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float | np.floating | np.integer)
 
 
 def _floats(array) -> list[float]:

@@ -30,7 +30,8 @@ from ..domains import Domain, MappedDomain
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
 
-#: A lobe's shape: each parameter's value, an array (K,) for K lobes or a number for one.
+#: A lobe's shape: each parameter's value, an array (K,) for K lobes or a number for one; a parameter with one value
+#: per channel (:attr:`Lobe.channel_names`) an array (K, C), or (C,) for one lobe.
 Shape = Mapping[str, Any]
 
 
@@ -112,6 +113,16 @@ class Lobe(ABC):
     Concrete lobes are frozen dataclasses, hence hashable: JAX treats them as static configuration.
     """
 
+    #: The shape parameters that take one value per channel (a conductor's complex index ``eta``, ``k``), the last
+    #: of :attr:`names`; with any, the lobe's values are (N, C), one lobe per channel. Every coordinate map of a
+    #: lobe with such parameters is elementwise (a :class:`MappedLobe`'s), so one map serves all channels.
+    channel_names: tuple[str, ...] = ()
+
+    def channel_grid(self, channels: tuple[str, ...]) -> tuple[dict[str, Any], ...]:
+        """Starting shapes beside :attr:`grid` whose :attr:`channel_names` have one value per channel (a list in the
+        order of ``channels``, the data's channel names): measured materials. None by default."""
+        return ()
+
     @property
     @abstractmethod
     def summary(self) -> str:
@@ -142,7 +153,8 @@ class Lobe(ABC):
 
     @abstractmethod
     def __call__(self, shape: Shape, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, " n"]:
-        """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars."""
+        """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars (of arrays (C,)
+        for the :attr:`channel_names`, and then values (N, C))."""
 
     @property
     @abstractmethod
@@ -210,11 +222,12 @@ class MappedShapeLobe(Lobe):
     def shape_holding(self, given: Shape, where: str) -> dict[str, float]:
         return self.checked_shape(dict(self.grid[0]) | dict(given), where)
 
-    def checked_shape(self, shape: Shape, where: str) -> dict[str, float]:
+    def checked_shape(self, shape: Shape, where: str) -> dict[str, Any]:
         for name, domain in self.parameters:
             if not domain.contains(shape[name]):
                 raise BrdfInputError(f"{where}{name} = {shape[name]!r} is outside its domain {domain.text}")
-        return {name: float(shape[name]) for name in self.names}
+        per_channel = lambda name: np.asarray(shape[name], float)  # a list of one value per channel stays one
+        return {name: per_channel(name) if name in self.channel_names else float(shape[name]) for name in self.names}
 
 
 class MappedLobe(MappedShapeLobe):

@@ -9,7 +9,9 @@ final siblings, none a subclass of another:
 
   with ``d`` the diffuse term (``diffuse.py``: Lambert's ``1/π``) and ``lobe`` a unit-albedo lobe family
   (``lobe.py``: Ward, Cook-Torrance, Phong, …). Diffuse and specular albedos are per channel, lobe shapes shared by
-  all channels. The fit's starts and its normal equations use the linearity (``brdffit/fitting``).
+  all channels but the parameters a lobe takes per channel (``Lobe.channel_names``: a conductor's index), with which
+  ``lobe`` is one per channel, ``lobe_c``. The fit's starts and its normal equations use the linearity
+  (``brdffit/fitting``).
 * ``PcaModel`` (``brdffit/datadriven/model.py``): the coefficients of a basis learned from measured tables.
 
 Code that needs a kind's own parts (lobes, a basis) dispatches on the kind (``isinstance``), never on flags. A
@@ -116,8 +118,10 @@ class LobeModel(Model):
 
     ``diffuse_name`` and ``specular_name`` name the albedos in the result file (``rho_d``, ``rho_s``; Cook-Torrance's
     ``kd``, ``ks``); ``lobes_as_list``: the result file writes the lobes as a list, ``"lobes": [{...}, ...]``
-    (Lafortune's); ``diffuse``: the diffuse term, a lobe without shape parameters (Lambert's). Frozen, hence
-    hashable: JAX treats a model as static configuration.
+    (Lafortune's); ``diffuse``: the diffuse term, a lobe without shape parameters (Lambert's); ``held``: parameters
+    the fit holds unless a user frees them, ``(name, value)`` by the result file's names (a conductor's ``ks`` at 1:
+    its Fresnel term is its reflectance; ``fitting/single/constraints.py``). Frozen, hence hashable: JAX treats a
+    model as static configuration.
     """
 
     name: str
@@ -130,6 +134,7 @@ class LobeModel(Model):
     isotropic: bool = True
     lobes_as_list: bool = False
     diffuse: Lobe = LAMBERTIAN
+    held: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self):
         if (self.lobe is None) != (self.n_lobes == 0):
@@ -145,7 +150,11 @@ class LobeModel(Model):
         visible, wi, wo = above_horizon(jnp.asarray(wi), jnp.asarray(wo))
         values = self.diffuse({}, wi, wo)[:, None] * jnp.asarray(params.diffuse)
         if self.n_lobes:
-            values = values + self.lobe_values(params.shape, wi, wo).T @ jnp.asarray(params.specular)
+            lobes = self.lobe_values(params.shape, wi, wo)
+            if lobes.ndim == 3:  # one lobe per channel (K, N, C)
+                values = values + jnp.einsum("knc,kc->nc", lobes, jnp.asarray(params.specular))
+            else:
+                values = values + lobes.T @ jnp.asarray(params.specular)
         return jnp.where(visible[:, None], values, 0.0)
 
     def host_brdf(self, params: Params, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
@@ -155,8 +164,9 @@ class LobeModel(Model):
     def prior_weight(self) -> float:
         return 0.0
 
-    def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"]:
-        """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions."""
+    def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"] | Float[Array, "K n C"]:
+        """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions; (K, N, C) for a lobe
+        with per-channel parameters (``Lobe.channel_names``)."""
         return jax.vmap(lambda one_shape: self.lobe(one_shape, wi, wo))(dict(shape))
 
     # ------------------------------------------------------------ parameter forms

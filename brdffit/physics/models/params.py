@@ -16,13 +16,13 @@ class Params(NamedTuple):
     """A model's parameters as arrays (a JAX pytree).
 
     ``diffuse``: (C,) albedos; ``specular``: (K, C) albedos; ``shape``: lobe-shape parameters, each of
-    shape (K,), keyed by their names (``alpha``, ``m``, ``f0``, …). Leading batch axes are allowed
-    where a caller vmaps.
+    shape (K,), keyed by their names (``alpha``, ``m``, ``f0``, …), (K, C) for those the lobe takes per channel
+    (``Lobe.channel_names``: a conductor's ``eta``, ``k``). Leading batch axes are allowed where a caller vmaps.
     """
 
     diffuse: Float[Array, "*batch C"] | Float[np.ndarray, "*batch C"]
     specular: Float[Array, "*batch K C"] | Float[np.ndarray, "*batch K C"]
-    shape: dict[str, Float[Array, "*batch K"] | Float[np.ndarray, "*batch K"]]
+    shape: dict[str, Float[Array, "*batch K"] | Float[np.ndarray, "*batch K"] | Float[Array, "*batch K C"]]
 
 
 class Layout(Protocol):
