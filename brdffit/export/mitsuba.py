@@ -69,7 +69,8 @@ class MitsubaExport:
     """A Mitsuba 3 BSDF as ``mitsuba.load_dict`` takes it (``bsdf``), the fit it was made from (``source``, a model
     spec), the fit it expresses exactly (``exported``: the source itself, or the Mitsuba model fitted to it), how far
     that lies from the source (``approximation``, None when exact) and what a user must know (``notes``);
-    ``at_data``: how far the BSDF lies from the data at its directions, when given (``at_data.py``)."""
+    ``at_data``: how far the BSDF lies from the data at its directions, when given (``at_data.py``); ``change``: what
+    an export of the fitted model itself left out (a negligible diffuse albedo), when it did."""
 
     bsdf: dict[str, Any]
     source: str
@@ -77,6 +78,7 @@ class MitsubaExport:
     approximation: "Approximation | None" = None
     notes: list[str] = field(default_factory=list)
     at_data: "DataError | None" = None
+    change: str | None = None
 
     @property
     def exact(self) -> bool:
@@ -134,6 +136,8 @@ class MitsubaExport:
         if self.exact:
             beckmann = self.exported.model_options.get("distribution") == "beckmann"
             how = "exact" + (" but for Mitsuba's Beckmann G1 (Walter's approximation, within 0.5%)" if beckmann else "")
+        elif self.change:
+            how = f"exact but for {self.change}: {self.approximation.line()}"
         else:
             how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
             how += self.approximation.line()
@@ -152,6 +156,17 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     if exact is not None and _in_range(result):
         return MitsubaExport(exact, source, result, None, notes + _tangent_notes(result))
     from .approximate import approximation_error, refit
+
+    if exact is not None and (without := _without_negligible_diffuse(result)) is not None:
+        diffuse = _albedo_maxima(result)[0]
+        change = f"its diffuse albedo (at most {diffuse:.2g}), left out"
+        notes.append(
+            f"its diffuse albedo (at most {diffuse:.2g}) is left out: Mitsuba's blend of diffuse and roughconductor"
+            f" cannot hold it beside a specular albedo of {_albedo_maxima(result)[1]:.3g}"
+        )
+        approximation = approximation_error(result, without.predict)
+        bsdf = _exact_bsdf(without)
+        return MitsubaExport(bsdf, source, without, approximation, notes + _tangent_notes(result), change=change)
 
     if exact is not None:  # the model Mitsuba has, refitted within its range
         notes.append(
@@ -181,6 +196,21 @@ def _albedo_maxima(result: FitResult) -> tuple[float, float]:
 
 #: How far inside Mitsuba's range a refit's albedos are held: their sum within it after the blend's division.
 _RANGE_MARGIN = 1e-9
+
+
+#: A diffuse albedo at most this is left out of an export rather than refitting the material (a metal's fit holds
+#: ks at 1, and noise leaves a kd of 1e-8 to 1e-5 beside it: at most 3·10⁻⁵ 1/sr, which the error reported shows).
+NEGLIGIBLE_DIFFUSE = 1e-4
+
+
+def _without_negligible_diffuse(result: FitResult) -> FitResult | None:
+    """``result`` with its diffuse albedo set to 0 where that is at most :data:`NEGLIGIBLE_DIFFUSE` and what is left
+    lies in Mitsuba's range; else None."""
+    diffuse, specular = _albedo_maxima(result)
+    if not (0.0 < diffuse <= NEGLIGIBLE_DIFFUSE and specular <= 1.0):
+        return None
+    name = get_model(result.model, **result.model_options).diffuse_name
+    return dataclasses.replace(result, params=result.params | {name: [0.0] * len(result.channels)})
 
 
 def _in_range(result: FitResult) -> bool:

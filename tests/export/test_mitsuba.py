@@ -242,3 +242,18 @@ def test_mitsubas_anisotropic_roughconductor_is_recovered_with_its_tangent(distr
     assert abs(at_data.median_error - at_data.fit_median_error) < 0.05 * at_data.fit_median_error
     untangented = data_error(result, samples, lambda a, b: mitsuba_eval(exported.bsdf, a, b), "Mitsuba, tangent +x")
     assert untangented.median_error > 3 * at_data.median_error  # the tangent's frame is what makes it the fit
+
+
+def test_a_metals_negligible_diffuse_albedo_is_left_out_and_said():
+    """A metal's fit holds ks at 1 and leaves a kd of ~1e-8 to 1e-5 beside it, which Mitsuba's blend cannot hold:
+    it is left out (a plain roughconductor, no refit), said, and its error, under 1e-5 of the BRDF's rms, reported."""
+    params = {"kd": [1e-8, 2e-8, 1e-5], "ks": [1.0, 1.0, 1.0], "m": 0.2}
+    params |= {"eta": [0.15, 0.37, 1.44], "k": [4.0, 2.4, 1.6]}
+    result = result_of("cook-torrance", params, fresnel="conductor", distribution="ggx", shadowing="smith")
+    exported = mitsuba_bsdf(result)
+    assert exported.bsdf["type"] == "roughconductor" and exported.exported.params["kd"] == [0.0, 0.0, 0.0]
+    assert exported.comment_lines()[1].startswith("exact but for its diffuse albedo (at most 1e-05), left out")
+    # 1e-5/π against a gold lobe of rms ~1 1/sr: the error is the dropped term itself.
+    assert exported.approximation.relative_rmse < 1e-5
+    bsdf = mi.load_string(exported.to_xml())
+    np.testing.assert_allclose(mitsuba_brdf(bsdf, WI, WO), exported.brdf(WI, WO), rtol=1e-4, atol=1e-7)
