@@ -295,3 +295,23 @@ def test_a_cache_folder_that_is_not_ours_alone_is_not_used(tmp_path, monkeypatch
     with pytest.warns(InputWarning, match=f"the compilation cache {folder} {reason}.*not used"):
         assert cache.enable_compilation_cache(folder) is None
     assert cache.programs_folder() is None
+
+
+def test_a_signed_program_that_fails_to_compile_is_exported_again(programs, monkeypatch):
+    """A file this cache signed whose program JAX cannot compile (its StableHLO's bytes changed before it was signed:
+    what a JAX that reads programs otherwise would meet): one warning, the program exported again and its file
+    replaced, the call answered; before, every later call failed ("Failed to deserialize StableHLO")."""
+    x = np.linspace(0.0, 1.0, 7)
+    scaled_sum(np.asarray(2.0), x)
+    (stored,) = stored_files(programs)
+    _, header, payload = stored.read_bytes().split(b"\n", 2)
+    stablehlo = payload.find(jax.export.deserialize(bytearray(payload)).mlir_module_serialized[:64])
+    assert stablehlo > 0
+    payload = bytearray(payload)
+    payload[stablehlo : stablehlo + 16] = bytes(byte ^ 0xFF for byte in payload[stablehlo : stablehlo + 16])
+    body = header + b"\n" + bytes(payload)
+    stored.write_bytes(_sign((programs / "key").read_bytes(), stored.stem, body) + b"\n" + body)
+    _later_process(monkeypatch)
+    with pytest.warns(InputWarning, match=r"the stored program .* failed \(.*\); it is compiled again and replaced"):
+        assert float(scaled_sum(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
+    _assert_read_back_quietly(monkeypatch, x)

@@ -21,7 +21,8 @@ random bytes, mode 0600, made by the first process that stores a program): a fil
 copied from another cache) or whose bytes changed (a flipped bit) fails the check, is never deserialized, and is
 exported again and replaced, with one :class:`~brdffit.errors.InputWarning`. The named tuples a header lists are
 looked up, never imported from elsewhere: a type of brdffit's own modules, or of a module already loaded. (That the
-folder is the user's own, writable by no one else, ``cache.py`` checks before turning the cache on.)
+folder is the user's own, writable by no one else, ``cache.py`` checks before turning the cache on.) A signed program
+that fails the first time it is compiled or run is discarded (:func:`discard`, from ``jit.py``) and exported again.
 """
 
 import hashlib
@@ -102,6 +103,25 @@ def stored_program(
             program = None if exported is None else jax.jit(exported.call, compiler_options=compile_options)
             _loaded[signature] = program
         return program
+
+
+def discard(identity: list, args: Sequence, static_argnums: Sequence[int], error: Exception) -> None:
+    """Forget the stored program for ``identity`` called with ``args``, which failed to compile or run (``error``):
+    its file is removed and the next call exports it again; said in one :class:`~brdffit.errors.InputWarning`."""
+    from .cache import programs_folder
+
+    signature = _signature(identity, args, static_argnums)
+    folder = programs_folder()
+    if signature is None or folder is None:
+        return
+    path = folder / f"{signature}{SUFFIX}"
+    with _lock:
+        _loaded.pop(signature, None)
+        path.unlink(missing_ok=True)
+    reason = (str(error).strip().splitlines() or [type(error).__name__])[0]
+    warnings.warn(
+        InputWarning(f"the stored program {path} failed ({reason}); it is compiled again and replaced"), stacklevel=3
+    )
 
 
 def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
