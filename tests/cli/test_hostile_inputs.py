@@ -1,18 +1,23 @@
 """Hostile and absurd inputs (issue 29, item 6): each is one line and exit status 2 before the work, or a documented
 cap, never a traceback, a hang or an allocation the input did not pay for."""
 
+import contextlib
 import io
 import json
 import os
 import re
+import socket
 import subprocess
 import sys
+import threading
+import types
 import zipfile
 
 import numpy as np
 import pytest
 from paths import ROOT
 
+import brdffit.api
 import brdffit.datadriven.basis
 import data_synth
 from brdffit import fit, save_samples
@@ -210,3 +215,51 @@ def test_a_dollar_in_a_channel_name_is_drawn_as_typed(tmp_path, capsys):
     status, _, err = run(["plot", tmp_path / "dollar.json", csv, "-o", f"{tmp_path}/figures/"], capsys)
     assert status == 0 and err == "", err
     assert len(list((tmp_path / "figures").iterdir())) == 4
+
+
+@pytest.fixture
+def not_dask():
+    """A TCP service that answers anything with an HTTP response (not Dask's protocol); its address."""
+    server = socket.create_server(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def serve():
+        while not stop.is_set():
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            with connection:
+                with contextlib.suppress(OSError):
+                    connection.recv(1024)
+                    connection.sendall(b"HTTP/1.0 200 OK\r\nContent-Type: text/plain\r\n\r\nnot dask\n" * 50)
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    stop.set()
+    server.close()
+    thread.join(timeout=10)
+
+
+def test_a_scheduler_address_that_is_not_dask_is_one_line(files, tmp_path, capsys, no_fit, not_dask):
+    """Dask read the HTTP bytes as a frame length and asked for 3 EiB: a MemoryError traceback, exit 1."""
+    pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
+    status, _, err = run(["fit", files / "ward.csv", "--scheduler", not_dask, "-o", tmp_path / "r.json"], capsys)
+    one_line_error(status, err, f"--scheduler {not_dask}: no Dask scheduler answers there")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_workers_killed_by_a_fit_are_one_line(files, tmp_path, capsys, monkeypatch):
+    """Dask gives up on a task that killed its workers (``KilledWorker``): one line, exit 2, nothing written."""
+    distributed = pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
+
+    def killed(*args, **kwargs):
+        raise distributed.KilledWorker("fit-3f2a", types.SimpleNamespace(address="tcp://127.0.0.1:40000"), 3)
+
+    monkeypatch.setattr(brdffit.api, "fit_batch", killed)
+    status, _, err = run(["fit", files / "ward.csv", "--workers", "1", "-o", tmp_path / "r.json"], capsys)
+    one_line_error(
+        status, err, "--workers 1: Dask workers died while fitting (attempted to run task 'fit-3f2a' on 4 different"
+    )
+    assert list(tmp_path.iterdir()) == []
