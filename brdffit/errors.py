@@ -52,6 +52,10 @@ class BrdfInputError(Spelled, ValueError):
     """Bad input: a file, an argument or a parameter value that brdffit cannot accept."""
 
 
+class BrdfWriteError(Spelled, OSError):
+    """A file that could not be written (a full disk, a folder that cannot be written): one line naming it."""
+
+
 class InputWarning(Spelled, UserWarning):
     """Input brdffit read, but that a user should check: a file header overridden, angles that look mistaken."""
 

@@ -3,12 +3,21 @@
 Angles follow brdffit's frame (``docs/conventions.md``: ``z`` the normal, azimuth from ``x``); the light
 sits at azimuth 0, so the mirror direction is at azimuth 180°. Grids use bin
 midpoints, so no direction lies on the horizon. Random geometries take a seed.
+A geometry holds at most :data:`MAX_SAMPLES` pairs, checked from its counts before anything is made.
 """
+
+import math
 
 import numpy as np
 
 from brdffit.checks import angle_up_to_90, whole_number
+from brdffit.errors import Argument, BrdfInputError
 from brdffit.physics.geometry import mirror_direction, spherical_to_direction
+
+#: The most direction pairs a geometry makes: above a full MERL table's 1,458,000. Synthesizing, writing and fitting a
+#: sample takes ~1–2 KB at its peak, so this is a few GB; ``synth --n-theta 10000000`` (2.9 billion pairs) grew to 24 GB
+#: and was killed before this cap.
+MAX_SAMPLES = 2_000_000
 
 
 def _directions(theta, phi) -> np.ndarray:
@@ -23,6 +32,16 @@ def _positive_count(name: str, value) -> int:
     return whole_number(name, value)
 
 
+def _check_size(**counts: int) -> None:
+    """Refuse a geometry of more than :data:`MAX_SAMPLES` pairs (the product of ``counts``) before making it."""
+    total = math.prod(counts.values())
+    if total > MAX_SAMPLES:
+        parts: list = []
+        for index, (name, value) in enumerate(counts.items()):
+            parts += [" × " if index else "", Argument(name, str(value))]
+        raise BrdfInputError(*parts, f" is {total:,} direction pairs; at most {MAX_SAMPLES:,}")
+
+
 def hemisphere_grid(n_incident: int = 8, n_theta: int = 36, n_phi: int = 36) -> tuple[np.ndarray, np.ndarray]:
     """Full hemispherical grid: ``n_incident`` light zeniths × ``n_theta`` viewer zeniths × ``n_phi`` azimuths.
 
@@ -33,6 +52,7 @@ def hemisphere_grid(n_incident: int = 8, n_theta: int = 36, n_phi: int = 36) -> 
     n_incident, n_theta, n_phi = (
         _positive_count(k, v) for k, v in (("n_incident", n_incident), ("n_theta", n_theta), ("n_phi", n_phi))
     )
+    _check_size(n_incident=n_incident, n_theta=n_theta, n_phi=n_phi)
     theta_i = _midpoints(n_incident, np.pi / 2)
     theta_o = _midpoints(n_theta, np.pi / 2)
     phi_o = np.arange(n_phi) * 2 * np.pi / n_phi
@@ -46,6 +66,7 @@ def in_plane(n_incident: int = 8, n_theta: int = 90) -> tuple[np.ndarray, np.nda
     Negative viewer zeniths lie on the mirror side (azimuth 180°).
     """
     n_incident, n_theta = _positive_count("n_incident", n_incident), _positive_count("n_theta", n_theta)
+    _check_size(n_incident=n_incident, n_theta=n_theta)
     theta_i = _midpoints(n_incident, np.pi / 2)
     signed = _midpoints(n_theta, np.pi / 2, -np.pi / 2)
     ti, so = np.meshgrid(theta_i, signed, indexing="ij")
@@ -56,6 +77,7 @@ def in_plane(n_incident: int = 8, n_theta: int = 90) -> tuple[np.ndarray, np.nda
 def uniform_random(n_samples: int = 10000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """``n_samples`` pairs, light and viewer each uniform in solid angle over the hemisphere."""
     n_samples = _positive_count("n_samples", n_samples)
+    _check_size(n_samples=n_samples)
     rng = np.random.default_rng(seed)
     # 1 - u with u ∈ [0, 1) gives cos θ ∈ (0, 1]: never exactly on the horizon.
     cos_theta = 1.0 - rng.random((2, n_samples))
@@ -75,6 +97,8 @@ def near_specular(
     peak), at a uniform azimuth about it; directions below 89.9° only.
     """
     n_incident, n_samples = _positive_count("n_incident", n_incident), _positive_count("n_samples", n_samples)
+    _check_size(n_samples=n_samples)
+    _check_size(n_incident=n_incident)
     angle_up_to_90("spread", spread)
     rng = np.random.default_rng(seed)
     theta_i = _midpoints(n_incident, np.pi / 2)

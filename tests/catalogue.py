@@ -69,12 +69,12 @@ CASES = [
         {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith", "anisotropic": True},
         {
             "kd": [0.01, 0.01, 0.01],
-            "ks": [1.0, 0.8, 0.4],
+            "ks": [1.0, 1.0, 1.0],  # a conductor's ks is held at 1: its index, per channel, colours it
             "alpha_u": 0.08,
             "alpha_v": 0.3,
             "phi_t": 30.0,
-            "eta": 0.2,
-            "k": 3.9,
+            "eta": [0.15, 0.37, 1.44],
+            "k": [4.0, 2.4, 1.6],
         },
     ),
     (  # a brushed lacquer: anisotropic Beckmann with height-correlated Smith, tangent at -60°

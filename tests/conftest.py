@@ -34,3 +34,36 @@ def random_directions(rng, n: int, min_cos: float = 1e-3) -> np.ndarray:
 def directions_from_degrees(theta, phi) -> np.ndarray:
     theta, phi = np.radians(np.atleast_1d(theta)), np.radians(np.atleast_1d(phi))
     return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+# ---------------------------------------------------------------------- the command-line tests' fixtures
+# (here rather than in tests/cli/conftest.py: a second conftest module would shadow this one for the tests that
+# import its helpers, `from conftest import random_directions`, under pytest's default import mode)
+
+
+@pytest.fixture
+def no_fit(monkeypatch):
+    """Fail the test if a fit starts: the checks must come first."""
+
+    import brdffit.api
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a fit ran before the bad input was reported")
+
+    monkeypatch.setattr(brdffit.api, "fit", refuse)
+    monkeypatch.setattr(brdffit.api, "fit_batch", refuse)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A small Ward dataset (``ward.csv``, one channel, 432 samples) and its fit (``ward.json``) in a folder."""
+    import data_synth
+    from brdffit import fit, save_samples
+
+    folder = tmp_path_factory.mktemp("ward")
+    samples = data_synth.synthesize(
+        "ward", {"rho_d": [0.2], "rho_s": [0.05], "alpha": 0.15}, *data_synth.hemisphere_grid(4, 9, 12), noise=0.01
+    )
+    save_samples(samples, folder / "ward.csv")
+    fit(samples, "ward").save(folder / "ward.json")
+    return folder

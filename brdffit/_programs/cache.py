@@ -3,11 +3,19 @@
 A ``brdffit fit`` spends most of its time compiling the solver for its model
 and data size; with the cache a later run loads the compiled program instead.
 The command line enables it; Python users call :func:`enable_compilation_cache`.
+
+The folder holds programs that run as the user's own code, so it is trusted only when it is the user's: a folder
+(or its ``programs/``) that another user owns, or that its group or anyone may write, is refused with one warning,
+and the fits compile as if the cache were off. brdffit makes its folders with mode 0700.
 """
 
 import os
+import stat
 import sys
+import warnings
 from pathlib import Path
+
+from ..errors import InputWarning
 
 #: The environment variable that moves the cache; set it to an empty string to turn the cache off.
 CACHE_VARIABLE = "BRDFFIT_CACHE_DIR"
@@ -38,8 +46,14 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
     if folder is None:
         return None
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
     except OSError:
+        return None
+    distrust = untrusted(folder) or untrusted(folder / "programs")
+    if distrust is not None:
+        warnings.warn(
+            InputWarning(f"the compilation cache {distrust}: not used (its programs would run as yours)"), stacklevel=2
+        )
         return None
     _enabled = folder
     if "jax" not in sys.modules:
@@ -52,6 +66,22 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
     jax.config.update("jax_compilation_cache_dir", str(folder))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     return folder
+
+
+def untrusted(folder: Path) -> str | None:
+    """Why ``folder`` cannot be trusted to hold programs (``"FOLDER is owned by user 1001"``), or None: it is ours and
+    no one else may write it (or it does not exist yet). Links are followed."""
+    try:
+        status = os.stat(folder)
+    except FileNotFoundError:
+        return None
+    except OSError as error:
+        return f"{folder} cannot be read ({error.strerror or error})"
+    if hasattr(os, "getuid") and status.st_uid != os.getuid():
+        return f"{folder} is owned by user {status.st_uid}, not by this one ({os.getuid()})"
+    if status.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"{folder} may be written by others (mode {stat.S_IMODE(status.st_mode):o}; chmod go-w to trust it)"
+    return None
 
 
 def programs_folder() -> Path | None:

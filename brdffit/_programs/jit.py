@@ -87,8 +87,29 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
             return None
         return stored.stored_program(identity, top_level(), args, static_argnums, compiler_options())
 
+    def with_stored(args, kwargs, key, use, otherwise):
+        """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
+        program that fails the first time it is compiled or run in this process (a file this cache signed, but that
+        this JAX cannot read) is discarded with one warning (``stored.discard``) and exported again."""
+        program = stored_for(args, kwargs)
+        if program is None:
+            return otherwise()
+        if program in proven:
+            return use(program)
+        try:
+            result = use(program)
+        except Exception as error:
+            stored.discard(identity, args, static_argnums, error)
+            program = stored_for(args, kwargs)
+            if program is None:
+                return otherwise()
+            result = use(program)
+        proven.add(program)
+        return result
+
     first_calls = FirstCalls()
     compiled: set = set()  # the call keys whose programs have run or been compiled in this process
+    proven: set = set()  # the stored programs that have run or compiled in this process: no failure to expect
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
@@ -96,11 +117,13 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
             if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree.leaves((args, kwargs))):
                 return plain()(*args, **kwargs)
             key = _call_key(args, kwargs, static_argnums)
-            program = stored_for(args, kwargs)
-            if program is not None:
-                result = program(*stored.dynamic_arguments(args, static_argnums))
-            else:
-                result = first_calls.run(key, lambda: top_level()(*args, **kwargs))
+            result = with_stored(
+                args,
+                kwargs,
+                key,
+                lambda program: program(*stored.dynamic_arguments(args, static_argnums)),
+                lambda: first_calls.run(key, lambda: top_level()(*args, **kwargs)),
+            )
             compiled.add(key)
             return result
 
@@ -112,12 +135,13 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         """
         with float64():
             key = _call_key(args, kwargs, static_argnums)
-            program = stored_for(args, kwargs)
-            if program is not None:
-                shapes = stored.dynamic_arguments(args, static_argnums)
-                program.lower(*shapes).compile()
-            else:
-                first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile())
+            with_stored(
+                args,
+                kwargs,
+                key,
+                lambda program: program.lower(*stored.dynamic_arguments(args, static_argnums)).compile(),
+                lambda: first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile()),
+            )
             compiled.add(key)
 
     def is_compiled(*args, **kwargs) -> bool:

@@ -10,16 +10,31 @@ dtypes of its array arguments. It deserializes the program (a few ms) and compil
 answers.
 
 A stored program belongs to this brdffit version and source (every ``.py`` file of the package is hashed), this JAX
-and jaxlib, this backend and device kind: a change of any of them gives new signatures, and stale files are never
-read. Programs are stored only while the compilation cache is on, in its folder's ``programs/``. A call that cannot
-be stored (a static argument without a cache key, an argument that is not an array, keyword arguments, a program
-``jax.export`` refuses) is compiled by ``jax.jit`` as before.
+and jaxlib, optimistix, equinox and lineax, this backend and device kind: a change of any of them gives new signatures,
+and stale files are never read. Programs are stored only while the compilation cache is on, in its folder's
+``programs/``. A call that cannot be stored (a static argument without a cache key, an argument that is not an array,
+keyword arguments, a program ``jax.export`` refuses) is compiled by ``jax.jit`` as before.
+
+The folder is untrusted input (issue 29, item 8): a program read from it runs as the user's own code. So each file
+begins with an HMAC-SHA256 of its signature and its content under a key that only this cache knows (``key``, 32
+random bytes, mode 0600, made by the first process that stores a program): a file this cache did not write (planted,
+copied from another cache) or whose bytes changed (a flipped bit) fails the check, is never deserialized, and is
+exported again and replaced, with one :class:`~brdffit.errors.InputWarning`. The named tuples a header lists are
+looked up, never imported from elsewhere: a type of brdffit's own modules, or of a module already loaded. (That the
+folder is the user's own, writable by no one else, ``cache.py`` checks before turning the cache on.) A signed program
+that fails the first time it is compiled or run is discarded (:func:`discard`, from ``jit.py``) and exported again.
 """
 
 import hashlib
+import hmac
 import importlib
 import json
+import os
+import secrets
+import sys
+import tempfile
 import threading
+import warnings
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
@@ -28,10 +43,15 @@ import numpy as np
 
 from .._files import atomic_path
 from .._jax import jax
+from ..errors import InputWarning
 from .keys import key_of
 
-#: A stored program's file: one line of JSON (the named tuples its trees hold) and the serialized program.
+#: A stored program's file: its HMAC (hex) on one line, one line of JSON (the named tuples its trees hold), and the
+#: serialized program.
 SUFFIX = ".jaxprogram"
+#: The file in ``programs/`` holding the cache's secret key (32 random bytes), which signs every program it stores.
+KEY_FILE = "key"
+KEY_BYTES = 32
 
 _lock = threading.Lock()  # held while a program is loaded or exported, and while it is published in ``_loaded``
 _MISSING = object()  # not in ``_loaded`` (None there means: cannot be stored)
@@ -79,10 +99,29 @@ def stored_program(
     with _lock:
         program = _loaded.get(signature, _MISSING)
         if program is _MISSING:
-            exported = _load_or_export(folder / f"{signature}{SUFFIX}", jitted, args, static_argnums)
+            exported = _load_or_export(folder, signature, jitted, args, static_argnums)
             program = None if exported is None else jax.jit(exported.call, compiler_options=compile_options)
             _loaded[signature] = program
         return program
+
+
+def discard(identity: list, args: Sequence, static_argnums: Sequence[int], error: Exception) -> None:
+    """Forget the stored program for ``identity`` called with ``args``, which failed to compile or run (``error``):
+    its file is removed and the next call exports it again; said in one :class:`~brdffit.errors.InputWarning`."""
+    from .cache import programs_folder
+
+    signature = _signature(identity, args, static_argnums)
+    folder = programs_folder()
+    if signature is None or folder is None:
+        return
+    path = folder / f"{signature}{SUFFIX}"
+    with _lock:
+        _loaded.pop(signature, None)
+        path.unlink(missing_ok=True)
+    reason = (str(error).strip().splitlines() or [type(error).__name__])[0]
+    warnings.warn(
+        InputWarning(f"the stored program {path} failed ({reason}); it is compiled again and replaced"), stacklevel=3
+    )
 
 
 def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
@@ -149,12 +188,27 @@ def _environment() -> list[str]:
     ]
 
 
-def _load_or_export(path: Path, jitted, args: Sequence, static_argnums: Sequence[int]):
-    """The ``Exported`` stored at ``path``, or the program exported now and stored there; None if it cannot be."""
+class UntrustedProgram(Exception):
+    """A stored program that is not run: not signed by this cache, changed since, or naming a type it may not."""
+
+
+def _load_or_export(folder: Path, signature: str, jitted, args: Sequence, static_argnums: Sequence[int]):
+    """The ``Exported`` stored for ``signature`` in ``folder``, or the program exported now and stored there; None if
+    it cannot be. A file that fails the checks (:func:`_read`) is said in one warning and replaced."""
+    path = folder / f"{signature}{SUFFIX}"
+    key = _secret(folder)
     try:
-        return _read(path)
-    except Exception:  # missing, cut short by a crash, written by another version: export it again
+        return _read(path, signature, key)
+    except FileNotFoundError:
         pass
+    except Exception as error:  # planted, flipped bytes, cut short by a crash: never run; exported again
+        warnings.warn(
+            InputWarning(
+                f"the stored program {path} is not used ({error}); it is compiled again and replaced"
+                " (the compilation cache is untrusted input: only the programs it signed run)"
+            ),
+            stacklevel=2,
+        )
     count_trace()
     try:
         exported = jax.export.export(jitted)(*(_shape_of(arg, i, static_argnums) for i, arg in enumerate(args)))
@@ -164,20 +218,90 @@ def _load_or_export(path: Path, jitted, args: Sequence, static_argnums: Sequence
         payload = exported.serialize()
     except Exception:  # jax.export refuses it (a callback, a custom call it does not know): compile it as usual
         return None
-    header = json.dumps({"named_tuples": [_type_name(kind) for kind in types]}).encode()
-    _write_atomically(path, header + b"\n" + bytes(payload))
+    if key is not None:  # no key (a cache that cannot be written): nothing is stored
+        body = json.dumps({"named_tuples": [_type_name(kind) for kind in types]}).encode() + b"\n" + bytes(payload)
+        _write_atomically(path, _signed(key, signature, body) + b"\n" + body)
     return exported
 
 
-def _read(path: Path):
-    header, _, payload = path.read_bytes().partition(b"\n")
+def _read(path: Path, signature: str, key: bytes | None):
+    """The ``Exported`` in ``path``, once its HMAC proves that this cache wrote it for ``signature``; raises
+    :class:`UntrustedProgram` otherwise (and ``FileNotFoundError`` when there is none)."""
+    mac, _, body = path.read_bytes().partition(b"\n")
+    if key is None or not hmac.compare_digest(mac, _signed(key, signature, body)):
+        raise UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
+    header, _, payload = body.partition(b"\n")
     for name in json.loads(header)["named_tuples"]:
-        module, _, qualified = name.partition(":")
-        kind = importlib.import_module(module)
-        for part in qualified.split("."):
-            kind = getattr(kind, part)
-        _register(kind)
+        _register(_named_tuple(name))
     return jax.export.deserialize(bytearray(payload))
+
+
+def _signed(key: bytes, signature: str, body: bytes) -> bytes:
+    """The HMAC-SHA256 (hex) of a program's ``body`` stored for ``signature`` (a file moved to another name fails)."""
+    return hmac.new(key, signature.encode() + b"\n" + body, hashlib.sha256).hexdigest().encode()
+
+
+def _named_tuple(name: str) -> type:
+    """The named tuple ``module:qualified.name`` a stored program's trees hold. Only brdffit's own modules are imported
+    for it; any other must be loaded already (a file never makes brdffit import anything else)."""
+    module_name, _, qualified = name.partition(":")
+    if module_name == "brdffit" or module_name.startswith("brdffit."):
+        module = importlib.import_module(module_name)
+    elif module_name in sys.modules:
+        module = sys.modules[module_name]
+    else:
+        raise UntrustedProgram(f"it names {name!r}, of a module that is not loaded")
+    kind = module
+    for part in qualified.split("."):
+        kind = getattr(kind, part, None)
+    if not (isinstance(kind, type) and issubclass(kind, tuple) and hasattr(kind, "_fields")):
+        raise UntrustedProgram(f"it names {name!r}, which is not a named tuple")
+    return kind
+
+
+def _secret(folder: Path) -> bytes | None:
+    """This cache's key (``folder/key``), made now if there is none; None if it can be neither read nor made."""
+    path = folder / KEY_FILE
+    with _key_lock:
+        if path not in _keys:
+            _keys[path] = _read_or_make_key(path)
+        return _keys[path]
+
+
+_key_lock = threading.Lock()
+_keys: dict[Path, bytes | None] = {}
+
+
+def _read_or_make_key(path: Path) -> bytes | None:
+    try:
+        key = path.read_bytes()
+        if len(key) == KEY_BYTES:
+            return key
+    except FileNotFoundError:
+        pass
+    except OSError:
+        return None
+    # None yet (or not a key): 32 random bytes, mode 0600 (mkstemp's), published by a link, which fails if another
+    # process published its key first (then that one is everyone's)
+    try:
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".key.")
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                stream.write(secrets.token_bytes(KEY_BYTES))
+            if path.exists():  # a key of the wrong length: replaced
+                os.replace(temporary, path)
+            else:
+                try:
+                    os.link(temporary, path)
+                except FileExistsError:
+                    pass
+        finally:
+            Path(temporary).unlink(missing_ok=True)
+        key = path.read_bytes()
+    except OSError:
+        return None
+    return key if len(key) == KEY_BYTES else None
 
 
 def _shape_of(arg, index: int, static_argnums: Sequence[int]):
@@ -215,7 +339,7 @@ def _write_atomically(path: Path, data: bytes) -> None:
     """``data`` into ``path`` atomically (``_files.atomic_path``): a reader never sees half a program. A cache that
     cannot be written (read-only, full) stores nothing; the program is still used in this process."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         with atomic_path(path) as temporary:
             temporary.write_bytes(data)
     except OSError:

@@ -8,21 +8,28 @@ Only the command being run is imported and configured, so ``brdffit --help`` and
 and no solver.
 
 Exit status: 0 success; 1 a fit did not converge (its result is still written, with ``converged: false``);
-2 bad input or usage, reported in one line on stderr, with nothing written (in a batch of fits, also a dataset whose
-fit is not finite: its line, no file for it, the others written); 130 interrupted (Ctrl-C), with
-nothing half-written (every file is written to a temporary name and renamed).
+2 bad input or usage, or a file that cannot be written (a full disk), reported in one line on stderr, with nothing
+written (in a batch of fits, also a dataset whose fit is not finite: its line, no file for it, the others written);
+130 interrupted (Ctrl-C), 143 terminated (SIGTERM), with nothing written from then on and nothing half-written (every
+file is written to a temporary name and renamed, and ``_files.stop_writing`` stops every later rename, so an
+interrupt that JAX swallows still stops the output).
 """
 
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 
+from .._files import resume_writing, stop_writing, writes_stopped
 from .._version import __version__
-from ..errors import BrdfInputError, FitWarning, InputWarning, Spelled, UncertaintyWarning
+from ..errors import BrdfInputError, BrdfWriteError, FitWarning, InputWarning, Spelled, UncertaintyWarning
 
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 #: The commands, each a module of this package, with the line ``brdffit --help`` shows for it.
 COMMANDS = {
@@ -44,6 +51,11 @@ class UsageError(Exception):
     """An argparse usage error, reported like any other bad input."""
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised where the program is (like ``KeyboardInterrupt`` for SIGINT): every ``finally`` and the atomic
+    writers' clean-up run, so no temporary file is left."""
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):
         raise UsageError(f"{message} (see {self.prog} --help)")
@@ -54,13 +66,18 @@ def main(argv: list[str] | None = None) -> int:
     from .arguments import spell
 
     argv = sys.argv[1:] if argv is None else [str(argument) for argument in argv]
+    resume_writing()
     try:
-        args = build_parser(_command_in(argv)).parse_args(argv)
-        with warnings.catch_warnings():
-            _warn_in_one_line()
-            args.declared_files(args).check()
-            return args.run(args)
-    except BrdfInputError as error:
+        with _signals_stop_writing():
+            args = build_parser(_command_in(argv)).parse_args(argv)
+            with warnings.catch_warnings():
+                _warn_in_one_line()
+                args.declared_files(args).check()
+                status = args.run(args)
+            if writes_stopped():  # an interrupt that was swallowed (JAX's gc callback): the work went on, unwritten
+                raise KeyboardInterrupt
+            return status
+    except (BrdfInputError, BrdfWriteError) as error:
         print(f"brdffit: error: {error.spelled(spell)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except UsageError as error:
@@ -71,6 +88,39 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("brdffit: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Terminated:
+        print("brdffit: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
+    finally:
+        resume_writing()  # the stop is for this command only (``main`` is also called from Python)
+
+
+def on_interrupt(signum, frame) -> None:
+    """SIGINT: stop every later write (``_files.stop_writing``), then raise ``KeyboardInterrupt`` as Python does."""
+    stop_writing()
+    raise KeyboardInterrupt
+
+
+def on_terminate(signum, frame) -> None:
+    """SIGTERM: stop every later write, then raise :class:`Terminated` (the temporaries are removed on the way out)."""
+    stop_writing()
+    raise Terminated
+
+
+@contextmanager
+def _signals_stop_writing() -> Iterator[None]:
+    """:func:`on_interrupt` and :func:`on_terminate` as the handlers of SIGINT and SIGTERM while a command runs (only
+    the main thread may set handlers; elsewhere, as in a test's thread, they are left alone)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signal.SIGINT: signal.signal(signal.SIGINT, on_interrupt)}
+    previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_terminate)
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 def run() -> None:

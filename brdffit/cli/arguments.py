@@ -6,11 +6,11 @@ typed it.
 """
 
 import argparse
-import json
 import os
 from pathlib import Path
 from typing import Any
 
+from .._files import parse_json, read_json_text
 from ..errors import Argument, BrdfInputError
 
 #: Flags whose name is not the argument's with ``_`` as ``-`` (``max_theta`` → ``--max-theta``).
@@ -114,9 +114,10 @@ def holding_arguments(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     for item in _held_items(args.fix, "--fix"):
         name, value = _name_and_text(item, "--fix", "NAME=VALUE (eta=1.5, kd=[0.1,0.2,0.3])")
         try:
-            fixed[_new(name, fixed, "--fix")] = json.loads(value)
-        except json.JSONDecodeError:
+            parsed = parse_json(value)
+        except ValueError:
             raise BrdfInputError(f"--fix {item}: {value!r} is not a number or a list of numbers") from None
+        fixed[_new(name, fixed, "--fix")] = parsed
     for name in _held_items(getattr(args, "free", None), "--free"):
         fixed[_new(name, fixed, "--free")] = None  # None frees a default hold (constraints.py)
     bounds: dict[str, Any] = {}
@@ -305,14 +306,14 @@ def json_argument(value: str, option: str) -> Any:
     else:
         where = f"{option} {value}"
         try:
-            text = Path(value).read_text(encoding="utf-8")
+            text = read_json_text(value)
         except FileNotFoundError:
             raise BrdfInputError(f"{where}: no such file") from None
-        except (OSError, UnicodeDecodeError) as error:
+        except (OSError, ValueError) as error:  # ValueError: too large, and UnicodeDecodeError
             raise BrdfInputError(f"{where}: cannot be read ({error})") from None
     try:
-        return json.loads(text)
-    except json.JSONDecodeError as error:
+        return parse_json(text)
+    except ValueError as error:
         raise BrdfInputError(f"{where}: not valid JSON ({error})") from None
 
 
@@ -338,10 +339,15 @@ def output_file(value: str | os.PathLike, option: str) -> Path:
     path = Path(value)
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
     where = f"{option} {value}"
-    if target.is_dir():
+    # What the path names, links followed by the system (``/dev/stdout`` is a link to ``/proc/self/fd/1``, a pipe whose
+    # resolved name, ``pipe:[…]``, names nothing): a folder, a device or a pipe is refused before any work.
+    if path.is_dir() or target.is_dir():
         raise BrdfInputError(f"{where}: is a folder; give a file name")
-    if target.exists() and not target.is_file():
-        raise BrdfInputError(f"{where}: is not a regular file (a device or a pipe); give a file name")
+    if (path.exists() and not path.is_file()) or (target.exists() and not target.is_file()):
+        raise BrdfInputError(
+            f"{where}: is not a regular file (a device or a pipe); give a file name"
+            + (", or - for standard output" if option == "-o" else "")
+        )
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise BrdfInputError(f"{where}: folder {folder} does not exist")

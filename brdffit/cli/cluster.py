@@ -26,11 +26,25 @@ def cluster_client(address: str | None, workers: int | None) -> Iterator:
     if address:
         try:
             client = distributed.Client(address, timeout=CONNECT_SECONDS)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise BrdfInputError(f"--scheduler {address}: no Dask scheduler answers there ({error})") from None
-        with client:
+        except Exception as error:  # whatever fails, no scheduler answers: an HTTP server's bytes, read by Dask as a
+            # frame length, asked for 3 EiB (MemoryError)
+            reason = f"{type(error).__name__}: {error}".splitlines()[0]
+            raise BrdfInputError(f"--scheduler {address}: no Dask scheduler answers there ({reason})") from None
+        with client, _killed_workers(distributed, f"--scheduler {address}"):
             yield client
         return
     cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
-    with cluster, distributed.Client(cluster) as client:
+    with cluster, distributed.Client(cluster) as client, _killed_workers(distributed, f"--workers {workers}"):
         yield client
+
+
+@contextlib.contextmanager
+def _killed_workers(distributed, where: str) -> Iterator[None]:
+    """A fit that killed every worker it was given (Dask gives up after a few: ``KilledWorker``) as one line."""
+    try:
+        yield
+    except distributed.KilledWorker as error:
+        reason = str(error).split(". ")[0]  # "Attempted to run task … on 4 different workers, but all … died …"
+        raise BrdfInputError(
+            f"{where}: Dask workers died while fitting ({reason[:1].lower()}{reason[1:]}); nothing written"
+        ) from None

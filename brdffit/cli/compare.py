@@ -3,6 +3,7 @@
 import argparse
 import sys
 
+from .._files import check_not_stopped
 from . import EXIT_OK
 from .arguments import add_comparison_options, comparison_arguments, load, output_file
 from .files import Files
@@ -37,6 +38,7 @@ def run(args: argparse.Namespace) -> int:
     stream = sys.stderr if args.output == "-" else sys.stdout
     print(comparison.table(), file=stream)
     if args.output == "-":
+        check_not_stopped()  # an interrupted command writes nothing, also here
         sys.stdout.write(comparison.to_json())
     elif output is not None:
         comparison.save(output)

@@ -6,10 +6,11 @@ Each command module has ``files(args) -> Files``: every file it reads (samples, 
 the command runs, so an option added to a command is checked as soon as it is declared there, and
 ``tests/cli/test_collisions.py`` fails while any option that takes a file is not.
 
-The rule: no output is an input (the user's data is never overwritten) and no two outputs are one file (the
-later would replace the earlier, and the run would still say it wrote both). Paths are compared as the operating
-system resolves them: two existing files by :func:`os.path.samefile` (a link, a hard link, another spelling of the
-same folder), anything else by its resolved path.
+The rule: every input is a file (or a folder), not a device or a pipe; no output is an input (the user's data is
+never overwritten) and no two outputs are one file (the later would replace the earlier, and the run would still say
+it wrote both). Paths are compared as the operating system resolves them: two existing files by
+:func:`os.path.samefile` (a link, a hard link, another spelling of the same folder), anything else by its resolved
+path.
 """
 
 import os
@@ -40,7 +41,11 @@ class Files:
         return cls(_pairs(inputs or {}), _pairs(outputs or {}))
 
     def check(self) -> None:
-        """Refuse, in one line, an output that is one of the inputs or an earlier output (nothing is written)."""
+        """Refuse, in one line, an input that is a device or a pipe (``/dev/zero`` never ends; a FIFO blocks, and is
+        gone once read), and an output that is one of the inputs or an earlier output (nothing is written)."""
+        for option, path in self.inputs:
+            if os.path.exists(path) and not (os.path.isfile(path) or os.path.isdir(path)):
+                raise BrdfInputError(f"{option} {path}: is not a regular file (a device or a pipe); give a file")
         for index, (option, path) in enumerate(self.outputs):
             for input_option, given in self.inputs:
                 if same_file(path, given):

@@ -8,6 +8,7 @@ import os
 import sys
 from pathlib import Path
 
+from .._files import check_not_stopped
 from ..errors import Argument, BrdfInputError
 from . import EXIT_BAD_INPUT, EXIT_NOT_CONVERGED, EXIT_OK
 from .arguments import (
@@ -123,12 +124,14 @@ def files(args: argparse.Namespace) -> Files:
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
     from ..fitting.objective.losses import get_loss
+    from ..fitting.options import Solving
     from ..physics.models.registry import get_model
 
     enable_compilation_cache()
     model = get_model(args.model, **model_options(args))
     get_loss(args.loss)
     mcmc = _uncertainty_settings(args)
+    Solving(n_starts=args.starts, max_steps=args.max_steps, dtype=args.dtype, seed=args.seed)  # checked before any work
     outputs = output_paths(args.samples, args.output, model)
     start = _start(args.start)
     held = holding_arguments(args)
@@ -153,6 +156,7 @@ def run(args: argparse.Namespace) -> int:
     if len(results) == 1 and problems[0] is not None:
         raise BrdfInputError(f"{args.samples[0]}: {problems[0]}")
     if outputs is None:  # -o -: the result file on standard output, everything else on standard error
+        check_not_stopped()  # an interrupted command writes nothing, also here
         sys.stdout.write(results[0].to_json())
     else:
         outputs[0].parent.mkdir(parents=True, exist_ok=True)

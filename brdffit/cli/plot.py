@@ -131,11 +131,11 @@ def _results(path: str) -> list:
 
 def _not_a_result(path: str) -> None:
     """Refuse a result or comparison file where the samples file belongs (the last file)."""
-    import json
+    from .._files import parse_json, read_json_text
 
     try:
-        content = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
+        content = parse_json(read_json_text(path))
+    except (OSError, ValueError):  # ValueError: JSON's, too large, and UnicodeDecodeError
         return  # not JSON: the samples reader says what is wrong with it
     if isinstance(content, dict) and ("params" in content or "models" in content):
         raise BrdfInputError(f"{path} is a result file, not samples; the samples file comes last")

@@ -155,6 +155,7 @@ def load_basis(path: str | os.PathLike) -> Basis:
         if key in _loaded:
             return _loaded[key]
         data = path.read_bytes()
+    _check_declared(path, data)
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as stored:
             arrays = {name: stored[name] for name in stored.files}
@@ -164,6 +165,48 @@ def load_basis(path: str | os.PathLike) -> Basis:
     _loaded.clear()  # one basis at a time: each holds ~10 MB per component
     _loaded[key] = basis
     return basis
+
+
+#: How much larger than its file a basis may be once decompressed, beyond :data:`EXPANSION_SLACK`: a basis's
+#: float32 components hardly compress, so a file that expands more is a zip bomb (200 components from 10 MB).
+MAX_EXPANSION = 50
+EXPANSION_SLACK = 64 * 2**20
+
+
+def _check_declared(path: Path, data: bytes) -> None:
+    """Refuse, before anything is decompressed, a file that is not an ``.npz`` (a ``.npy`` renamed), one that would
+    expand more than :data:`MAX_EXPANSION` times its size, and an array whose header declares another size than its
+    member holds (5 TiB declared in a small file: numpy would allocate it before reading)."""
+    not_a_basis = BrdfInputError(f"{path}: not a basis file (an .npz written by brdffit basis build)")
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(data))
+    except zipfile.BadZipFile:
+        raise not_a_basis from None
+    with archive:
+        members = archive.infolist()
+        expanded = sum(member.file_size for member in members)
+        if expanded > MAX_EXPANSION * len(data) + EXPANSION_SLACK:
+            raise BrdfInputError(
+                f"{path}: expands to {expanded / 2**20:,.0f} MiB from {len(data) / 2**20:,.1f} MiB, more than a basis"
+                f" does ({MAX_EXPANSION}×); not read"
+            )
+        for member in members:
+            try:
+                with archive.open(member) as stream:
+                    version = np.lib.format.read_magic(stream)
+                    if version != (1, 0) and version != (2, 0):
+                        raise ValueError(f"npy format {version}")
+                    read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else None
+                    shape, _, dtype = (read_header or np.lib.format.read_array_header_2_0)(stream)
+                    held = member.file_size - stream.tell()
+            except (ValueError, OSError, EOFError, zipfile.BadZipFile):
+                raise not_a_basis from None
+            declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
+            if dtype.hasobject or declared != held:
+                raise BrdfInputError(
+                    f"{path}: {member.filename} declares an array of shape {shape} ({declared:,} bytes) but holds"
+                    f" {held:,} bytes; not read"
+                )
 
 
 def _checked(path: Path, arrays: dict, digest: str) -> Basis:

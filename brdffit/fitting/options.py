@@ -18,6 +18,9 @@ from ..errors import Argument, BrdfInputError
 N_STARTS = 3
 #: Most solver steps per start.
 MAX_STEPS = 256
+#: The largest ``max_steps`` allowed: far beyond any fit's need (a few hundred), and within the solver's int32 step
+#: counter (``--max-steps 1e12`` overflowed it).
+MAX_STEPS_ALLOWED = 1_000_000
 #: The precisions a fit's model is evaluated in (its sums, and its result, are float64's either way).
 DTYPES = ("float64", "float32")
 
@@ -36,7 +39,7 @@ class Solving:
 
     def __post_init__(self):
         object.__setattr__(self, "n_starts", whole_number("n_starts", self.n_starts))
-        object.__setattr__(self, "max_steps", whole_number("max_steps", self.max_steps))
+        object.__setattr__(self, "max_steps", whole_number("max_steps", self.max_steps, 1, MAX_STEPS_ALLOWED))
         choice("dtype", self.dtype, DTYPES)
         object.__setattr__(self, "seed", whole_number("seed", self.seed, 0))
 

@@ -39,6 +39,12 @@ from .layout import QUANTILES, estimate
 MIN_AUTOCORRELATION_TIMES = 50
 #: The start ball's width in Laplace standard errors.
 BALL = 0.1
+#: The most walkers: each step evaluates the model for every walker at once (walkers × samples values), and emcee's
+#: vectorized moves hold as many; 10,000 is 300 times the default. ``--walkers 1e9`` ran out of memory.
+MAX_WALKERS = 10_000
+#: The most positions a chain holds (walkers × steps, burn-in included; 8 bytes per sampled parameter each): the
+#: default is 64,000. Beyond, the chain alone would need gigabytes.
+MAX_CHAIN_POSITIONS = 50_000_000
 #: Chain file suffixes: numpy's .npz, or emcee's HDF5 backend.
 CHAIN_SUFFIXES = (".npz", ".h5", ".hdf5")
 #: Below this mean acceptance fraction the walkers hardly move.
@@ -63,6 +69,15 @@ class MCMC:
     def __post_init__(self):
         for name, minimum in (("walkers", 2), ("steps", 1), ("burn", 0), ("thin", 1), ("seed", 0)):
             object.__setattr__(self, name, whole_number(name, getattr(self, name), minimum))
+        whole_number("walkers", self.walkers, 2, MAX_WALKERS)
+        if self.walkers * self.steps > MAX_CHAIN_POSITIONS:
+            raise BrdfInputError(
+                Argument("walkers", str(self.walkers)),
+                " × ",
+                Argument("steps", str(self.steps)),
+                f" is {self.walkers * self.steps:,} chain positions; at most {MAX_CHAIN_POSITIONS:,}"
+                f" ({MAX_CHAIN_POSITIONS * 8 // 2**20:,} MiB of chain per sampled parameter)",
+            )
         if self.burn >= self.steps:
             raise BrdfInputError(
                 Argument("burn", str(self.burn)), " must be less than ", Argument("steps", str(self.steps))

@@ -86,6 +86,21 @@ def save_figure(figure, path: str | os.PathLike, dpi: int = 120, **options) -> P
     """Write ``figure`` to ``path`` (format from the suffix) atomically: a temporary file renamed into place.
     ``options`` go to matplotlib's ``savefig`` (``bbox_inches="tight"``)."""
     path = Path(path)
+    text_as_typed(figure)
     with atomic_path(path) as temporary:
         figure.savefig(temporary, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png", **options)
     return path
+
+
+def text_as_typed(figure) -> None:
+    """Every text brdffit put on ``figure`` (titles, labels, legends: channel names, file names, model specs) shown as
+    typed: brdffit writes no math, and a ``$`` in a channel name would start matplotlib's math text, which fails on it
+    or mangles it. Tick labels, which matplotlib writes as math on log axes, are left alone."""
+    from matplotlib.axis import Axis, Tick
+    from matplotlib.text import Text
+
+    tick_texts = {id(tick_label) for tick in figure.findobj(Tick) for tick_label in (tick.label1, tick.label2)}
+    tick_texts |= {id(axis.offsetText) for axis in figure.findobj(Axis)}
+    for text in figure.findobj(Text):
+        if id(text) not in tick_texts:
+            text.set_parse_math(False)

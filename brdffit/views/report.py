@@ -33,7 +33,7 @@ from ..fitting.single.result import FitResult, parameter_rows, value_with_error
 from ..physics.models.model import Model
 from ..uncertainty.methods import check_options, with_uncertainty
 from . import plots
-from .figures import label
+from .figures import label, text_as_typed
 from .residuals import colour_limit
 
 #: Suffixes of the report file.
@@ -224,6 +224,7 @@ def _warnings(result: FitResult) -> list[str]:
 def _figure(figure, caption: str) -> str:
     """A figure as an embedded PNG (base64 ``data:`` URI) with its caption (already HTML)."""
     buffer = io.BytesIO()
+    text_as_typed(figure)
     figure.savefig(buffer, format="png", dpi=DPI)
     encoded = base64.b64encode(buffer.getvalue()).decode("ascii")
     return (

@@ -17,7 +17,7 @@ FILE_METAVARS = {"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN"
 #: Metavars of every other argument (a number, a name, a list of names or values, an address).
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
-    "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL",
+    "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL", "NAME[,…]", "true|false",
 }  # fmt: skip
 
 

@@ -217,9 +217,8 @@ def test_mitsubas_anisotropic_roughconductor_is_recovered_with_its_tangent(distr
     hemisphere grid plus 4000 pairs near the mirror direction, fitted from brdffit's default starts: alpha_u,
     alpha_v within 3% and phi_t within 2° (measured: 0.01% and 0.003°; the noise's own scatter is far smaller than
     either tolerance, which leaves room for Mitsuba's Beckmann G1 approximation). The export, evaluated by Mitsuba
-    at the data's directions in the tangent's frame (``export --samples``), lies as far from the data as the fit
-    does (the export adds Mitsuba's float32 and its Beckmann G1: within 5% of the fit's median error); Mitsuba with its
-    tangent along the data's +x does not."""
+    at the data's directions in the tangent's frame (``export --samples``), lies no farther from the data than the fit
+    (within 5% of the fit's median error); Mitsuba with its tangent along the data's +x does not."""
     truth = {"alpha_u": 0.05, "alpha_v": 0.3, "phi_t": 30.0}
     plugin = {"type": "roughconductor", "distribution": distribution, "alpha_u": 0.05, "alpha_v": 0.3}
     wi, wo = data_synth.hemisphere_grid(8, 36, 36)
@@ -239,7 +238,9 @@ def test_mitsubas_anisotropic_roughconductor_is_recovered_with_its_tangent(distr
     assert abs(result.params["phi_t"] - truth["phi_t"]) < 2.0
     exported = mitsuba_bsdf(result)
     at_data = exported.compared_with(result, samples).at_data
-    assert abs(at_data.median_error - at_data.fit_median_error) < 0.05 * at_data.fit_median_error
+    # Beckmann: the data are Mitsuba's (its approximate G1), so the export, which is Mitsuba, lies nearer to them than
+    # the fit (exact G1) does (measured: 0.74% against 1.33%); GGX: the two alike.
+    assert at_data.median_error < 1.05 * at_data.fit_median_error
     untangented = data_error(result, samples, lambda a, b: mitsuba_eval(exported.bsdf, a, b), "Mitsuba, tangent +x")
     assert untangented.median_error > 3 * at_data.median_error  # the tangent's frame is what makes it the fit
 

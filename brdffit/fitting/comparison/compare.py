@@ -105,6 +105,11 @@ class ModelScore:
     @classmethod
     def from_dict(cls, entry: dict[str, Any], comparison: dict[str, Any]) -> "ModelScore":
         """One entry of a comparison file's ``models``; ``comparison`` is the whole file (its loss, channels)."""
+        if not isinstance(entry, dict):
+            raise TypeError("models must be a JSON list of objects")
+        for name, kind in (("model", str), ("model_options", dict), ("params", dict)):
+            if not isinstance(entry[name], kind):
+                raise TypeError(f"models[].{name} must be a JSON {'string' if kind is str else 'object'}")
         result = FitResult(
             model=entry["model"],
             model_options=dict(entry["model_options"]),
@@ -205,7 +210,7 @@ class Comparison:
                 int(content["seed"]),
                 [ModelScore.from_dict(entry, content) for entry in content["models"]],
             )
-        except (KeyError, TypeError, ValueError) as error:
+        except (KeyError, TypeError, ValueError, OverflowError) as error:
             raise BrdfInputError(f"{source}: not a brdffit comparison file (missing or bad {error})") from None
 
     def save(self, path: str | os.PathLike) -> None:

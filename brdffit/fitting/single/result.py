@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..._files import write_text_atomic
+from ..._files import parse_json, read_json_text, write_text_atomic
 from ..._version import __version__
 from ...errors import BrdfInputError
 from ...physics.evaluate import evaluate
@@ -205,12 +205,12 @@ class FitResult:
     @classmethod
     def from_dict(cls, content: dict[str, Any], source: str = "result") -> "FitResult":
         try:
-            fit = content["fit"]
+            fit = _object(content["fit"], "fit")
             return cls(
-                model=content["model"],
-                model_options=dict(content.get("model_options", {})),
-                channels=tuple(content["channels"]),
-                params=content["params"],
+                model=_string(content["model"], "model"),
+                model_options=_object(content.get("model_options", {}), "model_options"),
+                channels=tuple(_string(channel, "channels") for channel in _list(content["channels"], "channels")),
+                params=_object(content["params"], "params"),
                 loss=fit["loss"],
                 cost=float(fit["cost"]),
                 rmse=float(fit["rmse"]),
@@ -229,7 +229,7 @@ class FitResult:
                 else Uncertainty.from_dict(content["uncertainty"], source),
                 brdffit_version=str(content.get("brdffit_version", "")),
             )
-        except (KeyError, TypeError, ValueError) as error:
+        except (KeyError, TypeError, ValueError, OverflowError) as error:
             raise BrdfInputError(f"{source}: not a brdffit result file (missing or bad {error})") from None
 
     # ------------------------------------------------------------ the table
@@ -247,6 +247,20 @@ def _object(value: Any, name: str) -> dict[str, Any]:
     if not isinstance(value, dict):
         raise TypeError(f"{name} must be a JSON object")
     return dict(value)
+
+
+def _list(value: Any, name: str) -> list:
+    """A JSON list of the result file."""
+    if not isinstance(value, list):
+        raise TypeError(f"{name} must be a JSON list")
+    return value
+
+
+def _string(value: Any, name: str) -> str:
+    """A JSON string of the result file (a model name, a channel)."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a JSON string")
+    return value
 
 
 def save_result(result: FitResult, path: str | os.PathLike) -> None:
@@ -268,10 +282,10 @@ def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
     """The JSON object in the file ``path``, or a one-line error naming the file and ``what`` it should be."""
     path = Path(path)
     try:
-        content = json.loads(path.read_text(encoding="utf-8"))
+        content = parse_json(read_json_text(path))
     except FileNotFoundError:
         raise BrdfInputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+    except (OSError, ValueError) as error:  # ValueError: JSON's, and UnicodeDecodeError
         raise BrdfInputError(f"{path}: not a readable JSON file ({error})") from None
     if not isinstance(content, dict):
         raise BrdfInputError(f"{path}: not a {what} (not a JSON object)")
