@@ -110,12 +110,18 @@ def on_terminate(signum, frame) -> None:
 @contextmanager
 def _signals_stop_writing() -> Iterator[None]:
     """:func:`on_interrupt` and :func:`on_terminate` as the handlers of SIGINT and SIGTERM while a command runs (only
-    the main thread may set handlers; elsewhere, as in a test's thread, they are left alone)."""
+    the main thread may set handlers; elsewhere, as in a test's thread, they are left alone; an ignored signal stays
+    ignored)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signal.SIGINT: signal.signal(signal.SIGINT, on_interrupt)}
-    previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, on_terminate)
+    # A signal the process was started ignoring (``nohup``, a background job) stays ignored, as Python leaves it.
+    handlers = {signal.SIGINT: on_interrupt, signal.SIGTERM: on_terminate}
+    previous = {
+        number: signal.signal(number, handler)
+        for number, handler in handlers.items()
+        if signal.getsignal(number) is not signal.SIG_IGN
+    }
     try:
         yield
     finally:

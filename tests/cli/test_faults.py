@@ -121,6 +121,8 @@ def swallowed_interrupt(monkeypatch):
 def test_a_swallowed_interrupt_writes_nothing_and_exits_130(files, tmp_path, capsys, monkeypatch, to_stdout):
     output = tmp_path / "result.json"
     output.write_text(OLD)
+    # Python's own handler, whatever this process was started with (nohup ignores SIGINT, which brdffit then leaves).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     swallowed_interrupt(monkeypatch)
     status, out, err = run(
         ["fit", files / "ward.csv", "--model", "lambert", "-o", "-" if to_stdout else output], capsys
@@ -129,7 +131,19 @@ def test_a_swallowed_interrupt_writes_nothing_and_exits_130(files, tmp_path, cap
     assert "{" not in out and output.read_text() == OLD
     assert sorted(path.name for path in tmp_path.iterdir()) == ["result.json"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handler is the caller's again
+    signal.signal(signal.SIGINT, previous)
     brdffit._files.write_text_atomic(output, "{}")  # and writes are allowed again: the stop was the command's
+
+
+def test_an_ignored_interrupt_stays_ignored(files, tmp_path, capsys):
+    """A command started with SIGINT ignored (``nohup``, a background job) leaves it ignored, as Python does."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        status, _, err = run(["fit", files / "ward.csv", "--model", "lambert", "-o", tmp_path / "r.json"], capsys)
+        assert status == 0, err
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".h5"])

@@ -225,8 +225,8 @@ def compile_in_background(solve, *arguments) -> threading.Thread:
     def compile_quietly():
         try:
             solve.precompile(*shapes)
-        except Exception:  # the call that follows raises it properly
-            pass
+        except (Exception, KeyboardInterrupt):  # the call that follows raises it properly; an interrupt (the stop of
+            pass  # every write, ``_files.stop_writing``, met storing the program) is the main thread's to report
 
     thread = threading.Thread(target=compile_quietly, name="brdffit-compile", daemon=True)
     thread.start()
