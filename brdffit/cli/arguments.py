@@ -367,3 +367,18 @@ def fit_file(path: str):
     from ..fitting.comparison.compare import Comparison
 
     return Comparison.from_dict(content, path).best.result
+
+
+def fit_file_files(args: argparse.Namespace, output: str):
+    """What ``export`` and ``render`` read (RESULT, the basis its model names, ``--samples``) and write (``output``:
+    ``-o`` or its default name), as :class:`~brdffit.cli.files.Files`."""
+    from .files import Files
+
+    return Files.of(
+        inputs={
+            "RESULT.json": args.result,
+            "the result's basis": model_files(fit_file(args.result).model_options),
+            "--samples": args.samples,
+        },
+        outputs={"-o": output},
+    )

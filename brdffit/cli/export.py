@@ -8,7 +8,7 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import fit_file, model_files, output_file
+from .arguments import fit_file, fit_file_files, output_file
 from .files import Files
 
 
@@ -44,15 +44,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def files(args: argparse.Namespace) -> Files:
-    """What ``export`` reads (the result, the basis its model names, ``--samples``) and writes (``-o``)."""
-    return Files.of(
-        inputs={
-            "RESULT.json": args.result,
-            "the result's basis": model_files(fit_file(args.result).model_options),
-            "--samples": args.samples,
-        },
-        outputs={"-o": _output(args)},
-    )
+    """What ``export`` reads and writes (:func:`~brdffit.cli.arguments.fit_file_files`)."""
+    return fit_file_files(args, _output(args))
 
 
 def _output(args: argparse.Namespace) -> str:
