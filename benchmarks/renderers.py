@@ -58,7 +58,7 @@ MATERIALS = {
     ),
     "silver-anisotropic": (
         {"type": "roughconductor", "material": "Ag", "distribution": "ggx", "alpha_u": 0.05, "alpha_v": 0.3},
-        None,
+        "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith,anisotropic=true",
     ),
     "plastic-ggx": (
         {
@@ -67,7 +67,7 @@ MATERIALS = {
             "alpha": 0.1,
             "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.2, 0.1]},
         },
-        None,
+        "roughplastic:distribution=ggx",
     ),
     "plastic-beckmann": (
         {
@@ -76,7 +76,7 @@ MATERIALS = {
             "alpha": 0.3,
             "diffuse_reflectance": {"type": "rgb", "value": [0.1, 0.3, 0.5]},
         },
-        None,
+        "roughplastic",
     ),
     "principled": (
         {
@@ -86,7 +86,7 @@ MATERIALS = {
             "metallic": 0.0,
             "specular": 0.5,
         },
-        None,
+        "principled",
     ),
     "principled-clearcoat": (
         {
@@ -96,7 +96,7 @@ MATERIALS = {
             "clearcoat": 1.0,
             "clearcoat_gloss": 0.9,
         },
-        None,
+        "principled",
     ),
 }
 
@@ -145,7 +145,7 @@ def measure(name: str) -> list[dict]:
     rows[0]["compare_seconds"] = compare_seconds
     if matching is not None:
         model, _, options = matching.partition(":")
-        result = fit(samples, model, **dict(option.split("=") for option in options.split(",")))
+        result = fit(samples, model, **dict(option.split("=") for option in options.split(",") if option))
         rows.append(exported_row(name, "matching model", result, samples))
     return rows
 

@@ -89,12 +89,38 @@ CASES = [
             "eta": 1.5,
         },
     ),
+    # glTF's own material (a whole-lobe model: no albedos beside it): a red plastic, and a copper with a little
+    # dielectric (ior is held at glTF's 1.5 unless freed)
+    ("gltf", {}, {"roughness": 0.35, "metallic": 0.0, "ior": 1.5, "base_color": [0.8, 0.3, 0.1]}),
+    ("gltf", {}, {"roughness": 0.2, "metallic": 0.9, "ior": 1.5, "base_color": [0.95, 0.64, 0.54]}),
+    (  # Mitsuba's principled (a whole-lobe model): a blue paint under a clear coat; tints, sheen, anisotropy held at 0
+        "principled",
+        {},
+        {
+            "roughness": 0.45,
+            "metallic": 0.0,
+            "specular": 0.5,
+            "spec_tint": 0.0,
+            "anisotropic": 0.0,
+            "sheen": 0.0,
+            "sheen_tint": 0.0,
+            "clearcoat": 0.3,
+            "clearcoat_gloss": 0.7,
+            "base_color": [0.2, 0.3, 0.6],
+        },
+    ),
+    (  # Mitsuba's roughplastic (a whole-lobe model): a red plastic under a GGX coating of index 1.6
+        "roughplastic",
+        {"distribution": "ggx", "int_ior": 1.6},
+        {"alpha": 0.15, "diffuse_reflectance": [0.8, 0.3, 0.1], "specular_reflectance": [1.0, 1.0, 1.0]},
+    ),
 ]
 
 
 def case_id(case) -> str:
-    model, options, _ = case
-    return model + "".join(f"-{key if value is True else value}" for key, value in options.items())
+    model, options, params = case
+    name = model + "".join(f"-{key if value is True else value}" for key, value in options.items())
+    return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "")
 
 
 def parametrize_cases(cases=CASES):

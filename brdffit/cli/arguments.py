@@ -38,12 +38,12 @@ def spell(argument: Argument) -> str:
 
 
 #: The model options as flags: each model takes some (``brdffit models`` lists them).
-MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "lobes", "basis", "ridge")
+MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "lobes", "int_ior", "basis", "ridge")
 
 
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
     """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--anisotropic``,
-    ``--lobes``, ``--basis``, ``--ridge``)."""
+    ``--lobes``, ``--int-ior``, ``--basis``, ``--ridge``)."""
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models.registry import MODELS
@@ -58,7 +58,8 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
         command.add_argument(
             f"--{name}",
             metavar="KIND",
-            help=f"cook-torrance's {what}: {', '.join(kinds)} (default {next(iter(kinds))})",
+            help=f"cook-torrance's {what}: {', '.join(kinds)} (default {next(iter(kinds))})"
+            + ("; roughplastic's: beckmann (default), ggx" if name == "distribution" else ""),
         )
     command.add_argument(
         "--anisotropic",
@@ -67,6 +68,9 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
         " (default false)",
     )
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
+    command.add_argument(
+        "--int-ior", type=float, metavar="ETA", help="roughplastic: the coating's index of refraction (default 1.49)"
+    )
     command.add_argument("--basis", metavar="FILE", help="pca: the basis file (from brdffit basis build)")
     command.add_argument(
         "--ridge",

@@ -55,11 +55,15 @@ def _changes_parameters(entry, option: str) -> bool:
 
 def describe_parameters(model) -> list[str]:
     """One line per parameter: its name, shape ([C] for one value per channel) and domain."""
-    lines = [f"{model.diffuse_name}: [C] {model.diffuse.albedo_domain.text}"]
+    held = dict(getattr(model, "held", ()))
+    held_text = lambda name: f" (held at {held[name]:g} unless freed)" if name in held else ""
+    lines = [] if model.whole else [f"{model.diffuse_name}: [C] {model.diffuse.albedo_domain.text}"]
     if model.n_lobes:
-        held = dict(getattr(model, "held", ()))
-        held_text = f" (held at {held[model.specular_name]:g} unless freed)" if model.specular_name in held else ""
-        lines.append(f"{model.specular_name}: [C] {model.lobe.albedo_domain.text}{held_text}")
+        if not model.whole:
+            albedo = model.lobe.albedo_domain.text
+            lines.append(f"{model.specular_name}: [C] {albedo}{held_text(model.specular_name)}")
         per_channel = lambda name: "[C] " if name in model.lobe.channel_names else ""
-        lines += [f"{name}: {per_channel(name)}{domain.text}" for name, domain in model.lobe.parameters]
+        lines += [
+            f"{name}: {per_channel(name)}{domain.text}{held_text(name)}" for name, domain in model.lobe.parameters
+        ]
     return lines

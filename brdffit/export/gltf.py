@@ -37,10 +37,12 @@ from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
 from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least_squares
 from ..physics.geometry import mirror_direction, spherical_to_direction
+from ..physics.models.registry import MODELS
+from ..physics.renderers.gltf import DEFAULT_F0, DEFAULT_IOR, ior_f0, material_brdf
 from ..views.render import display_rgb
 from .approximate import Approximation, approximation_error, tabulated
 from .at_data import data_error
-from .gltf_material import DEFAULT_F0, GltfMaterial, ior_f0, material_brdf
+from .gltf_material import GltfMaterial
 from .gltf_material import gltf_brdf as gltf_brdf  # the BRDF's name where the documentation once gave it
 
 #: The extensions are kept only when they lower the rmse over the grid by at least this fraction: a material with
@@ -359,10 +361,32 @@ def _in_channels(material: GltfMaterial, plan: str):
     return material.brdf
 
 
+def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
+    """The material of a fit of the ``gltf`` model, its numbers unchanged (the model's exact export): ``ior`` as
+    ``KHR_materials_ior`` where it is not glTF's 1.5. None for channels a glTF material holds only converted (CIE
+    XYZ); one channel is grey."""
+    if _channel_plan(result.channels)[0] == "xyz":
+        return None
+    params = result.params
+    base_color = [float(value) for value in params["base_color"]]
+    ior = float(params["ior"])
+    return GltfMaterial(
+        tuple(base_color * 3 if len(base_color) == 1 else base_color),
+        float(params["metallic"]),
+        float(params["roughness"]),
+        ior=None if ior == DEFAULT_IOR else ior,
+    )
+
+
 def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str]:
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be a FitResult, not {type(result).__name__}")
     plan, notes = _channel_plan(result.channels)
+    mapping = MODELS[result.model].exact_export("gltf") if result.model in MODELS else None
+    exact = None if mapping is None else mapping(result)
+    if exact is not None:  # the renderer's own model, fitted: its numbers as they are, the error measured all the same
+        approximation = approximation_error(result, _in_channels(exact, plan))
+        return exact, approximation, [*notes, "exact: the fitted glTF material, its numbers unchanged"], plan
     samples = tabulated(result)
     values = samples.values
     if plan == "xyz":

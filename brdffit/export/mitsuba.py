@@ -91,8 +91,9 @@ class MitsubaExport:
     @property
     def tangent_azimuth(self) -> float | None:
         """The azimuth (degrees from the data's ``+x``) at which the BSDF's tangent, Mitsuba's ``dp/du``, must lie:
-        an anisotropic fit's ``phi_t``; None for an isotropic BSDF."""
-        return self.exported.params["phi_t"] if _anisotropic(self.exported) else None
+        an anisotropic fit's ``phi_t`` (0 for ``principled``, whose tangent is the data's ``+x``); None for an isotropic
+        BSDF."""
+        return float(self.exported.params.get("phi_t", 0.0)) if _anisotropic(self.exported) else None
 
     def compared_with(self, result: FitResult, samples: "Samples") -> "MitsubaExport":
         """This export of ``result`` with :attr:`at_data` measured on ``samples`` (``at_data.data_for``'s data):
@@ -214,7 +215,10 @@ def _without_negligible_diffuse(result: FitResult) -> FitResult | None:
 
 
 def _in_range(result: FitResult) -> bool:
-    """Whether Mitsuba holds ``result``'s albedos as they are: ``max kd + max ks ≤ 1`` (module docstring)."""
+    """Whether Mitsuba holds ``result``'s albedos as they are: ``max kd + max ks ≤ 1`` (module docstring); a
+    renderer's own model (a whole-lobe one: ``principled``) keeps its parameters within the renderer's ranges."""
+    if getattr(get_model(result.model, **result.model_options), "whole", False):
+        return True
     return sum(_albedo_maxima(result)) <= 1.0
 
 
@@ -248,6 +252,8 @@ def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
 
 
 def _anisotropic(result: FitResult) -> bool:
+    if result.model == "principled":  # its tangent along the data's +x
+        return float(result.params["anisotropic"]) > 0.0
     return result.model == "cook-torrance" and bool(result.model_options.get("anisotropic", False))
 
 
@@ -255,7 +261,7 @@ def _tangent_notes(result: FitResult) -> list[str]:
     """Where an anisotropic BSDF's tangent must lie for the export to be the fit (module docstring)."""
     if not _anisotropic(result):
         return []
-    phi_t = float(result.params["phi_t"])
+    phi_t = float(result.params.get("phi_t", 0.0))
     where = "along the data's +x" if phi_t == 0.0 else f"at phi_t = {phi_t:.6g}° from the data's +x"
     return [
         f"anisotropic: Mitsuba's alpha_u lies along the shape's tangent (dp/du), which must lie {where}"
@@ -325,6 +331,28 @@ def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
         return diffuse
     specular["specular_reflectance"] = _rgb_value(ks / weight)
     return {"type": "blendbsdf", "weight": float(weight), "diffuse": diffuse, "specular": specular}
+
+
+def principled_bsdf(result: FitResult) -> dict[str, Any]:
+    """The Mitsuba ``principled`` BSDF of a ``principled`` ``result``: its parameters unchanged (the model is
+    Mitsuba's own, ``physics/renderers/principled.py``), ``base_color`` as an ``rgb`` value (one channel as grey)."""
+    params = result.params
+    scalars = {name: float(value) for name, value in params.items() if name != "base_color"}
+    return {"type": "principled", "base_color": _rgb_value(np.asarray(_rgb(params["base_color"])))} | scalars
+
+
+def roughplastic_bsdf(result: FitResult) -> dict[str, Any]:
+    """The Mitsuba ``roughplastic`` BSDF of a ``roughplastic`` ``result``: its parameters and options unchanged (the
+    model is Mitsuba's own, ``physics/renderers/roughplastic.py``), the reflectances as ``rgb`` values."""
+    params, options = result.params, get_model(result.model, **result.model_options).model_options
+    return {
+        "type": "roughplastic",
+        "distribution": options["distribution"],
+        "alpha": float(params["alpha"]),
+        "int_ior": float(options["int_ior"]),
+        "diffuse_reflectance": _rgb_value(np.asarray(_rgb(params["diffuse_reflectance"]))),
+        "specular_reflectance": _rgb_value(np.asarray(_rgb(params["specular_reflectance"]))),
+    }
 
 
 def _rgb_value(values: np.ndarray) -> dict[str, Any]:

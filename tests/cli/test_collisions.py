@@ -18,6 +18,7 @@ FILE_METAVARS = {"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN"
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
     "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL", "NAME[,…]", "true|false",
+    "ETA",
 }  # fmt: skip
 
 

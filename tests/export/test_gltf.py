@@ -16,9 +16,10 @@ from brdffit import BrdfInputError, FitResult, fit, load_samples
 from brdffit._version import __version__
 from brdffit.export.approximate import dense_grid
 from brdffit.export.gltf import EXTENSION_GAIN, fit_gltf, fit_material, write_gltf
-from brdffit.export.gltf_material import DEFAULT_F0, GltfMaterial, gltf_brdf
+from brdffit.export.gltf_material import GltfMaterial, gltf_brdf
 from brdffit.fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from brdffit.physics.microfacet import ggx_lambda
+from brdffit.physics.renderers.gltf import DEFAULT_F0
 
 #: Direction pairs (θi, φi, θo, φo in degrees) for golden values: near the mirror, off it, the exact mirror, grazing.
 PAIRS_DEGREES = [(30, 0, 40, 180), (10, 0, 70, 90), (60, 20, 20, 250), (45, 0, 45, 180), (75, 0, 65, 160)]

@@ -209,3 +209,17 @@ def test_an_anisotropy_that_in_plane_data_cannot_determine_is_named():
     assert not any("plane of incidence" in line for line in caveats(isotropic, in_plane, round_lobe))
     with pytest.warns(FitWarning, match=r"cannot determine phi_t, the tangent's azimuth"):
         fit(in_plane, "cook-torrance", **options)
+
+
+def test_a_clear_coat_from_one_incidence_is_said_to_be_undetermined():
+    """One incidence cannot tell a coat from the base's specular lobe: the coat is named, unless it is held."""
+    wi, wo = data_synth.hemisphere_grid(n_incident=1, n_theta=18, n_phi=36)
+    params = {name: 0.0 for name in ("spec_tint", "sheen", "sheen_tint", "anisotropic")}
+    params |= {"roughness": 0.5, "metallic": 0.0, "specular": 0.5, "clearcoat": 0.5, "clearcoat_gloss": 0.8}
+    samples = data_synth.synthesize("principled", params | {"base_color": [0.2, 0.3, 0.6]}, wi, wo)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        coated = fit(samples, "principled")
+        held = fit(samples, "principled", fixed={"clearcoat": 0.0})
+    assert any("one incidence" in caveat and "clearcoat_gloss" in caveat for caveat in coated.warnings)
+    assert not any("one incidence" in caveat for caveat in held.warnings)

@@ -91,9 +91,11 @@ def test_the_real_tape_prefers_several_lafortune_lobes_and_lambert_least():
 
 def test_the_default_set_is_every_model():
     specs = default_specs()
-    assert len(specs) == len(set(specs)) == 15
+    assert len(specs) == len(set(specs)) == 19
     assert {"lambert", "ward-aniso", "cook-torrance:fresnel=none", "lafortune:lobes=3"} <= set(specs)
     assert "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith" in specs  # Mitsuba's roughconductor
+    # The renderers' own models, each exported exactly: glTF's, Mitsuba's principled and rough plastic (both D)
+    assert {"gltf", "principled", "roughplastic", "roughplastic:distribution=ggx"} <= set(specs)
 
 
 def test_bad_arguments_are_refused_before_any_fit():

@@ -45,7 +45,10 @@ def test_recovers_noiseless_data_from_the_default_start(model, options, params):
     the tolerances the solver stops at) from the data-driven start."""
     result = fit(noiseless(model, options, params), model, **options)
     assert result.converged, result.message
-    assert result.cost < 1e-16
+    # A truth on an end of [0, 1] (glTF's metallic 0) is reached only in the limit of the solver's logistic map:
+    # the solve stops within ~1e-8 of it (its slope there is ~1e-8), a cost of ~1e-12 on these values of ~1.
+    on_an_end = any(value in (0.0, 1.0) for name, value in params.items() if name == "metallic")
+    assert result.cost < (1e-11 if on_an_end else 1e-16)
     assert_recovered(result, params, rtol=1e-5)
 
 

@@ -63,6 +63,10 @@ def test_compare_tries_what_the_entries_say():
         "lafortune:lobes=1",
         "lafortune:lobes=2",
         "lafortune:lobes=3",
+        "gltf",
+        "principled",
+        "roughplastic",
+        "roughplastic:distribution=ggx",
     ]
 
 
@@ -70,6 +74,10 @@ def test_a_models_exact_export_is_its_entrys():
     assert MODELS["cook-torrance"].exact_export("mitsuba").__name__ == "cook_torrance_bsdf"
     assert MODELS["lambert"].exact_export("mitsuba").__name__ == "lambert_bsdf"
     assert MODELS["ward"].exact_export("mitsuba") is None
+    assert MODELS["principled"].exact_export("mitsuba").__name__ == "principled_bsdf"
+    assert MODELS["roughplastic"].exact_export("mitsuba").__name__ == "roughplastic_bsdf"
+    assert MODELS["gltf"].exact_export("gltf").__name__ == "gltf_of_gltf_fit"
+    assert MODELS["gltf"].exact_export("mitsuba") is None
 
 
 @pytest.mark.parametrize(

@@ -19,7 +19,11 @@ A lobe with P parameters of one value per channel (``Lobe.channel_names``: a con
 lobe per channel, ``lobe_k[n, c]``, so the basis is per channel, (N, C, M) with ``M = 1 + K + K·(S + P)``:
 ``[d, lobe_k[·, c], ∂lobe_k[·, c]/∂u_ks, ∂lobe_k[·, c]/∂u_kpc]``. Channel ``c``'s lobe depends on channel ``c``'s
 parameters alone, so one forward-mode tangent per parameter, set in every channel at once, gives all channels'
-derivatives: S + P tangents, as many as a lobe of shared parameters would take.
+derivatives: S + P tangents, as many as a lobe of shared parameters would take. A whole-lobe model (a renderer's own,
+``LobeModel.whole``) has the same basis with no albedos in θ: its diffuse albedo is 0 and its lobe's 1, so its
+diffuse and lobe rows carry nothing and its derivative rows carry 1. A lobe whose channels depend on each other's
+parameters (``Lobe.channels_coupled``: principled's tints, through the colour's luminance) has the whole Jacobian as
+its basis, ``basis[n, c, p] = ∂f[n, c]/∂θ_p`` (M = k, one tangent per entry of θ), with identity coefficients.
 """
 
 import jax
@@ -30,6 +34,7 @@ from jaxtyping import Array, Float
 from ...physics.domains import ALBEDO
 from ...physics.geometry import above_horizon
 from ...physics.models.model import LobeModel
+from ...physics.models.params import albedo_size
 
 
 def value_and_basis(
@@ -43,6 +48,8 @@ def value_and_basis(
     """BRDF values (N, C) and the basis (N, M) at the unconstrained ``theta``, in ``dtype`` (default: ``wi``'s); a
     basis (N, C, M) for a lobe with per-channel parameters (module docstring)."""
     dtype = dtype or wi.dtype
+    if model.n_lobes and model.lobe.channels_coupled:
+        return _whole_jacobian(model, theta, wi, wo, n_channels, dtype)
     if model.n_lobes and model.lobe.channel_names:
         return _per_channel_value_and_basis(model, theta, wi, wo, n_channels, dtype)
     visible, wi, wo = above_horizon(wi, wo)
@@ -73,17 +80,24 @@ def value_and_basis(
     return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None], basis, 0.0)
 
 
+def _whole_jacobian(model: LobeModel, theta, wi, wo, n_channels: int, dtype):
+    """Values (N, C) and the whole Jacobian (N, C, k) as the basis, for a lobe whose channels are coupled."""
+    values_at = lambda t: model.brdf(model.unconstrained.to_params(t, n_channels), wi, wo).astype(dtype)
+    jacobian, values = jax.jacfwd(lambda t: (values_at(t), values_at(t)), has_aux=True)(theta)
+    return values, jacobian.astype(dtype)
+
+
 def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: int, dtype):
     """:func:`value_and_basis` of a lobe with per-channel parameters: the basis (N, C, M)."""
     visible, wi, wo = above_horizon(wi, wo)
     c, k = n_channels, model.n_lobes
     shared, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
     s, p = len(shared.names), len(per_channel.names)
-    diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
+    diffuse, specular = _albedos(model, theta, c, dtype)
     diffuse_term = model.diffuse({}, wi, wo).astype(dtype)  # (N,): the diffuse term of unit albedo
-    specular = ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
-    u_shared = theta[(1 + k) * c : (1 + k) * c + k * s].reshape(k, s)
-    u_channel = theta[(1 + k) * c + k * s :].reshape(k, p, c)
+    a = albedo_size(model, c)
+    u_shared = theta[a : a + k * s].reshape(k, s)
+    u_channel = theta[a + k * s :].reshape(k, p, c)
     # The tangents: each shared coordinate, then each per-channel parameter in every channel at once.
     tangents = (
         jnp.concatenate([jnp.eye(s, dtype=theta.dtype), jnp.zeros((p, s), theta.dtype)]),
@@ -112,6 +126,15 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
     return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None, None], basis, 0.0)
 
 
+def _albedos(model: LobeModel, theta, c: int, dtype):
+    """The diffuse (C,) and lobe (K, C) albedos at ``theta``: 0 and 1 for a whole-lobe model, which has none in θ."""
+    k = model.n_lobes
+    if model.whole:
+        return jnp.zeros(c, dtype), jnp.ones((k, c), dtype)
+    diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
+    return diffuse, ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
+
+
 def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channels: int) -> Float[Array, "C M k"]:
     """``A`` (C, M, k) with ``∂f[n, c]/∂θ = Σ_m basis[n, m] · A[c, m]`` (see :func:`value_and_basis`; ``basis[n, c,
     m]`` for a lobe with per-channel parameters).
@@ -120,6 +143,8 @@ def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channel
     shape-derivative rows carry the specular albedos.
     """
     c, k = n_channels, model.n_lobes
+    if k and model.lobe.channels_coupled:  # the basis is the Jacobian itself
+        return jnp.broadcast_to(jnp.eye(theta.shape[0], dtype=theta.dtype), (c, theta.shape[0], theta.shape[0]))
     if k and model.lobe.channel_names:
         return _per_channel_coefficients(model, theta, c)
     eye_c = jnp.eye(c, dtype=theta.dtype)
@@ -150,22 +175,25 @@ def _per_channel_coefficients(model: LobeModel, theta, n_channels: int):
     parameter ``t - S`` of lobe ``k`` in channel ``c``."""
     c, k = n_channels, model.n_lobes
     s, p = len(model.unconstrained.shared.names), len(model.unconstrained.per_channel.names)
-    size = model.unconstrained.size(c)
-    _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
-    u_specular = theta[c : (1 + k) * c].reshape(k, c)
-    specular, specular_slope = jax.jvp(ALBEDO.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
+    size, a = model.unconstrained.size(c), albedo_size(model, c)
     channel = np.arange(c)
     lobe, tangent = np.meshgrid(np.arange(k), np.arange(s + p), indexing="ij")  # (K, S + P)
-    shared_entry = (1 + k) * c + lobe * s + tangent  # (K, S + P); used where tangent < s
-    channel_entry = (1 + k) * c + k * s + (lobe * p + tangent - s)[..., None] * c + channel  # (K, S + P, C)
+    shared_entry = a + lobe * s + tangent  # (K, S + P); used where tangent < s
+    channel_entry = a + k * s + (lobe * p + tangent - s)[..., None] * c + channel  # (K, S + P, C)
     entry = np.where((tangent < s)[..., None], shared_entry[..., None], channel_entry)  # (K, S + P, C)
     rows = 1 + k + lobe * (s + p) + tangent  # (K, S + P)
     coefficients = jnp.zeros((c, 1 + k + k * (s + p), size), theta.dtype)
-    coefficients = coefficients.at[channel, 0, channel].set(diffuse_slope)
-    lobe_rows = np.broadcast_to(1 + np.arange(k)[:, None], (k, c))
-    coefficients = coefficients.at[channel[None, :], lobe_rows, c + np.arange(k)[:, None] * c + channel].set(
-        specular_slope
-    )
+    if model.whole:  # no albedos: the derivative rows carry the lobe's albedo, 1
+        specular = jnp.ones((k, c), theta.dtype)
+    else:
+        _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
+        u_specular = theta[c : (1 + k) * c].reshape(k, c)
+        specular, specular_slope = jax.jvp(ALBEDO.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
+        coefficients = coefficients.at[channel, 0, channel].set(diffuse_slope)
+        lobe_rows = np.broadcast_to(1 + np.arange(k)[:, None], (k, c))
+        coefficients = coefficients.at[channel[None, :], lobe_rows, c + np.arange(k)[:, None] * c + channel].set(
+            specular_slope
+        )
     on_channel = np.broadcast_to(channel, entry.shape)
     return coefficients.at[on_channel, np.broadcast_to(rows[..., None], entry.shape), entry].set(
         jnp.broadcast_to(specular[:, None, :], entry.shape)

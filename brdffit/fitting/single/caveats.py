@@ -12,6 +12,7 @@
   determine its anisotropy (an anisotropic Cook-Torrance lobe's tangent azimuth ``phi_t``, named).
 """
 
+import re
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -26,7 +27,7 @@ from ...data.samples import Samples
 from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ...physics.models.model import LobeModel, Model
-from ...physics.models.params import Params
+from ...physics.models.params import Params, albedo_size
 from ..objective.problem import padded_size, stacked_directions
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
@@ -57,17 +58,19 @@ def caveats(
     fewer_lobes_cost: float | None = None,
     *,
     screened: "Screened | None" = None,
+    held: frozenset[str] = frozenset(),
 ) -> list[str]:
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
     found = _not_reciprocal(samples) + _anisotropy_undetermined(model, samples)
+    found += _coat_undetermined(model, samples, held)
     if not isinstance(model, LobeModel):  # no lobes to share the model, none peaked at the mirror to screen
         screened = Screened(ALBEDO_INCIDENCE, np.zeros(0))
     elif screened is None:
         (screened,) = screen_bucket(model, [params], [samples], 1)
     found += _dead_lobes(model, params, screened.lobe_shares)
-    found += _implausible(model, params, samples.channels)
+    found += _implausible(model, params, samples.channels, held)
     found += _albedo_above_one(model, params, samples.channels, screened.albedo_open)
     if cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9):
         found.append(
@@ -116,6 +119,24 @@ def _anisotropy_undetermined(model: Model, samples: Samples) -> list[str]:
     ]
 
 
+def _coat_undetermined(model: Model, samples: Samples, held: frozenset[str]) -> list[str]:
+    """A clear coat fitted (``principled``'s ``clearcoat``, not held) to data of one incidence: the coat and the base's
+    specular lobe are told apart by how each changes with the incidence (the coat's Fresnel term and fixed narrow
+    shape), which one incidence does not show."""
+    if not isinstance(model, LobeModel) or not model.n_lobes or "clearcoat" not in model.lobe.names:
+        return []
+    if "clearcoat" in held:
+        return []
+    incidences = np.unique(np.round(samples.wi, 6), axis=0)
+    if len(incidences) > 1:
+        return []
+    theta = float(np.degrees(np.arccos(np.clip(incidences[0, 2], -1.0, 1.0))))
+    return [
+        f"every sample has one incidence (θi = {theta:.3g}°): the data cannot tell clearcoat and clearcoat_gloss"
+        " from the base's specular lobe; measure more incidences, or hold the coat (--fix clearcoat=0)"
+    ]
+
+
 def _plane_of_incidence(directions: np.ndarray) -> float | None:
     """The azimuth (degrees, in [0, 180)) of the one plane through the normal that holds every direction (N, 3)
     within :data:`IN_PLANE_DEGREES`, or None where there is none; directions along the normal lie in every plane."""
@@ -155,16 +176,24 @@ def _lobe_shares(model: LobeModel, params: Params, wi, wo, real):
     return (share * (visible & real)[None, :, None]).max(axis=(1, 2))
 
 
-def _implausible(model: Model, params: Params, channels: tuple[str, ...]) -> list[str]:
+def _implausible(
+    model: Model, params: Params, channels: tuple[str, ...], held: frozenset[str] = frozenset()
+) -> list[str]:
+    """A line for each parameter on an end of its domain or beyond its plausible range; not for those ``held`` (the
+    fit did not move them) nor those whose ends are values of their own (``Lobe.meaningful_ends``)."""
     values = np.asarray(model.physical.from_params(params))
     found = []
     # The albedos come first; a shape parameter of a domain ≥ 0 (a conductor's k) ends on its lower end as an
     # albedo of 0 does not: its map exp(u) reaches 0 only in the limit, where the fit compensates elsewhere.
-    n_albedos = (1 + model.n_lobes) * len(channels) if isinstance(model, LobeModel) else len(values)
+    n_albedos = albedo_size(model, len(channels)) if isinstance(model, LobeModel) else len(values)
+    meaningful_ends = model.lobe.meaningful_ends if isinstance(model, LobeModel) and model.n_lobes else ()
     for index, (label, value, domain) in enumerate(
         zip(model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True)
     ):
         low, high = domain.plausible
+        name = re.sub(r"\[[^\]]*\]$", "", label)  # without its channel: specular_reflectance[r]
+        if name in meaningful_ends or name in held:  # a value of its own (glTF's metallic 0), or the user's
+            continue
         at_zero = index >= n_albedos and isinstance(domain, Positive) and domain.allow_zero and value < EDGE
         if (isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE) or at_zero:
             found.append(

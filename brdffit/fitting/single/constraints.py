@@ -27,7 +27,7 @@ import numpy as np
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import Domain
 from ...physics.models.model import LobeModel, Model
-from ...physics.models.params import Params
+from ...physics.models.params import Params, albedo_size
 from ..options import parameter_mapping
 from ..solver.hold import Hold, on_bound
 
@@ -242,6 +242,8 @@ def parameter_names(model: Model) -> list[str]:
     """The names :func:`constraints_for` takes for ``model``: ``kd, ks, m, f0``; ``rho_d, lobes[0].rho_s, …``."""
     if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
         return []
+    if model.whole:  # a renderer's own model: its lobe's shape alone
+        return list(model.lobe.names)
     names = [model.diffuse_name]
     for k in range(model.n_lobes):
         prefix = _prefix(model, k)
@@ -275,7 +277,7 @@ def _coordinate(model: Model, target: Target) -> int:
 
 def _entries(model: Model, target: Target, n_channels: int) -> list[int]:
     """The indices of ``target``'s entries in the flat vectors (``coordinates.py``: diffuse, specular, shapes)."""
-    c, k = n_channels, model.n_lobes
+    c, k, a = n_channels, model.n_lobes, albedo_size(model, n_channels)
     if target.kind == "diffuse":
         return list(range(c))
     if target.kind == "specular":
@@ -283,9 +285,9 @@ def _entries(model: Model, target: Target, n_channels: int) -> list[int]:
     s = len(model.unconstrained.shared.names)
     if target.parameter in _per_channel(model):  # after every lobe's shared coordinates: lobe, parameter, channel
         names = model.unconstrained.per_channel.names
-        first = (1 + k) * c + k * s + (target.lobe * len(names) + names.index(target.parameter)) * c
+        first = a + k * s + (target.lobe * len(names) + names.index(target.parameter)) * c
         return list(range(first, first + c))
-    return [(1 + k) * c + target.lobe * s + _coordinate(model, target)]
+    return [a + target.lobe * s + _coordinate(model, target)]
 
 
 def _number(value: Any, argument: str, name: str) -> float:

@@ -15,7 +15,7 @@ from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
 from ..objective.losses import Loss
 from ..solver.compiled import Solved, failure_message
-from .caveats import Screened, caveats
+from .caveats import EDGE, Screened, caveats
 from .constraints import Constraints
 from .result import FitResult
 
@@ -28,7 +28,22 @@ def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
     low, high = np.array([domain.bounds for domain in domains]).T
     if not np.all(np.isfinite(physical) & (physical > low) & (physical < high)):  # else every domain holds it
         physical = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
-    return model.physical.to_params(physical, n_channels)
+    params = model.physical.to_params(physical, n_channels)
+    return _onto_meaningful_ends(model, params)
+
+
+def _onto_meaningful_ends(model: Model, params: Params) -> Params:
+    """``params`` with each parameter whose domain's ends are values of their own (``Lobe.meaningful_ends``: glTF's
+    metallic) put onto the end it lies within :data:`~brdffit.fitting.single.caveats.EDGE` of: the solver's logistic
+    map reaches an end only in the limit, and a user reads ``metallic 0``, not ``7e-09``."""
+    if not isinstance(model, LobeModel) or not model.n_lobes or not model.lobe.meaningful_ends:
+        return params
+    shape = dict(params.shape)
+    for name in model.lobe.meaningful_ends:
+        low, high = dict(model.lobe.parameters)[name].bounds
+        value = np.asarray(shape[name], float)
+        shape[name] = np.where(value - low < EDGE, low, np.where(high - value < EDGE, high, value))
+    return Params(params.diffuse, params.specular, shape)
 
 
 def canonical_params(model: Model, params: Params, constraints: Constraints | None = None) -> Params:
@@ -83,7 +98,15 @@ def result_of(
         message="" if converged else failure_message(int(solved.result), max_steps),
         dtype=dtype,
         warnings=[
-            *caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, screened=screened),
+            *caveats(
+                model,
+                samples,
+                params,
+                float(solved.cost),
+                fewer_lobes_cost,
+                screened=screened,
+                held=frozenset(() if constraints is None else constraints.fixed),
+            ),
             *more_caveats,
         ],
         quantity=samples.provenance.quantity if samples.provenance else None,

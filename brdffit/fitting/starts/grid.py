@@ -21,7 +21,7 @@ from ..._programs import jit
 from ...data.samples import Samples
 from ...physics.domains import ALBEDO
 from ...physics.models.model import Model
-from ...physics.models.params import Params
+from ...physics.models.params import Params, albedo_size
 from ..objective.losses import Loss, linearised_weight
 from ..objective.problem import Problem, prepared, residuals
 from ..solver.hold import Hold, respected
@@ -190,6 +190,9 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
         }
         if hold is not None:
             stacked = _held_shapes(model, stacked, hold, n_placed, n_channels)
+    cost_of = lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2)
+    if model.whole:  # a renderer's own model: no albedos to solve for, each grid shape is scored as it is
+        return _whole_candidates(model, stacked, n_channels, hold, cost_of)
     if per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
 
         def normal_equations_of(shape):
@@ -231,9 +234,20 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
         return respected(model.unconstrained.from_params(Params(albedo[0], specular, shape)), hold)
 
     thetas = jax.vmap(theta_of)(jnp.arange(len(grid)), albedos)
-    cost_of = lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2)
     costs = jax.lax.map(cost_of, thetas, batch_size=PER_CHANNEL_BATCH) if per_channel else jax.vmap(cost_of)(thetas)
     return costs, thetas
+
+
+def _whole_candidates(model: Model, stacked: dict, n_channels: int, hold: Hold | None, cost_of):
+    """Costs (G,) and unconstrained vectors (G, k) of a whole-lobe model (``LobeModel.whole``) at each grid shape."""
+
+    def theta_of(index):
+        shape = {name: jnp.asarray(stacked[name])[index][None] for name in model.lobe.names}
+        params = Params(jnp.zeros(n_channels), jnp.ones((1, n_channels)), shape)
+        return respected(model.unconstrained.from_params(params), hold)
+
+    thetas = jax.vmap(theta_of)(jnp.arange(len(next(iter(stacked.values())))))
+    return jax.lax.map(cost_of, thetas, batch_size=PER_CHANNEL_BATCH), thetas
 
 
 def _held_shapes(model: Model, stacked: dict, hold: Hold, lobe: int, n_channels: int) -> dict:
@@ -241,13 +255,13 @@ def _held_shapes(model: Model, stacked: dict, hold: Hold, lobe: int, n_channels:
     bounds), through the solver's coordinates."""
     coordinates, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
     k, s = model.n_lobes, len(coordinates.names)
-    first = (1 + k) * n_channels + lobe * s
+    first = albedo_size(model, n_channels) + lobe * s
     own = jax.tree.map(lambda leaf: leaf[first : first + s, None], hold)  # (S, 1): broadcast over the grid
     shapes = coordinates.from_vector(respected(coordinates.to_vector(stacked), own))
     if per_channel is None:
         return shapes
     p = len(per_channel.names)
-    first = (1 + k) * n_channels + k * s + lobe * p * n_channels
+    first = albedo_size(model, n_channels) + k * s + lobe * p * n_channels
     own = jax.tree.map(lambda leaf: leaf[first : first + p * n_channels].reshape(p, 1, n_channels), hold)
     return shapes | per_channel.from_vector(respected(per_channel.to_vector(stacked), own))  # (P, G, C)
 

@@ -3,7 +3,8 @@
 Every flat vector is laid out ``[diffuse (C), specular (K·C, lobe by lobe), lobe shapes (K·S, lobe by
 lobe), per-channel shapes (K·P·C: lobe, parameter, channel)]``, the last only for a lobe whose P last shape
 parameters take one value per channel (``Lobe.channel_names``: a conductor's ``eta``, ``k``; labels ``eta[r]``);
-the systems differ only in how an albedo and a lobe's shape become coordinates:
+a whole-lobe model (a renderer's own: ``LobeModel.whole``) has no albedos, only its lobe's shapes. The systems differ
+only in how an albedo and a lobe's shape become coordinates:
 
 =================  ===================================  ================================================
 system             albedos                              shape (``Lobe`` coordinates, ``lobe.py``)
@@ -25,7 +26,7 @@ from typing import final
 from ..._jax import namespace
 from ..domains import ALBEDO, Domain
 from .lobe import BoundedShapeCoordinates, ShapeCoordinates
-from .params import Layout, Params
+from .params import Layout, Params, albedo_size
 
 
 @dataclass(frozen=True)
@@ -73,14 +74,17 @@ class FlatCoordinates(ABC):
         if not k:
             return n_channels
         n_per_channel = len(self.per_channel.names) if self.per_channel else 0
-        return (1 + k) * n_channels + k * len(self.shared.names) + k * n_per_channel * n_channels
+        shapes = k * len(self.shared.names) + k * n_per_channel * n_channels
+        return albedo_size(self.model, n_channels) + shapes
 
     def labels(self, channels: tuple[str, ...]) -> list[str]:
         """A name per entry: ``rho_d[r]``, …, ``lobes[0].rho_s[r]``, …, ``alpha`` or ``lobes[0].psi``, ``eta[r]``."""
         model = self.model
-        labels = [f"{model.diffuse_name}[{c}]" for c in channels]
         prefixes = [f"lobes[{k}]." if model.lobes_as_list else "" for k in range(model.n_lobes)]
-        labels += [f"{prefix}{model.specular_name}[{c}]" for prefix in prefixes for c in channels]
+        labels = [] if model.whole else [f"{model.diffuse_name}[{c}]" for c in channels]
+        labels += (
+            [] if model.whole else [f"{prefix}{model.specular_name}[{c}]" for prefix in prefixes for c in channels]
+        )
         shape_names = self.shared.names if model.n_lobes else ()
         labels += [f"{prefix}{name}" for prefix in prefixes for name in shape_names]
         per_channel = self.per_channel.names if model.n_lobes and self.per_channel else ()
@@ -89,7 +93,9 @@ class FlatCoordinates(ABC):
     def from_params(self, params: Params):
         """The flat vector of ``params`` (numpy for numpy parameters)."""
         xp = namespace(params.diffuse, params.specular, *params.shape.values())
-        pieces = [self.albedo_to_vector(params.diffuse), self.albedo_to_vector(params.specular)]
+        pieces = (
+            [] if self.model.whole else [self.albedo_to_vector(params.diffuse), self.albedo_to_vector(params.specular)]
+        )
         if self.model.n_lobes:
             shared, per_channel = self._split()
             pieces.append(xp.transpose(shared.to_vector(params.shape)))  # (S, K) → lobe by lobe
@@ -99,10 +105,13 @@ class FlatCoordinates(ABC):
 
     def to_params(self, vector, n_channels: int) -> Params:
         """The parameters at the flat ``vector`` (the inverse of :meth:`from_params`), traceable by JAX."""
-        k = self.model.n_lobes
-        n_albedos = (1 + k) * n_channels
-        diffuse = self.albedo_from_vector(vector[:n_channels])
-        specular = self.albedo_from_vector(vector[n_channels:n_albedos]).reshape(k, n_channels)
+        k, n_albedos = self.model.n_lobes, albedo_size(self.model, n_channels)
+        if self.model.whole:  # no albedos: a diffuse one of 0, the lobe's 1
+            xp = namespace(vector)
+            diffuse, specular = xp.zeros(n_channels, vector.dtype), xp.ones((1, n_channels), vector.dtype)
+        else:
+            diffuse = self.albedo_from_vector(vector[:n_channels])
+            specular = self.albedo_from_vector(vector[n_channels:n_albedos]).reshape(k, n_channels)
         if not k:
             return Params(diffuse, specular, {})
         shared, per_channel = self._split()
@@ -136,7 +145,8 @@ class BoundedFlatCoordinates(FlatCoordinates):
             return diffuse
         specular = [self.model.lobe.albedo_domain] * (k * n_channels)
         per_channel = [d for d in self.per_channel.domains for _ in range(n_channels)] if self.per_channel else []
-        return diffuse + specular + list(self.shared.domains) * k + per_channel * k
+        albedos = [] if self.model.whole else diffuse + specular
+        return albedos + list(self.shared.domains) * k + per_channel * k
 
 
 @final

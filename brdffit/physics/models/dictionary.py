@@ -4,7 +4,8 @@
 order (a single number is one channel), lobe shapes as numbers, but a shape parameter with one value per channel
 (``Lobe.channel_names``: a conductor's ``eta``, ``k``) as a list in channel order, like an albedo (read back, one
 number stands for every channel: result files written before it took a list still load); models whose lobes come
-as a list (Lafortune) write ``{"rho_d": [...], "lobes": [{"rho_s": [...], "cxy": -0.6, "cz": 0.55, "n": 12.0}]}``.
+as a list (Lafortune) write ``{"rho_d": [...], "lobes": [{"rho_s": [...], "cxy": -0.6, "cz": 0.55, "n": 12.0}]}``; a
+whole-lobe model (a renderer's own) writes its lobe's shape alone: ``{"base_color": [...], "metallic": 0.0, …}``.
 """
 
 from collections.abc import Mapping
@@ -15,7 +16,7 @@ import numpy as np
 
 from ...errors import BrdfInputError
 from ..domains import ALBEDO
-from .params import Layout, Params
+from .params import Layout, Params, whole_albedos
 
 
 @dataclass(frozen=True)
@@ -28,6 +29,8 @@ class ParameterDictionary:
     def names(self) -> tuple[str, ...]:
         """The dictionary's top-level names, in the order of the result file."""
         model = self.model
+        if model.whole:
+            return model.lobe.names
         if not model.n_lobes:
             return (model.diffuse_name,)
         if model.lobes_as_list:
@@ -43,6 +46,8 @@ class ParameterDictionary:
         if not isinstance(values, Mapping):
             raise BrdfInputError(f"{model.name}: parameters must be a JSON object, got {type(values).__name__}")
         _check_keys(values, self.names, f"{model.name}: ")
+        if model.whole:
+            return _whole_params(model, values)
         diffuse = _albedo(values[model.diffuse_name], f"{model.name}: {model.diffuse_name}")
         if not model.n_lobes:
             return Params(diffuse, np.zeros((0, diffuse.size)), {})
@@ -80,6 +85,13 @@ class ParameterDictionary:
     def from_params(self, params: Params) -> dict[str, Any]:
         """The dictionary (plain Python floats and lists) of ``params``."""
         model = self.model
+        if model.whole:
+            return {
+                name: _floats(params.shape[name][0])
+                if name in model.lobe.channel_names
+                else float(params.shape[name][0])
+                for name in model.lobe.names
+            }
         result: dict[str, Any] = {model.diffuse_name: _floats(params.diffuse)}
         if not model.n_lobes:
             return result
@@ -98,6 +110,17 @@ class ParameterDictionary:
         else:
             result.update(lobes[0])
         return result
+
+
+def _whole_params(model: Layout, values: Mapping[str, Any]) -> Params:
+    """A whole-lobe model's parameters: its lobe's shape, with as many channels as its per-channel parameters' longest
+    list (one number stands for every channel)."""
+    prefix = f"{model.name}: "
+    lengths = [len(values[name]) for name in model.lobe.channel_names if isinstance(values[name], list | tuple)]
+    n_channels = max(lengths, default=1)
+    shape = model.lobe.checked_shape(_shape_numbers(values, model.lobe, n_channels, prefix), prefix)
+    diffuse, specular = whole_albedos(n_channels)
+    return Params(diffuse, specular, {name: np.array([value]) for name, value in shape.items()})
 
 
 def _check_keys(values: Mapping[str, Any], expected: tuple[str, ...], prefix: str) -> None:

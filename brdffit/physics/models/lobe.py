@@ -117,6 +117,13 @@ class Lobe(ABC):
     #: of :attr:`names`; with any, the lobe's values are (N, C), one lobe per channel. Every coordinate map of a
     #: lobe with such parameters is elementwise (a :class:`MappedLobe`'s), so one map serves all channels.
     channel_names: tuple[str, ...] = ()
+    #: The shape parameters whose domain's ends are values of their own, not limits a fit runs into (glTF's
+    #: ``metallic``: 0 is a dielectric, 1 a metal): a fit ending there is not warned about.
+    meaningful_ends: tuple[str, ...] = ()
+    #: Whether a channel's value depends on other channels' parameters (principled's tints divide the colour by its
+    #: luminance): then the fit takes the model's whole Jacobian, one forward-mode tangent per parameter and channel,
+    #: where a lobe of per-channel parameters otherwise takes one tangent per parameter for every channel at once.
+    channels_coupled: bool = False
 
     def channel_grid(self, channels: tuple[str, ...]) -> tuple[dict[str, Any], ...]:
         """Starting shapes beside :attr:`grid` whose :attr:`channel_names` have one value per channel (a list in the

@@ -11,7 +11,9 @@ final siblings, none a subclass of another:
   (``lobe.py``: Ward, Cook-Torrance, Phong, …). Diffuse and specular albedos are per channel, lobe shapes shared by
   all channels but the parameters a lobe takes per channel (``Lobe.channel_names``: a conductor's index), with which
   ``lobe`` is one per channel, ``lobe_c``. The fit's starts and its normal equations use the linearity
-  (``brdffit/fitting``).
+  (``brdffit/fitting``). A renderer's own model (glTF's metallic-roughness, Mitsuba's ``principled``) is a *whole*
+  lobe model: its one lobe is the whole BRDF, every parameter a shape parameter (``base_color`` per channel), with
+  no albedos to fit or write (``whole``).
 * ``PcaModel`` (``brdffit/datadriven/model.py``): the coefficients of a basis learned from measured tables.
 
 Code that needs a kind's own parts (lobes, a basis) dispatches on the kind (``isinstance``), never on flags. A
@@ -135,8 +137,13 @@ class LobeModel(Model):
     lobes_as_list: bool = False
     diffuse: Lobe = LAMBERTIAN
     held: tuple[tuple[str, Any], ...] = ()
+    whole: bool = False
 
     def __post_init__(self):
+        if self.whole and (self.n_lobes != 1 or not self.lobe.channel_names):
+            raise BrdfInputError(
+                f"model {self.name}: a whole-lobe model has one lobe, with a parameter per channel (its colour)"
+            )
         if (self.lobe is None) != (self.n_lobes == 0):
             raise BrdfInputError(f"model {self.name}: give a lobe family exactly when n_lobes > 0")
         if self.diffuse.names:
@@ -188,7 +195,7 @@ class LobeModel(Model):
 
     def cache_key(self) -> list | None:
         parts = [self.name, self.options, self.n_lobes, self.diffuse_name, self.specular_name, self.isotropic]
-        key = key_of((*parts, self.lobes_as_list, self.lobe, self.diffuse))  # None if any part has no key
+        key = key_of((*parts, self.lobes_as_list, self.lobe, self.diffuse, self.whole))  # None if any part has no key
         return None if key is None else key[1]
 
 

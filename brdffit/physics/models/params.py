@@ -36,3 +36,15 @@ class Layout(Protocol):
     diffuse_name: str
     specular_name: str
     lobes_as_list: bool
+    whole: bool
+
+
+def albedo_size(model: Layout, n_channels: int) -> int:
+    """How many albedos lead a flat vector of ``model`` (``coordinates.py``): a diffuse one and one per lobe in each
+    channel, none for a whole-lobe model (its parameters are its lobe's shape)."""
+    return 0 if model.whole else (1 + model.n_lobes) * n_channels
+
+
+def whole_albedos(n_channels: int, dtype=float) -> tuple[np.ndarray, np.ndarray]:
+    """The albedos a whole-lobe model's :class:`Params` carry: diffuse 0 (C,), the lobe's 1 (1, C)."""
+    return np.zeros(n_channels, dtype), np.ones((1, n_channels), dtype)

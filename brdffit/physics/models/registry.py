@@ -11,6 +11,9 @@ from typing import Any
 
 from ...datadriven.model import PCA
 from ...errors import Argument, BrdfInputError
+from ..renderers.gltf_model import GLTF
+from ..renderers.principled_model import PRINCIPLED
+from ..renderers.roughplastic_model import ROUGHPLASTIC
 from .cook_torrance import COOK_TORRANCE
 from .lafortune import LAFORTUNE
 from .lambert import LAMBERT
@@ -28,6 +31,9 @@ MODELS: dict[str, ModelEntry] = {
     "blinn-phong": BLINN_PHONG,
     "phong": PHONG,
     "lafortune": LAFORTUNE,
+    "gltf": GLTF,
+    "principled": PRINCIPLED,
+    "roughplastic": ROUGHPLASTIC,
     "pca": PCA,
 }
 

@@ -1,0 +1,1 @@
+"""The renderers' own models, evaluated in JAX exactly as the renderer does."""
