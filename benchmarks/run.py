@@ -27,6 +27,9 @@ Sections (issue 3):
     per-texel case): fit_batch from given starts, on its default path, and on its default path over a Dask
     LocalCluster of 1 and 2 workers (cluster start-up outside the clock, each worker compiling), against a
     loop of least_squares ``lm`` (exact Jacobian, compiled once) from the same starts; compile included.
+(n) ``brdffit compare`` with its default candidates (19 specs: the renderers' own models included) on the
+    10k-sample example (issue 28's goal: ≤ 30 s), process start to output written: a first run (an empty
+    compilation cache) and later ones (the cache filled by the first), in turns.
 (k) Start-up: commands that compute nothing (``--help``, ``--version``, ``models``, ``info``, ``convert``, an
     exact ``export``) and a ``fit`` of the example with a filled compilation cache, process start to exit.
 
@@ -83,6 +86,7 @@ SECTION_LETTERS = {
     "many_large": "j",
     "many_small": "j",
     "startup": "k",
+    "default_compare": "n",
     "hold": "m",
 }
 
@@ -291,6 +295,35 @@ def compare_section(repeats: int, folder: Path) -> dict:
         "fits_seconds": statistics.median(fit_runs),
         "all_compare_seconds": compare_runs,
         "all_fits_seconds": fit_runs,
+    }
+
+
+def default_compare_section(repeats: int, folder: Path) -> dict:
+    """(n): `brdffit compare` with the default candidates, first runs (empty cache) and later ones, in turns."""
+    import time
+
+    script = str(Path(sys.executable).with_name("brdffit"))
+    example = str(ROOT / "examples" / "ward-pickled-oak.csv")
+    first_runs, later_runs = [], []
+    for round_number in range(1, repeats + 1):
+        log(f"(n) default compare, round {round_number}/{repeats}")
+        cache = folder / f"cache-{round_number}"
+        for runs in (first_runs, later_runs):  # the first fills this round's cache, the second finds it full
+            clock = time.perf_counter()
+            subprocess.run(
+                [script, "compare", example, "-o", str(folder / "d.json")],
+                env={**os.environ, "BRDFFIT_CACHE_DIR": str(cache)},
+                capture_output=True,
+                check=True,
+            )
+            runs.append(time.perf_counter() - clock)
+    specs = len(json.loads((folder / "d.json").read_text())["models"])
+    return {
+        "specs": specs,
+        "first_seconds": statistics.median(first_runs),
+        "later_seconds": statistics.median(later_runs),
+        "all_first_seconds": first_runs,
+        "all_later_seconds": later_runs,
     }
 
 
@@ -504,6 +537,16 @@ def table(results: dict) -> str:
             f" {len(compared['models'])} plain `brdffit fit` runs ({ratio:.2f}×;"
             f" round by round {', '.join(f'{c / f:.2f}×' for c, f in rounds)}), no compilation cache."
         )
+    defaults = results.get("default_compare")
+    if defaults:
+        firsts, laters = (
+            ", ".join(f"{x:.1f}" for x in defaults[key]) for key in ("all_first_seconds", "all_later_seconds")
+        )
+        lines.append(
+            f"(n) `brdffit compare` with its {defaults['specs']} default candidates on the example: median"
+            f" {defaults['first_seconds']:.1f} s on a first run (an empty compilation cache),"
+            f" {defaults['later_seconds']:.1f} s on later ones (runs {firsts} s and {laters} s)."
+        )
     held = results.get("hold")
     if held:
         pairs = zip(held["given_start"], held["scipy"], strict=True)
@@ -540,8 +583,8 @@ def main() -> None:
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for latest.json and latest.md")
     parser.add_argument(
         "--sections",
-        default="abcfghijkm",
-        help="which to run: a (with d, e), b, c, f, g, h, i, j, k, m; default all (the README's table needs all)",
+        default="abcfghijkmn",
+        help="which to run: a (with d, e), b, c, f, g, h, i, j, k, m, n; default all (the README's table needs all)",
     )
     args = parser.parse_args()
     merl_size, materials, batch_size = (20_000, 3, 5_000) if args.quick else (1_458_000, 100, 100_000)
@@ -576,6 +619,8 @@ def main() -> None:
                 results[key] = many_section(count, size, args.repeats) | stamp
         if "k" in args.sections:
             results["startup"] = startup_section(args.repeats, folder) | stamp
+        if "n" in args.sections:
+            results["default_compare"] = default_compare_section(args.repeats, folder) | stamp
         if "m" in args.sections:
             results["hold"] = hold_section(args.repeats) | stamp
     text = table(results)

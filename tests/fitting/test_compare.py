@@ -91,9 +91,10 @@ def test_the_real_tape_prefers_several_lafortune_lobes_and_lambert_least():
 
 def test_the_default_set_is_every_model():
     specs = default_specs()
-    assert len(specs) == len(set(specs)) == 19
+    assert len(specs) == len(set(specs)) == 20
     assert {"lambert", "ward-aniso", "cook-torrance:fresnel=none", "lafortune:lobes=3"} <= set(specs)
     assert "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith" in specs  # Mitsuba's roughconductor
+    assert "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith,anisotropic=true" in specs  # brushed
     # The renderers' own models, each exported exactly: glTF's, Mitsuba's principled and rough plastic (both D)
     assert {"gltf", "principled", "roughplastic", "roughplastic:distribution=ggx"} <= set(specs)
 

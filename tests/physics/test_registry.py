@@ -58,6 +58,7 @@ def test_compare_tries_what_the_entries_say():
         "cook-torrance:fresnel=none",
         "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith",
         "cook-torrance:fresnel=dielectric,distribution=ggx,shadowing=smith",
+        "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith,anisotropic=true",
         "blinn-phong",
         "phong",
         "lafortune:lobes=1",
