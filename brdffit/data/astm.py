@@ -97,7 +97,15 @@ def read_astm(path: str | os.PathLike) -> Samples:
 
     angles = table[:, angle_columns]
     values = table[:, value_columns]
-    radians = bool(np.all(np.abs(angles) <= _TWO_PI + 1e-9))
+    beyond = np.any(np.abs(angles) > _TWO_PI + 1e-9, axis=1)  # rows that can only be degrees
+    radians = not bool(np.any(beyond))
+    if not radians and np.count_nonzero(beyond) <= MIXED_SHARE * len(rows):
+        first = int(np.argmax(beyond))
+        raise BrdfInputError(
+            f"{source}: line {lines[first]}: an angle beyond ±2π (degrees) in a file whose other rows"
+            f" ({len(rows) - np.count_nonzero(beyond)} of {len(rows)}) all lie within ±2π (radians): the units are"
+            " mixed; write every angle in one unit (radians, Cornell's)"
+        )
     why = "every angle in the file is within ±2π" if radians else "some angle in the file is beyond ±2π"
     unit = "radians" if radians else "degrees"
     wi, wo = checks.angles_to_directions(
@@ -113,6 +121,11 @@ def read_astm(path: str | os.PathLike) -> Samples:
     )
     samples = Samples.from_arrays(wi, wo, values, channels=channels, source=source)
     return replace(samples, provenance=Provenance("astm", rows=len(rows)))
+
+
+#: A file read as degrees (some angle beyond ±2π) where at most this share of the rows has such an angle is refused as
+#: mixed: a file in degrees has an azimuth or a scatter angle beyond 6.28° on almost every row.
+MIXED_SHARE = 0.1
 
 
 def _split(text: str, source: str) -> tuple[dict[str, tuple[int, str]], list[tuple[int, str]]]:

@@ -117,13 +117,13 @@ class MitsubaExport:
 
     def to_xml(self) -> str:
         """Mitsuba 3 XML of the BSDF (``mitsuba.load_string`` takes it), with a comment on where it came from."""
-        lines = [f"<!-- {line} -->" for line in self.comment_lines()]
+        lines = [f"<!-- {_commented(line).replace('--', '- -')} -->" for line in self.comment_lines()]
         lines += _xml(self.bsdf, indent="", version=XML_VERSION)
         return "\n".join(lines) + "\n"
 
     def to_python(self) -> str:
         """A Python module: ``bsdf``, the dictionary ``mitsuba.load_dict(bsdf)`` takes, and ``approximation``."""
-        comment = "".join(f"# {line}\n" for line in self.comment_lines())
+        comment = "".join(f"# {_commented(line)}\n" for line in self.comment_lines())
         approximation = None if self.approximation is None else self.approximation.to_dict()
         at_data = None if self.at_data is None else self.at_data.to_dict()
         return (
@@ -353,6 +353,13 @@ def roughplastic_bsdf(result: FitResult) -> dict[str, Any]:
         "diffuse_reflectance": _rgb_value(np.asarray(_rgb(params["diffuse_reflectance"]))),
         "specular_reflectance": _rgb_value(np.asarray(_rgb(params["specular_reflectance"]))),
     }
+
+
+def _commented(line: str) -> str:
+    """``line`` safe inside a comment of Python or XML: every character that is not printable (a line break in a
+    channel name a result file carries, which would end a Python comment and start code) written as its escape, as
+    ``repr`` writes it; XML's ``--`` is the caller's."""
+    return "".join(character if character.isprintable() else repr(character)[1:-1] for character in line)
 
 
 def _rgb_value(values: np.ndarray) -> dict[str, Any]:

@@ -263,3 +263,34 @@ def test_workers_killed_by_a_fit_are_one_line(files, tmp_path, capsys, monkeypat
         status, err, "--workers 1: Dask workers died while fitting (attempted to run task 'fit-3f2a' on 4 different"
     )
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("kind", ["dict", "xml"])
+def test_a_channel_name_cannot_put_code_or_markup_into_an_export(tmp_path, kind, capsys):
+    """A result's channel name reaches the export's comments (``one channel (…): written as grey``): a line break in
+    it must not end a Python comment and start code, nor ``-->`` end an XML comment and start elements."""
+    import json
+    import runpy
+    import xml.etree.ElementTree as ElementTree
+
+    from brdffit.cli import main
+
+    marker = tmp_path / "ran"
+    hostile = f"v\nimport pathlib; pathlib.Path({str(marker)!r}).touch()\n# --><bsdf type='diffuse'/><!--"
+    result = {
+        "model": "lambert",
+        "model_options": {},
+        "channels": [hostile],
+        "params": {"rho_d": [0.3]},
+        "fit": {"loss": "log", "cost": 0, "rmse": 0, "n_samples": 1, "n_steps": 1, "converged": True},
+    }
+    (tmp_path / "fit.json").write_text(json.dumps(result))
+    output = tmp_path / ("fit.mitsuba.py" if kind == "dict" else "fit.xml")
+    argv = ["export", str(tmp_path / "fit.json"), "--to", "mitsuba", "--format", kind, "-o", str(output)]
+    assert main(argv) == 0
+    if kind == "dict":
+        loaded = runpy.run_path(str(output))
+        assert not marker.exists() and loaded["bsdf"]["type"] == "diffuse"
+    else:
+        root = ElementTree.fromstring(output.read_text())
+        assert root.tag == "bsdf" and len(root) == 1  # the diffuse BSDF and its reflectance, nothing injected

@@ -57,6 +57,14 @@ def test_radians_when_every_angle_is_within_two_pi(tmp_path):
     np.testing.assert_allclose(samples.theta_o, [2, 2])
 
 
+def test_one_row_in_degrees_among_radians_is_refused_as_mixed(tmp_path):
+    """A degree-valued row among radians once turned the whole file into degrees silently: it is named instead."""
+    radian_rows = [f"{math.radians(30)!r},0,{math.radians(5 * k)!r},{math.pi!r},0.1,0.2,0.3" for k in range(20)]
+    rows = [*radian_rows[:7], "30,0,45,180,0.1,0.2,0.3", *radian_rows[7:]]
+    with pytest.raises(BrdfInputError, match=r"line 13: an angle beyond ±2π .* the units are mixed"):
+        read_astm(astm_file(tmp_path, cornell(rows)))
+
+
 def test_tolerant_layout(tmp_path):
     """Keywords in any case, unknown keywords, blank and # lines, tabs, white-space cells, columns in any order."""
     body = (

@@ -309,3 +309,16 @@ def test_names_are_checked_before_the_samples_are_known():
 
 def test_nothing_held_is_no_hold():
     assert constraints_for(CT, 3, {}, None) is None
+
+
+def test_a_parameter_that_ends_on_its_bound_is_written_within_it():
+    """The solver's scaled logit reaches a bound to within rounding (the pickled oak's Cook-Torrance, m bounded to
+    [0.01, 0.1], ended at 0.10000000000000002): the result holds what the user allowed, the bound itself."""
+    from paths import EXAMPLE
+
+    samples = brdffit.load_samples(EXAMPLE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = brdffit.fit(samples, "cook-torrance", bounds={"m": [0.01, 0.1]})
+    assert 0.01 <= result.params["m"] <= 0.1
+    assert any("m ended on its upper bound 0.1" in line for line in result.warnings)

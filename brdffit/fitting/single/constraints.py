@@ -157,6 +157,22 @@ class Constraints:
                         shape[tied][target.lobe] = placed.shape[tied][target.lobe]
         return Params(diffuse, specular, shape)
 
+    def within_bounds(self, params: Params) -> Params:
+        """``params`` with every bounded parameter clipped into its bound: the solver's scaled logit reaches an end to
+        within rounding, and ``m = 0.10000000000000002`` for a bound ``[0.01, 0.1]`` is outside what the user
+        allowed."""
+        diffuse, specular = np.array(params.diffuse, float), np.array(params.specular, float)
+        shape = {name: np.array(value, float) for name, value in params.shape.items()}
+        for name, (low, high) in self.bounds.items():
+            target = _target(self.model, name)
+            if target.kind == "diffuse":
+                diffuse = np.clip(diffuse, low, high)
+            elif target.kind == "specular":
+                specular[target.lobe] = np.clip(specular[target.lobe], low, high)
+            else:
+                shape[target.parameter][target.lobe] = np.clip(shape[target.parameter][target.lobe], low, high)
+        return Params(diffuse, specular, shape)
+
     def bound_warnings(self, theta) -> list[str]:
         """One line per bounded parameter whose solve ``theta`` (unconstrained) ended on a bound."""
         side = on_bound(theta, self.hold())

@@ -82,7 +82,7 @@ def result_of(
     params = final_params(model, solved, samples.n_channels) if params is None else params
     params = canonical_params(model, params, constraints)
     if constraints is not None:
-        params = constraints.with_fixed(params)
+        params = constraints.within_bounds(constraints.with_fixed(params))
         more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]
     return FitResult(
         model=model.name,
