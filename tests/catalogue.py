@@ -6,6 +6,23 @@ Parameters are of real materials (Ngan et al. 2005's fits) or textbook values.
 
 import pytest
 
+
+def gltf_params(
+    roughness, metallic, *, base_color, ior=1.5, clearcoat=0.0, clearcoat_roughness=0.0, strength=0.0, rotation=0.0
+) -> dict:
+    """The ``gltf`` model's parameters in its order (a result file's), its held ones at their defaults unless given."""
+    return {
+        "roughness": roughness,
+        "metallic": metallic,
+        "ior": ior,
+        "clearcoat": clearcoat,
+        "clearcoat_roughness": clearcoat_roughness,
+        "anisotropy_strength": strength,
+        "anisotropy_rotation": rotation,
+        "base_color": base_color,
+    }
+
+
 CASES = [
     ("lambert", {}, {"rho_d": [0.5, 0.3, 0.2]}),
     ("ward", {}, {"rho_d": [0.143, 0.094, 0.054], "rho_s": [0.0359, 0.0313, 0.0215], "alpha": 0.146}),
@@ -89,10 +106,11 @@ CASES = [
             "eta": 1.5,
         },
     ),
-    # glTF's own material (a whole-lobe model: no albedos beside it): a red plastic, and a copper with a little
-    # dielectric (ior is held at glTF's 1.5 unless freed)
-    ("gltf", {}, {"roughness": 0.35, "metallic": 0.0, "ior": 1.5, "base_color": [0.8, 0.3, 0.1]}),
-    ("gltf", {}, {"roughness": 0.2, "metallic": 0.9, "ior": 1.5, "base_color": [0.95, 0.64, 0.54]}),
+    # glTF's own material (a whole-lobe model: no albedos beside it): a red paint under a glossy clear coat, and a
+    # copper with a little dielectric under a strong, glossier one (a car paint); ior is held at glTF's 1.5 and the
+    # anisotropy at 0 unless freed (tests/export/test_gltf_model.py frees them)
+    ("gltf", {}, gltf_params(0.35, 0.0, clearcoat=0.5, clearcoat_roughness=0.1, base_color=[0.6, 0.2, 0.05])),
+    ("gltf", {}, gltf_params(0.3, 0.9, clearcoat=0.8, clearcoat_roughness=0.15, base_color=[0.95, 0.64, 0.54])),
     (  # Mitsuba's principled (a whole-lobe model): a blue paint under a clear coat; tints, sheen, anisotropy held at 0
         "principled",
         {},
@@ -115,6 +133,18 @@ CASES = [
         {"alpha": 0.15, "diffuse_reflectance": [0.8, 0.3, 0.1], "specular_reflectance": [1.0, 1.0, 1.0]},
     ),
 ]
+
+
+def reciprocal(case) -> bool:
+    """Whether the case's BRDF is reciprocal, ``f(wi, wo) = f(wo, wi)``: every model's but glTF's under a clear coat,
+    which KHR_materials_clearcoat weights by Schlick's Fresnel term of the viewer's direction alone
+    (``tests/export/test_gltf.py`` measures by how much)."""
+    model, _, params = case
+    return not (model == "gltf" and params["clearcoat"] > 0)
+
+
+#: The cases whose BRDF is reciprocal (:func:`reciprocal`), for the tests of reciprocity.
+RECIPROCAL_CASES = [case for case in CASES if reciprocal(case)]
 
 
 def case_id(case) -> str:

@@ -363,8 +363,10 @@ def _in_channels(material: GltfMaterial, plan: str):
 
 def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
     """The material of a fit of the ``gltf`` model, its numbers unchanged (the model's exact export): ``ior`` as
-    ``KHR_materials_ior`` where it is not glTF's 1.5. None for channels a glTF material holds only converted (CIE
-    XYZ); one channel is grey."""
+    ``KHR_materials_ior`` where it is not glTF's 1.5, the coat as ``KHR_materials_clearcoat`` where ``clearcoat`` is
+    not 0, the anisotropy as ``KHR_materials_anisotropy`` where ``anisotropy_strength`` is not 0 (its tangent the
+    data's ``+x``: :func:`_tangent_notes`). None for channels a glTF material holds only converted (CIE XYZ); one
+    channel is grey."""
     if _channel_plan(result.channels)[0] == "xyz":
         return None
     params = result.params
@@ -375,7 +377,25 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
         float(params["metallic"]),
         float(params["roughness"]),
         ior=None if ior == DEFAULT_IOR else ior,
+        clearcoat=float(params["clearcoat"]),
+        clearcoat_roughness=float(params["clearcoat_roughness"]),
+        anisotropy_strength=float(params["anisotropy_strength"]),
+        anisotropy_rotation=float(params["anisotropy_rotation"]),
     )
+
+
+def _tangent_notes(material: GltfMaterial) -> list[str]:
+    """Where an anisotropic material's tangent must lie for a viewer to show the fit: KHR_materials_anisotropy
+    stretches the lobe along the mesh's tangent turned by anisotropyRotation, and the fit's tangent is the data's
+    ``+x``."""
+    if not material.needs_tangents:
+        return []
+    return [
+        "anisotropic (KHR_materials_anisotropy): the lobe is stretched along the mesh's tangent turned by"
+        f" anisotropyRotation = {material.anisotropy_rotation:.6g} rad, so a mesh needs tangents (glTF's TANGENT"
+        " attribute, or a normal texture to derive them from) that lie where the data's +x lay on the sample; the"
+        " preview sphere has them, along its lines of latitude"
+    ]
 
 
 def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str]:
@@ -386,7 +406,8 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
     exact = None if mapping is None else mapping(result)
     if exact is not None:  # the renderer's own model, fitted: its numbers as they are, the error measured all the same
         approximation = approximation_error(result, _in_channels(exact, plan))
-        return exact, approximation, [*notes, "exact: the fitted glTF material, its numbers unchanged"], plan
+        notes = [*notes, "exact: the fitted glTF material, its numbers unchanged", *_tangent_notes(exact)]
+        return exact, approximation, notes, plan
     samples = tabulated(result)
     values = samples.values
     if plan == "xyz":

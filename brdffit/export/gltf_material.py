@@ -16,7 +16,7 @@ from .._jax import float64
 from .._programs import jit
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
-from ..physics.renderers.gltf import DEFAULT_IOR, dielectric_f0, material_brdf
+from ..physics.renderers.gltf import DEFAULT_IOR, MIN_ANISOTROPY, dielectric_f0, ior_f0, material_brdf
 from .gltf_preview import glb_bytes, gltf_document
 
 #: The ``asset.generator`` of every file brdffit writes.
@@ -34,15 +34,24 @@ def gltf_brdf(
     specular=1.0,
     specular_color=(1.0, 1.0, 1.0),
     ior=DEFAULT_IOR,
+    clearcoat=0.0,
+    clearcoat_roughness=0.0,
+    anisotropy_strength=0.0,
+    anisotropy_rotation=0.0,
 ):
     """The glTF 2.0 metallic-roughness BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3), JAX.
 
     ``base_color`` (3,) linear RGB, ``metallic`` and ``roughness`` in [0, 1] (``α = roughness²``); ``specular``
     (in [0, 1]), ``specular_color`` (3,) (≥ 0) and ``ior`` (0 or ≥ 1) are ``KHR_materials_specular``'s and
-    ``KHR_materials_ior``'s, and their defaults give the core model exactly. The model is the module docstring's:
-    Appendix B's complete model ``mix(dielectric_brdf, metal_brdf, metallic)`` (not its former single-F
-    shortcut), GGX with height-correlated Smith (as the Khronos Sample Viewer and Filament implement it;
-    Appendix B writes the separable Smith form) and Schlick's Fresnel term in ``|V·H|``.
+    ``KHR_materials_ior``'s; ``clearcoat`` and ``clearcoat_roughness`` (in [0, 1]) ``KHR_materials_clearcoat``'s, the
+    coat's reflectance at normal incidence that of ``ior`` (as the Sample Viewer takes it); ``anisotropy_strength`` (in
+    [0, 1]) and ``anisotropy_rotation`` (radians from the data's ``+x``, counter-clockwise towards ``+y``)
+    ``KHR_materials_anisotropy``'s. Their defaults give the core model exactly. The model is
+    ``physics/renderers/gltf.py``'s: Appendix B's complete model ``mix(dielectric_brdf, metal_brdf, metallic)`` (not
+    its former single-F shortcut), GGX with height-correlated Smith (as the Khronos Sample Viewer and Filament
+    implement it; Appendix B writes the separable Smith form), Schlick's Fresnel term in ``|V·H|``, the coat's in
+    ``N·V``, and the Sample Viewer's anisotropic GGX (its visibility clamped to 1) where ``anisotropy_strength`` is
+    ``MIN_ANISOTROPY`` (10⁻⁶) or more.
 
     Zero where either direction is at or below the horizon; finite, with finite derivatives with respect to the
     parameters, for both cosines in (0, 1] (θ = 89.9° included) and roughness down to 0.001 (``α`` is held at
@@ -50,12 +59,38 @@ def gltf_brdf(
     """
     wi, wo = jnp.asarray(wi), jnp.asarray(wo)
     reflectance = dielectric_f0(specular_color, ior)
-    return material_brdf(base_color, metallic, roughness, specular, reflectance, wi, wo)
+    return material_brdf(
+        base_color,
+        metallic,
+        roughness,
+        specular,
+        reflectance,
+        wi,
+        wo,
+        clearcoat=clearcoat,
+        clearcoat_roughness=clearcoat_roughness,
+        coat_reflectance=ior_f0(ior),
+        anisotropy_strength=anisotropy_strength,
+        anisotropy_rotation=anisotropy_rotation,
+    )
 
 
 @jit
-def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_color, ior, wi, wo):
-    return gltf_brdf(base_color, metallic, roughness, wi, wo, specular=specular, specular_color=specular_color, ior=ior)
+def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_color, ior, coat, anisotropy, wi, wo):
+    return gltf_brdf(
+        base_color,
+        metallic,
+        roughness,
+        wi,
+        wo,
+        specular=specular,
+        specular_color=specular_color,
+        ior=ior,
+        clearcoat=coat[0],
+        clearcoat_roughness=coat[1],
+        anisotropy_strength=anisotropy[0],
+        anisotropy_rotation=anisotropy[1],
+    )
 
 
 # ---------------------------------------------------------------------- the material
@@ -85,7 +120,11 @@ class GltfMaterial:
     """A glTF 2.0 metallic-roughness material: ``base_color`` (3 floats in [0, 1], linear RGB), ``metallic`` and
     ``roughness`` (in [0, 1]); ``specular`` (in [0, 1]) and ``specular_color`` (3 floats ≥ 0) of
     ``KHR_materials_specular`` and ``ior`` (0 or ≥ 1; 0 means ``f0 = 1``) of ``KHR_materials_ior``, each None
-    when not used (its default applies: 1, (1, 1, 1), 1.5)."""
+    when not used (its default applies: 1, (1, 1, 1), 1.5); ``clearcoat`` and ``clearcoat_roughness`` (in [0, 1]) of
+    ``KHR_materials_clearcoat``, used where ``clearcoat`` is not 0; ``anisotropy_strength`` (in [0, 1]) and
+    ``anisotropy_rotation`` (radians, any finite number) of ``KHR_materials_anisotropy``, used where the strength is
+    not 0 (the tangent is the mesh's ``TANGENT``, the data's ``+x`` for a fit); a strength below
+    ``physics/renderers/gltf.py``'s ``MIN_ANISOTROPY`` (10⁻⁶) is none, and is set to 0."""
 
     base_color: tuple[float, float, float]
     metallic: float
@@ -93,11 +132,24 @@ class GltfMaterial:
     specular: float | None = None
     specular_color: tuple[float, float, float] | None = None
     ior: float | None = None
+    clearcoat: float = 0.0
+    clearcoat_roughness: float = 0.0
+    anisotropy_strength: float = 0.0
+    anisotropy_rotation: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "base_color", _three_numbers("base_color", self.base_color, 1.0))
-        object.__setattr__(self, "metallic", _unit_interval("metallic", self.metallic))
-        object.__setattr__(self, "roughness", _unit_interval("roughness", self.roughness))
+        for name in ("metallic", "roughness", "clearcoat", "clearcoat_roughness", "anisotropy_strength"):
+            object.__setattr__(self, name, _unit_interval(name, getattr(self, name)))
+        if self.anisotropy_strength < MIN_ANISOTROPY:  # none, as the BRDF takes it: no extension written either
+            object.__setattr__(self, "anisotropy_strength", 0.0)
+        rotation = self.anisotropy_rotation
+        number = not isinstance(rotation, bool) and isinstance(rotation, int | float | np.floating | np.integer)
+        if not number or not math.isfinite(rotation):
+            raise BrdfInputError(
+                Argument.given("anisotropy_rotation", rotation), " is not allowed; give a finite number (radians)"
+            )
+        object.__setattr__(self, "anisotropy_rotation", float(rotation))
         if self.specular is not None:
             object.__setattr__(self, "specular", _unit_interval("specular", self.specular))
         if self.specular_color is not None:
@@ -117,7 +169,18 @@ class GltfMaterial:
             used.append("KHR_materials_specular")
         if self.ior is not None:
             used.append("KHR_materials_ior")
+        if self.clearcoat != 0.0:
+            used.append("KHR_materials_clearcoat")
+        if self.anisotropy_strength != 0.0:
+            used.append("KHR_materials_anisotropy")
         return tuple(used)
+
+    @property
+    def needs_tangents(self) -> bool:
+        """Whether a mesh must carry tangents (glTF's ``TANGENT`` attribute) to show this material as fitted: an
+        anisotropic lobe is stretched along the tangent (``KHR_materials_anisotropy``: "MUST have a defined tangent
+        space")."""
+        return "KHR_materials_anisotropy" in self.extensions
 
     def brdf(self, wi, wo) -> np.ndarray:
         """This material's BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3) (:func:`gltf_brdf`)."""
@@ -129,6 +192,8 @@ class GltfMaterial:
                 1.0 if self.specular is None else self.specular,
                 np.asarray(self.specular_color or (1.0, 1.0, 1.0)),
                 DEFAULT_IOR if self.ior is None else self.ior,
+                np.array([self.clearcoat, self.clearcoat_roughness]),
+                np.array([self.anisotropy_strength, self.anisotropy_rotation]),
                 np.asarray(wi, dtype=np.float64),
                 np.asarray(wo, dtype=np.float64),
             )
@@ -157,6 +222,16 @@ class GltfMaterial:
             extensions["KHR_materials_specular"] = specular
         if self.ior is not None:
             extensions["KHR_materials_ior"] = {"ior": self.ior}
+        if "KHR_materials_clearcoat" in self.extensions:
+            extensions["KHR_materials_clearcoat"] = {
+                "clearcoatFactor": self.clearcoat,
+                "clearcoatRoughnessFactor": self.clearcoat_roughness,
+            }
+        if "KHR_materials_anisotropy" in self.extensions:
+            extensions["KHR_materials_anisotropy"] = {
+                "anisotropyStrength": self.anisotropy_strength,
+                "anisotropyRotation": self.anisotropy_rotation,
+            }
         if extensions:
             material["extensions"] = extensions
         if extras is not None:
@@ -168,8 +243,10 @@ class GltfMaterial:
         (:meth:`material_object`) on a preview sphere in a scene named ``name``, so that a viewer shows it; the
         top-level ``extensionsUsed`` lists the material's extensions; ``asset.generator`` names brdffit
         (``export/gltf_preview.py``)."""
-        return gltf_document(self.material_object(name, extras), list(self.extensions), name, _GENERATOR)
+        material = self.material_object(name, extras)
+        return gltf_document(material, list(self.extensions), name, _GENERATOR, tangents=self.needs_tangents)
 
     def to_glb(self, name: str, extras: dict[str, Any] | None = None) -> bytes:
         """The document of :meth:`to_gltf` as a binary glTF (``.glb``) file's bytes."""
-        return glb_bytes(self.material_object(name, extras), list(self.extensions), name, _GENERATOR)
+        material = self.material_object(name, extras)
+        return glb_bytes(material, list(self.extensions), name, _GENERATOR, tangents=self.needs_tangents)

@@ -220,38 +220,46 @@ class Interval(Domain):
 @final
 @dataclass(frozen=True)
 class AxisAzimuth(MappedDomain):
-    """The azimuth of an axis, in degrees, in ``(−90, 90]``: an axis and its opposite are one (an anisotropic lobe's
-    tangent, whose lobe is π-periodic in it). Reached from the real line (radians) by wrapping,
-    ``x = 90 − ((90 − degrees(u)) mod 180)``: the lobe is the same on both sides of the seam at ±90°, so the
-    solver moves across it freely; uniform prior."""
+    """The azimuth of an axis, in degrees, in ``(−90, 90]`` (in radians, in ``(−π/2, π/2]``, with ``radians``: glTF's
+    ``anisotropyRotation``): an axis and its opposite are one (an anisotropic lobe's tangent, whose lobe is
+    π-periodic in it). Reached from the real line (radians) by wrapping, ``x = 90 − ((90 − degrees(u)) mod 180)``: the
+    lobe is the same on both sides of the seam at ±90°, so the solver moves across it freely; uniform prior."""
+
+    radians: bool = False
+
+    @property
+    def _quarter_turn(self) -> float:
+        return np.pi / 2 if self.radians else 90.0
 
     @property
     def text(self) -> str:
-        return "(-90, 90] degrees"
+        return "(-π/2, π/2] radians" if self.radians else "(-90, 90] degrees"
 
     @property
     def bounds(self) -> tuple[float, float]:
-        return -90.0, 90.0
+        return -self._quarter_turn, self._quarter_turn
 
     def contains(self, x) -> bool:
         x = np.asarray(x, dtype=float)
-        return bool(np.all(np.isfinite(x) & (x > -90.0) & (x <= 90.0)))
+        return bool(np.all(np.isfinite(x) & (x > -self._quarter_turn) & (x <= self._quarter_turn)))
 
-    def wrapped(self, degrees):
-        """``degrees`` (any real, numpy or JAX) as the same axis's azimuth in ``(−90, 90]``."""
-        xp = namespace(degrees)
-        return 90.0 - xp.mod(90.0 - degrees, 180.0)
+    def wrapped(self, angle):
+        """``angle`` (any real, in the domain's unit; numpy or JAX) as the same axis's azimuth in the domain."""
+        xp = namespace(angle)
+        quarter = self._quarter_turn
+        return quarter - xp.mod(quarter - angle, 2.0 * quarter)
 
     def to_physical(self, u):
-        return self.wrapped(jnp.degrees(u))
+        return self.wrapped(u if self.radians else jnp.degrees(u))
 
     def to_unconstrained(self, x) -> np.ndarray:
         xp = namespace(x)
-        return xp.radians(xp.asarray(x, dtype=float))
+        x = xp.asarray(x, dtype=float)
+        return x if self.radians else xp.radians(x)
 
     def log_prior(self, x):
-        """Uniform on (−90, 90]."""
-        return jnp.where((x > -90.0) & (x <= 90.0), 0.0, -jnp.inf)
+        """Uniform on the domain."""
+        return jnp.where((x > -self._quarter_turn) & (x <= self._quarter_turn), 0.0, -jnp.inf)
 
 
 NON_NEGATIVE = Positive(allow_zero=True)
@@ -265,3 +273,5 @@ ROUGHNESS = Positive(plausible_max=2.0)
 EXPONENT = Positive(plausible_max=1e4)
 #: The azimuth of an anisotropic lobe's tangent (degrees from +x, in (−90, 90]).
 AXIS_AZIMUTH = AxisAzimuth()
+#: The same in radians, in (−π/2, π/2] (glTF's anisotropyRotation).
+AXIS_ANGLE = AxisAzimuth(radians=True)

@@ -18,8 +18,9 @@ from brdffit.export.approximate import dense_grid
 from brdffit.export.gltf import EXTENSION_GAIN, fit_gltf, fit_material, write_gltf
 from brdffit.export.gltf_material import GltfMaterial, gltf_brdf
 from brdffit.fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
+from brdffit.physics.geometry import in_turned_frame
 from brdffit.physics.microfacet import ggx_lambda
-from brdffit.physics.renderers.gltf import DEFAULT_F0
+from brdffit.physics.renderers.gltf import DEFAULT_F0, MIN_ANISOTROPY
 
 #: Direction pairs (θi, φi, θo, φo in degrees) for golden values: near the mirror, off it, the exact mirror, grazing.
 PAIRS_DEGREES = [(30, 0, 40, 180), (10, 0, 70, 90), (60, 20, 20, 250), (45, 0, 45, 180), (75, 0, 65, 160)]
@@ -31,6 +32,16 @@ PAIRS = (
 #: The roughnesses are ≥ 0.3 (α² ≥ 0.0081), so that GGX's 1 − (N·H)², computed in two ways, stays ≪ 1e-12 of α².
 GOLDEN_RTOL = 1e-12
 EXTENSION = {"specular": 0.6, "specular_color": (1.0, 0.7, 0.4), "ior": 1.8}
+#: KHR_materials_clearcoat's and KHR_materials_anisotropy's factors (the coat's roughness ≥ 0.3, as GOLDEN_RTOL asks).
+COAT = {"clearcoat": 0.7, "clearcoat_roughness": 0.35}
+ANISOTROPY = {"anisotropy_strength": 0.7, "anisotropy_rotation": 0.6}
+#: Pairs near the mirror at grazing angles, along and across the tangent of ANISOTROPY and between: where
+#: N·L · N·V < 1/4, the anisotropic visibility's clamp to 1 binds.
+GRAZING_DEGREES = [(75, 214.4, 75, 34.4), (70, 124.4, 80, 304.4), (80, 0, 78, 170), (65, 90, 72, 265)]
+GRAZING = (
+    directions_from_degrees([p[0] for p in GRAZING_DEGREES], [p[1] for p in GRAZING_DEGREES]),
+    directions_from_degrees([p[2] for p in GRAZING_DEGREES], [p[3] for p in GRAZING_DEGREES]),
+)
 
 
 def golden_specular(roughness, wi, wo):
@@ -49,20 +60,66 @@ def golden_specular(roughness, wi, wo):
     return visibility * distribution, (1.0 - v_dot_h) ** 5
 
 
+def golden_anisotropic_specular(roughness, strength, rotation, wi, wo):
+    """KHR_materials_anisotropy's ``V · D`` of one pair, in plain numpy from the extension's text: the tangent the
+    data's +x turned counter-clockwise by ``rotation`` radians, the bitangent ``n × t``; ``α_t = mix(α, 1, s²)``,
+    ``α_b = α`` (floored at 0.001, the Sample Viewer's ``clamp(alphaRoughness, 0.001, 1.0)``); Burley's D; the sample
+    implementation's V, clamped to [0, 1]."""
+    normal = np.array([0.0, 0.0, 1.0])
+    tangent = np.array([math.cos(rotation), math.sin(rotation), 0.0])
+    bitangent = np.cross(normal, tangent)
+    alpha = roughness * roughness
+    alpha_t = alpha * (1.0 - strength**2) + 1.0 * strength**2
+    alpha_b = min(max(alpha, 0.001), 1.0)
+    half = (wi + wo) / np.linalg.norm(wi + wo)
+    n_dot_h = max(float(half @ normal), 0.001)
+    t_dot_h, b_dot_h = float(half @ tangent), float(half @ bitangent)
+    denominator = (t_dot_h / alpha_t) ** 2 + (b_dot_h / alpha_b) ** 2 + n_dot_h**2
+    distribution = 1.0 / (math.pi * alpha_t * alpha_b * denominator**2)
+    n_dot_l, n_dot_v = float(wi @ normal), float(wo @ normal)
+    ggx_v = n_dot_l * np.linalg.norm([alpha_t * (tangent @ wo), alpha_b * (bitangent @ wo), n_dot_v])
+    ggx_l = n_dot_v * np.linalg.norm([alpha_t * (tangent @ wi), alpha_b * (bitangent @ wi), n_dot_l])
+    visibility = min(max(0.5 / (ggx_v + ggx_l), 0.0), 1.0)
+    return visibility * distribution
+
+
 def golden_gltf(
-    base_color, metallic, roughness, wi, wo, specular=1.0, specular_color=(1.0, 1.0, 1.0), ior=1.5, f0=None
+    base_color,
+    metallic,
+    roughness,
+    wi,
+    wo,
+    specular=1.0,
+    specular_color=(1.0, 1.0, 1.0),
+    ior=1.5,
+    f0=None,
+    clearcoat=0.0,
+    clearcoat_roughness=0.0,
+    anisotropy_strength=0.0,
+    anisotropy_rotation=0.0,
 ):
     """The glTF BRDF (3,) of one pair, as the specification and its extensions write it, in plain numpy: Schlick in
     |V·H|, fresnel_mix with the KHR_materials_specular weight and colour (``f0`` from the ior, or given), and the
-    metal/dielectric mix."""
+    metal/dielectric mix; KHR_materials_anisotropy's lobe for both layers where its strength is not 0; and
+    KHR_materials_clearcoat's ``mix(material, clearcoat_brdf, clearcoat · clearcoat_fresnel)``, the coat's Fresnel
+    term Schlick's in |V·N| with the ior's ``f0`` (the Sample Viewer's; the extension's text fixes 1.5)."""
     base = np.asarray(base_color, dtype=float)
     specular_brdf, schlick = golden_specular(roughness, wi, wo)
+    if anisotropy_strength > 0:
+        specular_brdf = golden_anisotropic_specular(roughness, anisotropy_strength, anisotropy_rotation, wi, wo)
     metal_brdf = (base + (1.0 - base) * schlick) * specular_brdf
     if f0 is None:
         f0 = np.minimum(((1.0 - ior) / (1.0 + ior)) ** 2 * np.asarray(specular_color, dtype=float), 1.0)
     fresnel = f0 + (1.0 - f0) * schlick
     dielectric_brdf = (1.0 - specular * fresnel.max()) * base / math.pi + specular * fresnel * specular_brdf
-    return (1.0 - metallic) * dielectric_brdf + metallic * metal_brdf
+    material = (1.0 - metallic) * dielectric_brdf + metallic * metal_brdf
+    if clearcoat == 0:
+        return material
+    coat_f0 = ((1.0 - ior) / (1.0 + ior)) ** 2
+    clearcoat_fresnel = coat_f0 + (1.0 - coat_f0) * (1.0 - abs(float(wo[2]))) ** 5
+    clearcoat_brdf, _ = golden_specular(clearcoat_roughness, wi, wo)
+    weight = clearcoat * clearcoat_fresnel
+    return (1.0 - weight) * material + weight * clearcoat_brdf
 
 
 def golden_single_f(base_color, metallic, roughness, wi, wo):
@@ -75,9 +132,9 @@ def golden_single_f(base_color, metallic, roughness, wi, wo):
     return (1.0 - fresnel) * c_diff / math.pi + fresnel * specular_brdf
 
 
-def golden_rows(base_color, metallic, roughness, **extension):
+def golden_rows(base_color, metallic, roughness, pairs=PAIRS, **extension):
     return np.array(
-        [golden_gltf(base_color, metallic, roughness, a, b, **extension) for a, b in zip(*PAIRS, strict=True)]
+        [golden_gltf(base_color, metallic, roughness, a, b, **extension) for a, b in zip(*pairs, strict=True)]
     )
 
 
@@ -88,6 +145,82 @@ def test_the_brdf_is_the_specifications_formula(metallic, extension):
     base, roughness = (0.8, 0.5, 0.2), 0.45
     computed = np.asarray(gltf_brdf(base, metallic, roughness, *PAIRS, **extension))
     np.testing.assert_allclose(computed, golden_rows(base, metallic, roughness, **extension), rtol=GOLDEN_RTOL)
+
+
+@pytest.mark.parametrize("metallic", [0.0, 1.0, 0.3])
+@pytest.mark.parametrize(
+    "extension",
+    [COAT, ANISOTROPY, COAT | ANISOTROPY, COAT | ANISOTROPY | EXTENSION],
+    ids=["clearcoat", "anisotropy", "both", "all"],
+)
+def test_the_clear_coat_and_the_anisotropy_are_their_extensions_formulas(metallic, extension):
+    base, roughness = (0.8, 0.5, 0.2), 0.45
+    for pairs in (PAIRS, GRAZING):
+        computed = np.asarray(gltf_brdf(base, metallic, roughness, *pairs, **extension))
+        expected = golden_rows(base, metallic, roughness, pairs, **extension)
+        np.testing.assert_allclose(computed, expected, rtol=GOLDEN_RTOL)
+
+
+def test_the_anisotropic_visibility_is_clamped_where_the_sample_viewer_clamps_it():
+    # The grazing pairs are where the clamp binds: their unclamped V exceeds 1, and the lobe is cut to V = 1 there.
+    strength, rotation = ANISOTROPY["anisotropy_strength"], ANISOTROPY["anisotropy_rotation"]
+    alpha = 0.45**2
+
+    def unclamped(alpha_t, alpha_b):  # the sample implementation's V before its clamp
+        light, viewer = (in_turned_frame(w, rotation) for w in GRAZING)
+        stretched = [np.linalg.norm(w * [alpha_t, alpha_b, 1.0], axis=1) for w in (light, viewer)]
+        return 0.5 / (light[:, 2] * stretched[1] + viewer[:, 2] * stretched[0])
+
+    assert np.all(unclamped(alpha + (1 - alpha) * strength**2, alpha) > 1.0)
+    # The core form has no clamp: where the strength reaches its threshold (1e-6, below which it is none, as a
+    # material without the extension) the BRDF of a white metal jumps by the clamp's factor, min(1, 1/V).
+    white = (1.0, 1.0, 1.0)
+    at_the_threshold = np.asarray(gltf_brdf(white, 1.0, 0.45, *GRAZING, anisotropy_strength=MIN_ANISOTROPY))
+    below = np.asarray(gltf_brdf(white, 1.0, 0.45, *GRAZING, anisotropy_strength=0.999 * MIN_ANISOTROPY))
+    core = np.asarray(gltf_brdf(white, 1.0, 0.45, *GRAZING))
+    np.testing.assert_allclose(below, core, rtol=1e-14)
+    jump = np.minimum(1.0, 1.0 / unclamped(alpha, alpha))
+    np.testing.assert_allclose(at_the_threshold / core, np.broadcast_to(jump[:, None], core.shape), rtol=1e-5)
+    assert np.all(jump < 0.6)  # measured: 0.21 to 0.59 at these pairs (roughness 0.45)
+
+
+def test_the_tangent_is_the_data_x_turned_counter_clockwise_by_the_rotation(rng):
+    # Turning both directions and the rotation together about the normal changes nothing; turning the directions
+    # alone does: the lobe has a direction, +x turned by anisotropy_rotation towards +y.
+    wi, wo = random_directions(rng, 500), random_directions(rng, 500)
+    turn = 0.9
+    values = np.asarray(gltf_brdf((0.6, 0.5, 0.4), 0.5, 0.3, wi, wo, **ANISOTROPY))
+    turned = [np.asarray(in_turned_frame(w, -turn)) for w in (wi, wo)]  # each direction turned by +0.9 rad
+    moved = ANISOTROPY | {"anisotropy_rotation": ANISOTROPY["anisotropy_rotation"] + turn}
+    np.testing.assert_allclose(np.asarray(gltf_brdf((0.6, 0.5, 0.4), 0.5, 0.3, *turned, **moved)), values, rtol=1e-12)
+    assert np.max(np.abs(np.asarray(gltf_brdf((0.6, 0.5, 0.4), 0.5, 0.3, *turned, **ANISOTROPY)) / values - 1)) > 0.1
+    # a half turn is the same lobe (anisotropy_rotation is an axis's: the model's domain is (−π/2, π/2])
+    half_turn = ANISOTROPY | {"anisotropy_rotation": ANISOTROPY["anisotropy_rotation"] - math.pi}
+    np.testing.assert_allclose(
+        np.asarray(gltf_brdf((0.6, 0.5, 0.4), 0.5, 0.3, wi, wo, **half_turn)), values, rtol=1e-12
+    )
+    # stretched along the tangent: a viewer off the mirror direction by 10° along t sees more than one across it
+    rotation = ANISOTROPY["anisotropy_rotation"]
+    light = directions_from_degrees(45.0, math.degrees(rotation) + 180.0)
+    along = directions_from_degrees(55.0, math.degrees(rotation))
+    across = directions_from_degrees(45.0, math.degrees(rotation) + math.degrees(math.atan(math.tan(math.radians(10)))))
+    assert float(np.asarray(gltf_brdf((0, 0, 0), 1.0, 0.3, light, along, **ANISOTROPY))[0, 0]) > 2 * float(
+        np.asarray(gltf_brdf((0, 0, 0), 1.0, 0.3, light, across, **ANISOTROPY))[0, 0]
+    )
+
+
+def test_without_their_weights_the_extensions_are_the_core_model():
+    base = (0.9, 0.6, 0.3)
+    core = np.asarray(gltf_brdf(base, 0.3, 0.6, *PAIRS))
+    # clearcoat 0 (a traced 0: gltf_material's compiled BRDF) is the core material to the bit: (1 − 0)·m + 0·coat
+    uncoated = np.asarray(GltfMaterial(base, 0.3, 0.6, clearcoat_roughness=0.2).brdf(*PAIRS))
+    np.testing.assert_array_equal(uncoated, np.asarray(GltfMaterial(base, 0.3, 0.6).brdf(*PAIRS)))
+    # no anisotropy, whatever the rotation: the same lobe, the x and y components turned (rounding)
+    for rotation in (0.0, 1.0, -1.4):
+        round_lobe = gltf_brdf(
+            base, 0.3, 0.6, *PAIRS, anisotropy_strength=jnp.asarray(0.0), anisotropy_rotation=rotation
+        )
+        np.testing.assert_allclose(np.asarray(round_lobe), core, rtol=1e-14)
 
 
 def test_the_extensions_defaults_give_the_core_model_exactly():
@@ -143,7 +276,7 @@ def test_appendix_b_separable_smith_is_darker_by_the_product_of_the_lambdas():
 # ---------------------------------------------------------------------- edges
 def test_reciprocal_and_zero_below_the_horizon(rng):
     wi, wo = random_directions(rng, 500), random_directions(rng, 500)
-    for extension in ({}, EXTENSION):
+    for extension in ({}, EXTENSION, ANISOTROPY, ANISOTROPY | {"anisotropy_strength": 1.0}):
         forward = np.asarray(gltf_brdf((0.7, 0.4, 0.2), 0.3, 0.4, wi, wo, **extension))
         backward = np.asarray(gltf_brdf((0.7, 0.4, 0.2), 0.3, 0.4, wo, wi, **extension))
         np.testing.assert_allclose(forward, backward, rtol=1e-12)
@@ -152,6 +285,27 @@ def test_reciprocal_and_zero_below_the_horizon(rng):
     for other in (below, horizon):
         assert np.all(np.asarray(gltf_brdf((0.7, 0.4, 0.2), 0.3, 0.4, wi, other)) == 0.0)
         assert np.all(np.asarray(gltf_brdf((0.7, 0.4, 0.2), 0.3, 0.4, other, wi)) == 0.0)
+
+
+def test_the_clear_coat_is_not_reciprocal_by_its_fresnel_term_of_the_viewer(rng):
+    # KHR_materials_clearcoat weights the coat by Schlick's term in N·V: swapping light and viewer changes the weight
+    # (and nothing else), so f(wi, wo) − f(wo, wi) is that change times (coat − material), as written out.
+    wi, wo = random_directions(rng, 300), random_directions(rng, 300)
+    base, metallic, roughness = (0.7, 0.4, 0.2), 0.3, 0.4
+    forward = np.asarray(gltf_brdf(base, metallic, roughness, wi, wo, **COAT))
+    backward = np.asarray(gltf_brdf(base, metallic, roughness, wo, wi, **COAT))
+    material = np.asarray(gltf_brdf(base, metallic, roughness, wi, wo))  # reciprocal
+    coat = np.asarray(gltf_brdf((0.0, 0.0, 0.0), 0.0, COAT["clearcoat_roughness"], wi, wo, specular_color=(25,) * 3))
+    schlick = lambda w: 0.04 + 0.96 * (1.0 - w[:, 2:3]) ** 5
+    expected = COAT["clearcoat"] * (schlick(wo) - schlick(wi)) * (coat - material)
+    np.testing.assert_allclose(forward - backward, expected, rtol=1e-9, atol=1e-12 * np.max(forward))
+    # e.g. light at 10°, viewer at 80° across the mirror (the viewer's Schlick term 0.41, the light's 0.04): 20%, 15%
+    # and 5% less than the other way round, the brighter the base, the more
+    light, viewer = directions_from_degrees(10.0, 0.0), directions_from_degrees(80.0, 180.0)
+    ratio = np.asarray(gltf_brdf(base, 0.0, 0.5, light, viewer, **COAT)) / np.asarray(
+        gltf_brdf(base, 0.0, 0.5, viewer, light, **COAT)
+    )
+    np.testing.assert_allclose(ratio, [[0.801, 0.849, 0.951]], atol=1e-3)
 
 
 def test_finite_values_and_gradients_at_grazing_angles_and_small_roughness():
@@ -173,6 +327,37 @@ def test_finite_values_and_gradients_at_grazing_angles_and_small_roughness():
     # the mirror pair at θ = 89.9° with roughness 0.02 is a sharp, large peak, but finite
     peak = np.asarray(gltf_brdf((0.5, 0.5, 0.5), 1.0, 0.02, grazing[:1], viewers[:1]))
     assert np.all(np.isfinite(peak)) and np.all(peak > 1e3)
+
+
+@pytest.mark.parametrize("strength", [0.0, 0.5 * MIN_ANISOTROPY, MIN_ANISOTROPY, 0.3, 1.0])
+@pytest.mark.parametrize("roughness", [0.001, 0.02, 1.0])
+def test_the_extensions_are_finite_with_finite_gradients_at_grazing_angles(strength, roughness):
+    # every parameter traced (as the fit's are), the coat from smooth to rough, the anisotropy on either side of its
+    # threshold: values and derivatives finite at 89.9° (the directions of the test above)
+    grazing = directions_from_degrees([89.9, 89.9, 89.9, 30.0, 89.9], [0.0, 0.0, 0.0, 0.0, 45.0])
+    viewers = directions_from_degrees([89.9, 89.9, 0.0, 89.9, 89.9], [180.0, 0.0, 0.0, 90.0, 225.0])
+
+    def total(parameters):
+        base, metallic, rough, coat, coat_roughness, anisotropy, rotation = parameters
+        values = gltf_brdf(
+            base,
+            metallic,
+            rough,
+            grazing,
+            viewers,
+            clearcoat=coat,
+            clearcoat_roughness=coat_roughness,
+            anisotropy_strength=anisotropy,
+            anisotropy_rotation=rotation,
+        )
+        return jnp.sum(values)
+
+    for coat_roughness in (0.0, 0.001, 1.0):
+        parameters = (jnp.array([0.5, 0.4, 0.3]), 0.3, roughness, 0.8, coat_roughness, strength, 0.7)
+        parameters = tuple(jnp.asarray(p, dtype=jnp.float64) for p in parameters)
+        assert np.isfinite(float(total(parameters)))
+        gradients = jax.grad(total)(parameters)
+        assert all(np.all(np.isfinite(np.asarray(g))) for g in gradients), (coat_roughness, gradients)
 
 
 def white_albedos(metallic, roughness, n=512, **extension):
@@ -210,6 +395,32 @@ def test_the_dielectric_fresnel_mix_gains_energy_at_grazing_incidence():
     assert np.all(white_albedos(0.5, 0.5) <= 1.0)  # half metal: the metal's loss outweighs the gain
 
 
+def test_the_clear_coat_gains_energy_at_grazing_incidence_as_its_fresnel_term_is_the_viewers():
+    # KHR_materials_clearcoat weights the coat by the viewer's Schlick term: for one viewer, the light it receives
+    # from the whole hemisphere (∫ f cos θi dωi) is a mix of the base's and the coat's, as the extension says; for
+    # one light, what leaves (∫ f cos θo dωo, the directional albedo the fit's caveats measure) is not: light at a
+    # grazing incidence meets the base's full weight and, towards grazing viewers, the coat's large one. Measured
+    # (n = 256 and 512 agree to 1e-4): a white dielectric of roughness 0.5 under a full coat of roughness 0.3
+    # reflects 1.23 at θi = 80° (1.08 bare; test_the_dielectric_fresnel_mix_gains_energy_at_grazing_incidence).
+    full_coat = {"clearcoat": 1.0, "clearcoat_roughness": 0.3}
+    coated = white_albedos(0.0, 0.5, **full_coat)
+    np.testing.assert_allclose(coated, [0.955, 0.957, 1.012, 1.227], atol=0.002)
+    # the viewer's side: the same quadrature with the roles swapped (the grid's "incidence" is now the viewer's)
+    wi, wo = albedo_directions(512)
+    values = np.asarray(gltf_brdf((1.0, 1.0, 1.0), 0.0, 0.5, wo, wi, **full_coat))
+    seen = albedo_quadrature(values, 512)[0][:, 0]
+    bare = white_albedos(0.0, 0.5)
+    assert np.all(seen <= np.maximum(bare, 1.0) + 0.005), (seen, bare)
+
+
+@pytest.mark.parametrize("strength", [0.5, 1.0])
+def test_the_anisotropic_metal_never_gains_energy(strength):
+    # Single scattering, and the visibility's clamp only takes light away: a white anisotropic metal's albedo stays
+    # below 1 at every incidence (the lobe stretched along +x, the light's azimuth: its widest).
+    albedos = white_albedos(1.0, 0.5, anisotropy_strength=strength, anisotropy_rotation=0.0)
+    assert np.all(albedos <= 1.005), albedos
+
+
 # ---------------------------------------------------------------------- the material
 def test_the_material_checks_its_factors_with_one_line_naming_them():
     cases = [
@@ -220,6 +431,10 @@ def test_the_material_checks_its_factors_with_one_line_naming_them():
         ({"specular": 2.0}, "specular=2.0 is not allowed"),
         ({"specular_color": (1.0, -1.0, 0.0)}, "specular_color=(1.0, -1.0, 0.0) is not allowed"),
         ({"ior": 0.5}, "ior=0.5 is not allowed; give 0 or a finite number ≥ 1"),
+        ({"clearcoat": 1.5}, "clearcoat=1.5 is not allowed; give a number in [0, 1]"),
+        ({"clearcoat_roughness": -0.2}, "clearcoat_roughness=-0.2 is not allowed; give a number in [0, 1]"),
+        ({"anisotropy_strength": True}, "anisotropy_strength=True is not allowed; give a number in [0, 1]"),
+        ({"anisotropy_rotation": math.inf}, "anisotropy_rotation=inf is not allowed; give a finite number (radians)"),
     ]
     for change, message in cases:
         arguments = {"base_color": (0.5, 0.5, 0.5), "metallic": 0.0, "roughness": 0.5} | change
@@ -230,6 +445,9 @@ def test_the_material_checks_its_factors_with_one_line_naming_them():
 
 def test_the_material_brdf_is_the_gltf_brdf(rng):
     wi, wo = random_directions(rng, 100), random_directions(rng, 100)
+    layered = GltfMaterial((0.8, 0.5, 0.2), 0.3, 0.45, **EXTENSION, **COAT, **ANISOTROPY)
+    expected = gltf_brdf((0.8, 0.5, 0.2), 0.3, 0.45, wi, wo, **EXTENSION, **COAT, **ANISOTROPY)
+    np.testing.assert_allclose(layered.brdf(wi, wo), np.asarray(expected), rtol=1e-14)
     material = GltfMaterial((0.8, 0.5, 0.2), 0.3, 0.45, **EXTENSION)
     # compiled (material.brdf) and traced op by op (gltf_brdf): the same operations, rounded by XLA's fusions
     np.testing.assert_allclose(
@@ -260,6 +478,18 @@ def test_the_document_is_gltf_with_extensions_only_when_used():
     assert "extras" not in extended["materials"][0]
     only_specular = GltfMaterial((0.8, 0.5, 0.2), 0.0, 0.45, specular=0.5).to_gltf("weak")
     assert only_specular["extensionsUsed"] == ["KHR_materials_specular"]
+    # the coat and the anisotropy where their weights are not 0, each with both its factors
+    layered = GltfMaterial((0.8, 0.5, 0.2), 1.0, 0.45, **COAT, **ANISOTROPY).to_gltf("brushed, lacquered")
+    assert layered["extensionsUsed"] == ["KHR_materials_clearcoat", "KHR_materials_anisotropy"]
+    assert layered["materials"][0]["extensions"] == {
+        "KHR_materials_clearcoat": {"clearcoatFactor": 0.7, "clearcoatRoughnessFactor": 0.35},
+        "KHR_materials_anisotropy": {"anisotropyStrength": 0.7, "anisotropyRotation": 0.6},
+    }
+    assert layered["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] == 2  # the lobe's direction on the mesh
+    unused = GltfMaterial((0.8, 0.5, 0.2), 0.0, 0.45, clearcoat_roughness=0.3, anisotropy_rotation=1.0)
+    assert unused.extensions == () and "extensions" not in unused.material_object("none")
+    faint = GltfMaterial((0.8, 0.5, 0.2), 0.0, 0.45, anisotropy_strength=0.5 * MIN_ANISOTROPY)
+    assert faint.anisotropy_strength == 0.0 and faint.extensions == ()  # none, as the BRDF takes it
 
 
 # ---------------------------------------------------------------------- the fit

@@ -20,7 +20,9 @@ from brdffit.export.targets import export_format
 
 #: The materials brdffit writes, one of each kind :func:`brdffit.export.gltf._material_of` makes: core glTF (a
 #: dielectric and a metal), with KHR_materials_specular alone (f0 ≤ 0.04), with an index of refraction (f0 up to
-#: that of ior 4) and with ``ior = 0`` (f0 = the specular colour, beyond ior 4), and at the factors' ends (0 and 1).
+#: that of ior 4) and with ``ior = 0`` (f0 = the specular colour, beyond ior 4), and at the factors' ends (0 and 1);
+#: and those a ``gltf`` fit maps exactly: under a clear coat (KHR_materials_clearcoat), anisotropic
+#: (KHR_materials_anisotropy, the sphere with its tangents), and both with an index.
 MATERIALS = {
     "dielectric": GltfMaterial((0.5, 0.4, 0.3), 0.0, 0.35),
     "metal": GltfMaterial((0.95, 0.64, 0.54), 1.0, 0.2),
@@ -28,6 +30,11 @@ MATERIALS = {
     "specular-ior": GltfMaterial((0.1, 0.3, 0.2), 0.0, 0.1, specular=0.9, specular_color=(1.0, 0.8, 0.6), ior=2.3),
     "ior-zero": GltfMaterial((0.14, 0.09, 0.05), 0.0, 0.38, specular=0.04, specular_color=(0.9, 0.9, 0.9), ior=0.0),
     "ends": GltfMaterial((0.0, 1.0, 0.0), 0.0, 1.0),
+    "clearcoat": GltfMaterial((0.2, 0.3, 0.6), 0.0, 0.5, clearcoat=0.8, clearcoat_roughness=0.12),
+    "anisotropic": GltfMaterial((0.91, 0.92, 0.92), 1.0, 0.25, anisotropy_strength=0.6, anisotropy_rotation=-1.2),
+    "coat-anisotropy-ior": GltfMaterial(
+        (0.6, 0.2, 0.05), 0.4, 0.3, ior=1.6, clearcoat=1.0, clearcoat_roughness=0.0, anisotropy_strength=1.0
+    ),
 }
 
 
@@ -52,6 +59,24 @@ def test_the_preview_sphere_is_closed_outward_facing_and_has_unit_normals():
     np.testing.assert_allclose(positions.max(axis=0), 1.0, atol=1e-3)
 
 
+def test_the_preview_spheres_tangents_point_east_with_a_right_handed_frame():
+    # glTF's TANGENT: unit xyz, w = ±1 (the validator checks both); here perpendicular to the normals, along the lines
+    # of latitude towards increasing azimuth (counter-clockwise seen from +y), and w = +1: the bitangent
+    # cross(normal, tangent) · w points north where the normal points out, as the data's y = z × x.
+    mesh = preview_sphere()
+    assert mesh.tangents.dtype == np.float32 and mesh.tangents.shape == (len(mesh.positions), 4)
+    tangents, normals = mesh.tangents[:, :3].astype(np.float64), mesh.normals.astype(np.float64)
+    np.testing.assert_allclose(np.linalg.norm(tangents, axis=1), 1.0, atol=1e-6)
+    np.testing.assert_array_equal(mesh.tangents[:, 3], 1.0)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", tangents, normals), 0.0, atol=1e-6)
+    up = np.array([0.0, 1.0, 0.0])
+    east = np.cross(up, normals)  # the direction of increasing azimuth about +y (0 at the poles)
+    ring = np.linalg.norm(east, axis=1) > 1e-6
+    np.testing.assert_allclose(tangents[ring], east[ring] / np.linalg.norm(east[ring], axis=1)[:, None], atol=1e-6)
+    bitangents = np.cross(normals, tangents)
+    assert np.all(bitangents[ring] @ up > 0)  # north
+
+
 def _glb_parts(data: bytes) -> tuple[dict, bytes]:
     """The JSON chunk (parsed) and the binary chunk of a ``.glb`` file, checking the container's layout (glTF 2.0
     §4.4): header magic, version and length; chunk lengths multiples of 4; JSON padded with spaces, BIN with zeros."""
@@ -68,8 +93,9 @@ def _glb_parts(data: bytes) -> tuple[dict, bytes]:
     return json.loads(text), binary
 
 
-def test_the_glb_holds_the_gltf_document_and_its_buffer_bytes():
-    material = MATERIALS["specular-ior"]
+@pytest.mark.parametrize("kind", ["specular-ior", "anisotropic"])
+def test_the_glb_holds_the_gltf_document_and_its_buffer_bytes(kind):
+    material = MATERIALS[kind]
     document = material.to_gltf("coat", {"note": "kept"})
     packed, binary = _glb_parts(material.to_glb("coat", {"note": "kept"}))
     uri = document["buffers"][0].pop("uri")
@@ -77,15 +103,23 @@ def test_the_glb_holds_the_gltf_document_and_its_buffer_bytes():
     assert packed == document  # the same document, less the URI
     embedded = base64.b64decode(uri.split(",", 1)[1])
     assert binary[: len(embedded)] == embedded and set(binary[len(embedded) :]) <= {0}
-    # The buffer holds the sphere as the accessors describe it.
+    # The buffer holds the sphere as the accessors describe it, its tangents where the material needs them.
     mesh = preview_sphere()
-    views = document["bufferViews"]
+    views, attributes = document["bufferViews"], document["meshes"][0]["primitives"][0]["attributes"]
+    accessors = document["accessors"]
+    index_view = views[accessors[document["meshes"][0]["primitives"][0]["indices"]]["bufferView"]]
     positions = np.frombuffer(embedded, "<f4", count=3 * len(mesh.positions), offset=views[0]["byteOffset"])
-    indices = np.frombuffer(embedded, "<u2", count=mesh.indices.size, offset=views[2]["byteOffset"])
+    indices = np.frombuffer(embedded, "<u2", count=mesh.indices.size, offset=index_view["byteOffset"])
     np.testing.assert_array_equal(positions.reshape(-1, 3), mesh.positions)
     np.testing.assert_array_equal(indices.reshape(-1, 3), mesh.indices)
+    assert ("TANGENT" in attributes) == material.needs_tangents
+    if material.needs_tangents:
+        view = views[accessors[attributes["TANGENT"]]["bufferView"]]
+        tangents = np.frombuffer(embedded, "<f4", count=mesh.tangents.size, offset=view["byteOffset"])
+        np.testing.assert_array_equal(tangents.reshape(-1, 4), mesh.tangents)
+        assert view["byteLength"] == mesh.tangents.nbytes
     assert document["materials"][0]["extras"] == {"note": "kept"}
-    assert document["extensionsUsed"] == ["KHR_materials_specular", "KHR_materials_ior"]
+    assert document["extensionsUsed"] == list(material.extensions)
     assert document["meshes"][0]["primitives"][0]["material"] == 0 and document["scenes"][0]["nodes"] == [0]
 
 
@@ -99,7 +133,9 @@ def test_the_khronos_validator_finds_no_error_and_no_warning(tmp_path, kind):
     for path in (gltf, glb):
         issues = assert_valid(path)
         # measured with gltf-validator 2.0.0-dev.3.10: no infos or hints either (no unused object, no missing
-        # bufferView target); a newer validator may add infos, which this does not hold against it.
+        # bufferView target), but for an anisotropic material's tangents, which that validator counts as unused
+        # (UNUSED_MESH_TANGENT: it knows KHR_materials_anisotropy's factors, not that the extension "MUST have a
+        # defined tangent space"); a newer validator may add infos, which this does not hold against it.
         assert issues["numErrors"] == issues["numWarnings"] == 0
 
 

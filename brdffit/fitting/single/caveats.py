@@ -9,11 +9,14 @@
   per channel);
 * a fit with more lobes ends worse than one with fewer: it stopped in a local minimum;
 * an anisotropic model fitted to data whose every direction lies in one plane of incidence: the data cannot
-  determine its anisotropy (an anisotropic Cook-Torrance lobe's tangent azimuth ``phi_t``, named).
+  determine its anisotropy (an anisotropic Cook-Torrance lobe's tangent azimuth ``phi_t``, named; a freed one of an
+  isotropic model's, ``Lobe.anisotropy_names``, alike);
+* a clear coat fitted to data of one incidence: the data cannot tell it from the base's lobe.
 """
 
 import re
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import NamedTuple
 
 import jax
@@ -63,8 +66,11 @@ def caveats(
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
-    found = _not_reciprocal(samples) + _anisotropy_undetermined(model, samples)
+    found = _not_reciprocal(samples) + _anisotropy_undetermined(model, samples, held)
     found += _coat_undetermined(model, samples, held)
+    checked = as_fitted(model, params)
+    if checked is not model:  # screened by the caller as the isotropic model its fit is not: again, as it is
+        model, screened = checked, None
     if not isinstance(model, LobeModel):  # no lobes to share the model, none peaked at the mirror to screen
         screened = Screened(ALBEDO_INCIDENCE, np.zeros(0))
     elif screened is None:
@@ -99,11 +105,29 @@ def _not_reciprocal(samples: Samples) -> list[str]:
     ]
 
 
-def _anisotropy_undetermined(model: Model, samples: Samples) -> list[str]:
+def as_fitted(model: Model, params: Params) -> Model:
+    """``model`` as its fit with ``params`` (numpy) is checked: an isotropic model whose lobe's anisotropy
+    (``Lobe.anisotropy_names``: glTF's) lies off the values the model holds it at (a user freed it, or fixed it
+    elsewhere) as the anisotropic model it then is, whose albedo the screens compute without an isotropic model's
+    shortcuts (:func:`_model_quadrature`: half the grid, one azimuth at normal incidence); else ``model`` itself."""
+    if not isinstance(model, LobeModel) or not model.isotropic or not model.n_lobes:
+        return model
+    defaults = dict(model.held)
+    names = model.lobe.anisotropy_names
+    if all(np.all(np.asarray(params.shape[name]) == defaults.get(name)) for name in names):
+        return model
+    return replace(model, isotropic=False)
+
+
+def _anisotropy_undetermined(model: Model, samples: Samples, held: frozenset[str] = frozenset()) -> list[str]:
     """An anisotropic lobe model fitted to directions that all lie in one plane of incidence: such data see the lobe
     in that plane alone, where a tangent and its mirror image about the plane look alike and the two roughnesses
-    enter only in combination."""
-    if not isinstance(model, LobeModel) or model.isotropic or not model.n_lobes:
+    enter only in combination. An isotropic model whose lobe's anisotropy the fit freed (``Lobe.anisotropy_names``,
+    not ``held``) is one."""
+    if not isinstance(model, LobeModel) or not model.n_lobes:
+        return []
+    anisotropy = model.lobe.anisotropy_names
+    if model.isotropic and all(name in held for name in anisotropy):
         return []
     plane = _plane_of_incidence(np.concatenate([samples.wi, samples.wo]))
     if plane is None:
@@ -112,7 +136,7 @@ def _anisotropy_undetermined(model: Model, samples: Samples) -> list[str]:
     if "phi_t" in names:
         what = "phi_t, the tangent's azimuth (its mirror image about that plane fits alike), nor alpha_u, alpha_v apart"
     else:
-        what = f"its anisotropy ({', '.join(names)})"
+        what = f"its anisotropy ({', '.join(anisotropy or names)})"
     return [
         f"every direction lies in one plane of incidence (azimuth {plane:.3g}°): the data cannot determine {what};"
         " measure out of that plane, or fit an isotropic model"
@@ -120,9 +144,9 @@ def _anisotropy_undetermined(model: Model, samples: Samples) -> list[str]:
 
 
 def _coat_undetermined(model: Model, samples: Samples, held: frozenset[str]) -> list[str]:
-    """A clear coat fitted (``principled``'s ``clearcoat``, not held) to data of one incidence: the coat and the base's
-    specular lobe are told apart by how each changes with the incidence (the coat's Fresnel term and fixed narrow
-    shape), which one incidence does not show."""
+    """A clear coat fitted (``principled``'s or ``gltf``'s ``clearcoat``, not held) to data of one incidence: the coat
+    and the base's specular lobe are told apart by how each changes with the incidence (the coat's Fresnel term and
+    its own narrow shape), which one incidence does not show."""
     if not isinstance(model, LobeModel) or not model.n_lobes or "clearcoat" not in model.lobe.names:
         return []
     if "clearcoat" in held:
@@ -131,8 +155,9 @@ def _coat_undetermined(model: Model, samples: Samples, held: frozenset[str]) -> 
     if len(incidences) > 1:
         return []
     theta = float(np.degrees(np.arccos(np.clip(incidences[0, 2], -1.0, 1.0))))
+    coat = [name for name in model.lobe.names if name.startswith("clearcoat")]  # the coat's weight and its shape
     return [
-        f"every sample has one incidence (θi = {theta:.3g}°): the data cannot tell clearcoat and clearcoat_gloss"
+        f"every sample has one incidence (θi = {theta:.3g}°): the data cannot tell {' and '.join(coat)}"
         " from the base's specular lobe; measure more incidences, or hold the coat (--fix clearcoat=0)"
     ]
 

@@ -124,6 +124,10 @@ class Lobe(ABC):
     #: luminance): then the fit takes the model's whole Jacobian, one forward-mode tangent per parameter and channel,
     #: where a lobe of per-channel parameters otherwise takes one tangent per parameter for every channel at once.
     channels_coupled: bool = False
+    #: The shape parameters that make the lobe of an isotropic model (``LobeModel.isotropic``) anisotropic, which the
+    #: model holds by default at values that keep it isotropic (glTF's ``anisotropy_strength`` 0, and its rotation): a
+    #: fit that frees them, or holds them elsewhere, is checked as an anisotropic model's (``caveats.py``).
+    anisotropy_names: tuple[str, ...] = ()
 
     def channel_grid(self, channels: tuple[str, ...]) -> tuple[dict[str, Any], ...]:
         """Starting shapes beside :attr:`grid` whose :attr:`channel_names` have one value per channel (a list in the

@@ -2,20 +2,40 @@
 
 The BRDF is the one a glTF viewer renders (``gltf.py``: the specification's Appendix B complete model,
 ``mix(dielectric_brdf, metal_brdf, metallic)``, GGX with height-correlated Smith, Schlick's Fresnel term), with
-``KHR_materials_ior``'s index for the dielectric::
+``KHR_materials_ior``'s index for the dielectric, ``KHR_materials_clearcoat``'s coat over it and
+``KHR_materials_anisotropy``'s stretched lobe, each as the Khronos glTF Sample Viewer evaluates it::
 
-    f = (1 − metallic) · [(1 − F_d) · base_color/π + F_d · V·D] + metallic · (base_color + (1 − base_color) S) · V·D
+    f = (1 − clearcoat · F_c) · m + clearcoat · F_c · V_c·D_c
+    m = (1 − metallic) · [(1 − F_d) · base_color/π + F_d · V·D] + metallic · (base_color + (1 − base_color) S) · V·D
     S = (1 − |V·H|)⁵,   F_d = f0 + (1 − f0) S,   f0 = ((1 − ior)/(1 + ior))²,   α = roughness²
+    F_c = f0 + (1 − f0)(1 − N·V)⁵,   V_c·D_c: GGX and height-correlated Smith at α_c = clearcoat_roughness²
 
-Parameters: ``roughness`` and ``metallic`` in [0, 1]; ``ior`` > 1, held at glTF's 1.5 unless freed (``--free ior``:
-``KHR_materials_ior``, for a dielectric whose reflectance at normal incidence is not 4%); ``base_color`` in [0, 1], one
-per channel. The material is the whole BRDF: a whole-lobe model (``LobeModel.whole``), no albedos beside it.
+``V·D`` is the core GGX lobe, or, where ``anisotropy_strength > 0``, the extension's anisotropic one with
+``α_t = mix(α, 1, anisotropy_strength²)`` along the data's ``+x`` turned by ``anisotropy_rotation`` (radians,
+counter-clockwise towards ``+y``) and ``α_b = α`` across it (``gltf.py`` has every term, its sources, and where the
+Sample Viewer departs from the extensions' texts).
+
+Parameters: ``roughness``, ``metallic``, ``clearcoat``, ``clearcoat_roughness`` and ``anisotropy_strength`` in
+[0, 1]; ``ior`` > 1; ``anisotropy_rotation`` in (−π/2, π/2] (the lobe is the same turned by π); ``base_color`` in
+[0, 1], one per channel. Fitted by default: ``base_color``, ``roughness``, ``metallic``, ``clearcoat`` and
+``clearcoat_roughness``. Held unless freed: ``ior`` at glTF's 1.5 (``--free ior``: ``KHR_materials_ior``, for a
+dielectric whose reflectance at normal incidence is not 4%; the coat's follows it, as in the Sample Viewer), and the
+anisotropy at 0 (``--free anisotropy_strength,anisotropy_rotation``): one gonioreflectometer's few planes
+seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry.
+
+The model says it is isotropic (``LobeModel.isotropic``), as it is with its default holds: the fit's checks take the
+shortcuts an isotropic model allows (the albedo on half the grid; at normal incidence, one azimuth), which keep a
+narrow coat's albedo resolved. A fit that frees the anisotropy, or holds it elsewhere, is checked as an anisotropic
+model's (``Lobe.anisotropy_names``; ``fitting/single/caveats.py``), and data in one plane of incidence then earn a
+line saying they cannot determine it. The material is the whole BRDF: a whole-lobe model (``LobeModel.whole``), no
+albedos beside it.
 """
 
+import math
 from dataclasses import dataclass
 from typing import final
 
-from ..domains import ALBEDO, UNIT_INTERVAL, Domain
+from ..domains import ALBEDO, AXIS_ANGLE, UNIT_INTERVAL, Domain
 from ..fresnel import FRESNEL
 from ..models.lobe import MappedLobe
 from ..models.model import LobeModel, ModelEntry
@@ -28,16 +48,30 @@ IOR = dict((name, domain) for name, domain, _ in FRESNEL["dielectric"].parameter
 ROUGHNESS_STARTS = (0.05, 0.1, 0.15, 0.22, 0.3, 0.42, 0.6, 0.8)
 METALLIC_STARTS = (0.02, 0.5, 0.98)
 BASE_COLOR_STARTS = (0.05, 0.25, 0.7)
+#: Starting coats ``(clearcoat, clearcoat_roughness)``: next to none (off the end of [0, 1]) and a half-strength glossy
+#: one, both at roughness 0.1 (``α_c`` = 0.01: a varnish's narrow highlight; a fit widens it where the data do).
+CLEARCOAT_STARTS = ((0.02, 0.1), (0.5, 0.1))
+#: Starting anisotropies ``(anisotropy_strength, anisotropy_rotation)``, one beside each base colour of
+#: :data:`BASE_COLOR_STARTS` rather than beside every shape: held (the default) they are all 0 and add no start; freed,
+#: every roughness, metallic and coat start comes with each of three rotations, 60° apart, so that one lies within 30°
+#: of any tangent (a rotation 90° from the truth is a stationary point of the cost, where a fit would stay).
+ANISOTROPY_STARTS = ((0.4, 0.0), (0.4, math.pi / 3), (0.4, -math.pi / 3))
+#: What the fit holds unless a user frees it: glTF's index, and no anisotropy.
+HELD = (("ior", DEFAULT_IOR), ("anisotropy_strength", 0.0), ("anisotropy_rotation", 0.0))
 
 
 @final
 @dataclass(frozen=True)
 class GltfLobe(MappedLobe):
-    """glTF's metallic-roughness BRDF as one lobe, the whole material (module docstring)."""
+    """glTF's metallic-roughness BRDF with its clear coat and anisotropy as one lobe, the whole material (module
+    docstring)."""
 
     @property
     def summary(self) -> str:
-        return "glTF 2.0 metallic-roughness (Appendix B, height-correlated Smith GGX, Schlick)"
+        return (
+            "Appendix B (height-correlated Smith GGX, Schlick) under a clear coat (Schlick in N·V); anisotropic GGX"
+            " along +x turned by anisotropy_rotation"
+        )
 
     peaks_at_mirror = True
 
@@ -47,29 +81,56 @@ class GltfLobe(MappedLobe):
 
     @property
     def parameters(self):
-        return (("roughness", UNIT_INTERVAL), ("metallic", UNIT_INTERVAL), ("ior", IOR), ("base_color", UNIT_INTERVAL))
+        return (
+            ("roughness", UNIT_INTERVAL),
+            ("metallic", UNIT_INTERVAL),
+            ("ior", IOR),
+            ("clearcoat", UNIT_INTERVAL),
+            ("clearcoat_roughness", UNIT_INTERVAL),
+            ("anisotropy_strength", UNIT_INTERVAL),
+            ("anisotropy_rotation", AXIS_ANGLE),
+            ("base_color", UNIT_INTERVAL),  # the per-channel one last (Lobe.channel_names)
+        )
 
     channel_names = ("base_color",)
-    meaningful_ends = ("metallic",)
+    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength")
+    anisotropy_names = ("anisotropy_strength", "anisotropy_rotation")
 
     @property
     def grid(self):
         return tuple(
             {"roughness": roughness, "metallic": metallic, "ior": DEFAULT_IOR, "base_color": base}
+            | {"clearcoat": clearcoat, "clearcoat_roughness": coat_roughness}
+            | {"anisotropy_strength": strength, "anisotropy_rotation": rotation}
             for roughness in ROUGHNESS_STARTS
             for metallic in METALLIC_STARTS
-            for base in BASE_COLOR_STARTS
+            for base, (strength, rotation) in zip(BASE_COLOR_STARTS, ANISOTROPY_STARTS, strict=True)
+            for clearcoat, coat_roughness in CLEARCOAT_STARTS
         )
 
     def __call__(self, shape, wi, wo):
-        f0 = ior_f0(shape["ior"])
-        return material_brdf(shape["base_color"], shape["metallic"], shape["roughness"], 1.0, f0, wi, wo)
+        f0 = ior_f0(shape["ior"])  # the dielectric's, and the coat's (the Sample Viewer's getClearCoatInfo)
+        return material_brdf(
+            shape["base_color"],
+            shape["metallic"],
+            shape["roughness"],
+            1.0,
+            f0,
+            wi,
+            wo,
+            clearcoat=shape["clearcoat"],
+            clearcoat_roughness=shape["clearcoat_roughness"],
+            coat_reflectance=f0,
+            anisotropy_strength=shape["anisotropy_strength"],
+            anisotropy_rotation=shape["anisotropy_rotation"],
+        )
 
 
 def gltf() -> LobeModel:
-    """glTF 2.0's metallic-roughness material (module docstring); ``ior`` held at 1.5 unless freed."""
-    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior for the dielectric)"
-    return LobeModel("gltf", summary, GltfLobe(), 1, held=(("ior", DEFAULT_IOR),), whole=True)
+    """glTF 2.0's metallic-roughness material with a clear coat and anisotropy (module docstring); ``ior`` held at
+    1.5 and the anisotropy at 0 unless freed."""
+    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy)"
+    return LobeModel("gltf", summary, GltfLobe(), 1, held=HELD, whole=True, isotropic=True)
 
 
 #: glTF's material in the registry: ``brdffit compare`` tries it; its glTF export is exact.
