@@ -41,6 +41,7 @@ class PrincipledLobe(MappedLobe):
     peaks_at_mirror = True
     channel_names = ("base_color",)
     channels_coupled = True  # the tints: base_color over its luminance
+    anisotropy_names = ("anisotropic",)  # held at 0 (isotropic) unless freed: then checked as anisotropic
     meaningful_ends = ("metallic", "clearcoat", "clearcoat_gloss", "spec_tint", "sheen", "sheen_tint", "anisotropic")
 
     @property
