@@ -131,14 +131,16 @@ def _signals_stop_writing() -> Iterator[None]:
 
 def run() -> None:
     """Console-script entry point."""
+    status = None
     try:
         status = main()
         sys.stdout.flush()
     except BrokenPipeError:
-        # The reader went away (`brdffit fit … | head`): files are already written; say nothing more.
+        # The reader of a printed table went away (`brdffit fit … | head`): files are already written; say nothing
+        # more (a result meant for standard output, -o -, is a write error: files.write_to_standard_output).
         # Python docs, "Note on SIGPIPE": point stdout at devnull so the final flush cannot fail again.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        status = EXIT_OK
+        status = EXIT_OK if status is None else status
     sys.exit(status)
 
 

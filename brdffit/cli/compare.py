@@ -6,7 +6,7 @@ import sys
 from .._files import check_not_stopped
 from . import EXIT_OK
 from .arguments import add_comparison_options, comparison_arguments, load, output_file
-from .files import Files
+from .files import Files, write_to_standard_output
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     print(comparison.table(), file=stream)
     if args.output == "-":
         check_not_stopped()  # an interrupted command writes nothing, also here
-        sys.stdout.write(comparison.to_json())
+        write_to_standard_output(comparison.to_json())
     elif output is not None:
         comparison.save(output)
         print(f"wrote {output}", file=stream)

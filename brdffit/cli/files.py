@@ -14,10 +14,11 @@ path.
 """
 
 import os
+import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from ..errors import BrdfInputError
+from ..errors import BrdfInputError, BrdfWriteError
 
 #: A path as a command has it: a string or path object; None (an option not given) declares nothing.
 PathOrNone = str | os.PathLike | None
@@ -74,3 +75,18 @@ def _pairs(declared: Mapping[str, PathOrNone | Iterable[PathOrNone]]) -> tuple[t
         values = value if isinstance(value, list | tuple) else [value]
         pairs += [(option, str(path)) for path in values if path is not None]
     return tuple(pairs)
+
+
+def write_to_standard_output(text: str) -> None:
+    """A command's product written to standard output (``-o -``) and flushed. A reader that went away before it
+    (``brdffit fit … -o - | true``) is a write error, exit status 2: the product is lost, where a table printed
+    into a closed pipe is not (``run``). Standard output then points at the null device, so that the final flush
+    cannot fail again (Python's documentation, "Note on SIGPIPE")."""
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise BrdfWriteError(
+            "-o -: standard output was closed before the result was written (its reader went away); nothing was written"
+        ) from None

@@ -24,7 +24,7 @@ from .arguments import (
     read_options,
 )
 from .cluster import cluster_client
-from .files import Files
+from .files import Files, write_to_standard_output
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -157,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
         raise BrdfInputError(f"{args.samples[0]}: {problems[0]}")
     if outputs is None:  # -o -: the result file on standard output, everything else on standard error
         check_not_stopped()  # an interrupted command writes nothing, also here
-        sys.stdout.write(results[0].to_json())
+        write_to_standard_output(results[0].to_json())
     else:
         outputs[0].parent.mkdir(parents=True, exist_ok=True)
         for result, output, problem in zip(results, outputs, problems, strict=True):

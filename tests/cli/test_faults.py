@@ -179,3 +179,20 @@ def test_a_write_error_in_python_is_an_os_error_naming_the_file(tmp_path, monkey
     with pytest.raises(OSError, match=re.escape("r.json: cannot be written (No space left on device)")):
         brdffit._files.write_text_atomic(tmp_path / "r.json", json.dumps({}))
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["fit", "compare"])
+def test_a_result_for_standard_output_whose_reader_went_away_is_a_write_error(tmp_path, command):
+    """``-o -`` into a pipe whose reader closed before the result: the result is lost, so exit status 2 and one line
+    (it was 0, as for a table printed into ``| head``, where the files are written)."""
+    argv = [sys.executable, ROOT / "cli.py", command, EXAMPLE, "-o", "-"]
+    argv += ["--model", "lambert"] if command == "fit" else ["--models", "lambert", "--folds", "2"]
+    process = subprocess.Popen(
+        [str(a) for a in argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+    )
+    process.stdout.close()  # the reader goes away before the result
+    err = process.stderr.read()
+    process.stderr.close()
+    assert process.wait(timeout=300) == 2, err
+    assert err.strip().splitlines()[-1].startswith("brdffit: error: -o -: standard output was closed"), err
+    assert "Traceback" not in err and "Exception ignored" not in err
