@@ -94,8 +94,13 @@ def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_colo
 
 
 # ---------------------------------------------------------------------- the material
+def _is_number(value) -> bool:
+    """A real number (a Python or numpy int or float), not a boolean."""
+    return not isinstance(value, bool) and isinstance(value, int | float | np.floating | np.integer)
+
+
 def _unit_interval(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+    if not _is_number(value):
         raise BrdfInputError(Argument.given(name, value), " is not allowed; give a number in [0, 1]")
     if not 0.0 <= float(value) <= 1.0:
         raise BrdfInputError(Argument.given(name, value), " is not allowed; give a number in [0, 1]")
@@ -144,8 +149,7 @@ class GltfMaterial:
         if self.anisotropy_strength < MIN_ANISOTROPY:  # none, as the BRDF takes it: no extension written either
             object.__setattr__(self, "anisotropy_strength", 0.0)
         rotation = self.anisotropy_rotation
-        number = not isinstance(rotation, bool) and isinstance(rotation, int | float | np.floating | np.integer)
-        if not number or not math.isfinite(rotation):
+        if not _is_number(rotation) or not math.isfinite(rotation):
             raise BrdfInputError(
                 Argument.given("anisotropy_rotation", rotation), " is not allowed; give a finite number (radians)"
             )
@@ -156,8 +160,7 @@ class GltfMaterial:
             object.__setattr__(self, "specular_color", _three_numbers("specular_color", self.specular_color, None))
         if self.ior is not None:
             ior = self.ior
-            number = not isinstance(ior, bool) and isinstance(ior, int | float | np.floating | np.integer)
-            if not number or not (ior == 0 or 1.0 <= ior < math.inf):
+            if not _is_number(ior) or not (ior == 0 or 1.0 <= ior < math.inf):
                 raise BrdfInputError(Argument.given("ior", ior), " is not allowed; give 0 or a finite number ≥ 1")
             object.__setattr__(self, "ior", float(ior))
 

@@ -34,7 +34,7 @@ from jaxtyping import Array, Float
 from ...physics.domains import ALBEDO
 from ...physics.geometry import above_horizon
 from ...physics.models.model import LobeModel
-from ...physics.models.params import albedo_size
+from ...physics.models.params import albedo_size, whole_albedos
 
 
 def value_and_basis(
@@ -82,8 +82,12 @@ def value_and_basis(
 
 def _whole_jacobian(model: LobeModel, theta, wi, wo, n_channels: int, dtype):
     """Values (N, C) and the whole Jacobian (N, C, k) as the basis, for a lobe whose channels are coupled."""
-    values_at = lambda t: model.brdf(model.unconstrained.to_params(t, n_channels), wi, wo).astype(dtype)
-    jacobian, values = jax.jacfwd(lambda t: (values_at(t), values_at(t)), has_aux=True)(theta)
+
+    def values_at(t):
+        values = model.brdf(model.unconstrained.to_params(t, n_channels), wi, wo).astype(dtype)
+        return values, values
+
+    jacobian, values = jax.jacfwd(values_at, has_aux=True)(theta)
     return values, jacobian.astype(dtype)
 
 
@@ -129,8 +133,8 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
 def _albedos(model: LobeModel, theta, c: int, dtype):
     """The diffuse (C,) and lobe (K, C) albedos at ``theta``: 0 and 1 for a whole-lobe model, which has none in θ."""
     k = model.n_lobes
-    if model.whole:
-        return jnp.zeros(c, dtype), jnp.ones((k, c), dtype)
+    if model.whole:  # one lobe (LobeModel.whole)
+        return whole_albedos(c, jnp, dtype)
     diffuse = ALBEDO.to_physical(theta[:c]).astype(dtype)
     return diffuse, ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
 

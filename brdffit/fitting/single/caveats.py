@@ -151,7 +151,7 @@ def _coat_undetermined(model: Model, samples: Samples, held: frozenset[str]) -> 
         return []
     if "clearcoat" in held:
         return []
-    incidences = np.unique(np.round(samples.wi, 6), axis=0)
+    incidences, _ = samples.light_directions()
     if len(incidences) > 1:
         return []
     theta = float(np.degrees(np.arccos(np.clip(incidences[0, 2], -1.0, 1.0))))

@@ -21,7 +21,7 @@ from ..._programs import jit
 from ...data.samples import Samples
 from ...physics.domains import ALBEDO
 from ...physics.models.model import Model
-from ...physics.models.params import Params, albedo_size
+from ...physics.models.params import Params, albedo_size, whole_albedos
 from ..objective.losses import Loss, linearised_weight
 from ..objective.problem import Problem, prepared, residuals
 from ..solver.hold import Hold, respected
@@ -243,7 +243,7 @@ def _whole_candidates(model: Model, stacked: dict, n_channels: int, hold: Hold |
 
     def theta_of(index):
         shape = {name: jnp.asarray(stacked[name])[index][None] for name in model.lobe.names}
-        params = Params(jnp.zeros(n_channels), jnp.ones((1, n_channels)), shape)
+        params = Params(*whole_albedos(n_channels, jnp), shape)
         return respected(model.unconstrained.from_params(params), hold)
 
     thetas = jax.vmap(theta_of)(jnp.arange(len(next(iter(stacked.values())))))

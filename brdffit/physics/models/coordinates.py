@@ -26,7 +26,7 @@ from typing import final
 from ..._jax import namespace
 from ..domains import ALBEDO, Domain
 from .lobe import BoundedShapeCoordinates, ShapeCoordinates
-from .params import Layout, Params, albedo_size
+from .params import Layout, Params, albedo_size, whole_albedos
 
 
 @dataclass(frozen=True)
@@ -107,8 +107,7 @@ class FlatCoordinates(ABC):
         """The parameters at the flat ``vector`` (the inverse of :meth:`from_params`), traceable by JAX."""
         k, n_albedos = self.model.n_lobes, albedo_size(self.model, n_channels)
         if self.model.whole:  # no albedos: a diffuse one of 0, the lobe's 1
-            xp = namespace(vector)
-            diffuse, specular = xp.zeros(n_channels, vector.dtype), xp.ones((1, n_channels), vector.dtype)
+            diffuse, specular = whole_albedos(n_channels, namespace(vector), vector.dtype)
         else:
             diffuse = self.albedo_from_vector(vector[:n_channels])
             specular = self.albedo_from_vector(vector[n_channels:n_albedos]).reshape(k, n_channels)

@@ -86,23 +86,12 @@ class ParameterDictionary:
         """The dictionary (plain Python floats and lists) of ``params``."""
         model = self.model
         if model.whole:
-            return {
-                name: _floats(params.shape[name][0])
-                if name in model.lobe.channel_names
-                else float(params.shape[name][0])
-                for name in model.lobe.names
-            }
+            return _shape_written(model, params, 0)
         result: dict[str, Any] = {model.diffuse_name: _floats(params.diffuse)}
         if not model.n_lobes:
             return result
         lobes = [
-            {model.specular_name: _floats(params.specular[k])}
-            | {
-                name: _floats(params.shape[name][k])
-                if name in model.lobe.channel_names
-                else float(params.shape[name][k])
-                for name in model.lobe.names
-            }
+            {model.specular_name: _floats(params.specular[k])} | _shape_written(model, params, k)
             for k in range(model.n_lobes)
         ]
         if model.lobes_as_list:
@@ -110,6 +99,15 @@ class ParameterDictionary:
         else:
             result.update(lobes[0])
         return result
+
+
+def _shape_written(model: Layout, params: Params, k: int) -> dict[str, Any]:
+    """Lobe ``k``'s shape as the file writes it: numbers, and lists for the lobe's per-channel parameters."""
+    per_channel = model.lobe.channel_names
+    return {
+        name: _floats(params.shape[name][k]) if name in per_channel else float(params.shape[name][k])
+        for name in model.lobe.names
+    }
 
 
 def _whole_params(model: Layout, values: Mapping[str, Any]) -> Params:

@@ -10,7 +10,8 @@ one angle ``ψ`` in the last two (``lafortune.py``).
 Abstract classes here, final concrete classes in the family modules (equinox's abstract/final pattern: an
 abstract class may implement methods, a concrete one never overrides them). Most families are a
 :class:`MappedLobe`; Lafortune's is a :class:`Lobe` with coordinates of its own; the anisotropic microfacet lobe
-a :class:`MappedShapeLobe` with a canonical form of its own (``cook_torrance.py``).
+a :class:`MappedShapeLobe` with a canonical form of its own (``cook_torrance.py``); a renderer's own material, the whole
+BRDF as one lobe, a :class:`WholeLobe` (``physics/renderers``).
 """
 
 from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
@@ -25,7 +26,7 @@ import numpy as np
 from ..._jax import namespace
 from ..._programs.keys import dataclass_key
 from ...errors import BrdfInputError
-from ..domains import Domain, MappedDomain
+from ..domains import ALBEDO, Domain, MappedDomain
 
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
@@ -248,3 +249,14 @@ class MappedLobe(MappedShapeLobe):
 
     def canonical(self, shape: Shape) -> dict[str, Any]:
         return dict(shape)
+
+
+class WholeLobe(MappedLobe):
+    """A lobe that is a whole material, the one lobe of a whole-lobe model (``LobeModel.whole``: a renderer's own,
+    ``physics/renderers``): every parameter is its shape's, its colour among them (:attr:`channel_names`), and no albedo
+    scales it."""
+
+    @property
+    def albedo_domain(self) -> Domain:
+        """Never asked of a whole material, which has no albedo: the plain albedo's domain."""
+        return ALBEDO

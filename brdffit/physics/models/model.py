@@ -42,7 +42,7 @@ from ..geometry import above_horizon
 from .coordinates import PhysicalCoordinates, SamplingCoordinates, UnconstrainedCoordinates
 from .dictionary import ParameterDictionary
 from .diffuse import LAMBERTIAN
-from .lobe import Lobe
+from .lobe import Lobe, WholeLobe
 from .params import Params
 
 if TYPE_CHECKING:
@@ -140,9 +140,10 @@ class LobeModel(Model):
     whole: bool = False
 
     def __post_init__(self):
-        if self.whole and (self.n_lobes != 1 or not self.lobe.channel_names):
+        if self.whole and (self.n_lobes != 1 or not isinstance(self.lobe, WholeLobe) or not self.lobe.channel_names):
             raise BrdfInputError(
-                f"model {self.name}: a whole-lobe model has one lobe, with a parameter per channel (its colour)"
+                f"model {self.name}: a whole-lobe model has one lobe, a WholeLobe with a parameter per channel"
+                " (its colour)"
             )
         if (self.lobe is None) != (self.n_lobes == 0):
             raise BrdfInputError(f"model {self.name}: give a lobe family exactly when n_lobes > 0")

@@ -45,6 +45,7 @@ def albedo_size(model: Layout, n_channels: int) -> int:
     return 0 if model.whole else (1 + model.n_lobes) * n_channels
 
 
-def whole_albedos(n_channels: int, dtype=float) -> tuple[np.ndarray, np.ndarray]:
-    """The albedos a whole-lobe model's :class:`Params` carry: diffuse 0 (C,), the lobe's 1 (1, C)."""
-    return np.zeros(n_channels, dtype), np.ones((1, n_channels), dtype)
+def whole_albedos(n_channels: int, xp=np, dtype=float):
+    """The albedos a whole-lobe model's :class:`Params` carry: diffuse 0 (C,), the lobe's 1 (1, C); ``xp`` numpy, or
+    ``jax.numpy`` inside a program."""
+    return xp.zeros(n_channels, dtype), xp.ones((1, n_channels), dtype)

@@ -35,19 +35,15 @@ import math
 from dataclasses import dataclass
 from typing import final
 
-from ..domains import ALBEDO, AXIS_ANGLE, UNIT_INTERVAL, Domain
+from ..domains import AXIS_ANGLE, UNIT_INTERVAL
 from ..fresnel import FRESNEL
-from ..models.lobe import MappedLobe
+from ..models.grids import BASE_COLOR_STARTS, METALLIC_STARTS, ROUGHNESS_STARTS
+from ..models.lobe import WholeLobe
 from ..models.model import LobeModel, ModelEntry
 from .gltf import DEFAULT_IOR, ior_f0, material_brdf
 
 #: The dielectric's index: a dielectric's Fresnel domain (``fresnel.py``), greater than 1.
 IOR = dict((name, domain) for name, domain, _ in FRESNEL["dielectric"].parameters)["eta"]
-#: Starting roughnesses (``α = roughness²`` from 0.0025 to 0.64, a factor of ~2 in ``α`` apart), metallic values
-#: (off the ends of [0, 1], where the solver's logistic map has no slope) and grey base colours.
-ROUGHNESS_STARTS = (0.05, 0.1, 0.15, 0.22, 0.3, 0.42, 0.6, 0.8)
-METALLIC_STARTS = (0.02, 0.5, 0.98)
-BASE_COLOR_STARTS = (0.05, 0.25, 0.7)
 #: Starting coats ``(clearcoat, clearcoat_roughness)``: next to none (off the end of [0, 1]) and a half-strength glossy
 #: one, both at roughness 0.1 (``α_c`` = 0.01: a varnish's narrow highlight; a fit widens it where the data do).
 CLEARCOAT_STARTS = ((0.02, 0.1), (0.5, 0.1))
@@ -62,7 +58,7 @@ HELD = (("ior", DEFAULT_IOR), ("anisotropy_strength", 0.0), ("anisotropy_rotatio
 
 @final
 @dataclass(frozen=True)
-class GltfLobe(MappedLobe):
+class GltfLobe(WholeLobe):
     """glTF's metallic-roughness BRDF with its clear coat and anisotropy as one lobe, the whole material (module
     docstring)."""
 
@@ -74,10 +70,6 @@ class GltfLobe(MappedLobe):
         )
 
     peaks_at_mirror = True
-
-    @property
-    def albedo_domain(self) -> Domain:
-        return ALBEDO  # a whole-lobe model has no albedo (LobeModel.whole)
 
     @property
     def parameters(self):

@@ -16,10 +16,10 @@ whole BRDF: a whole-lobe model (``LobeModel.whole``), no albedos beside it.
 from dataclasses import dataclass
 from typing import final
 
-from ..domains import ALBEDO, UNIT_INTERVAL, Domain
-from ..models.lobe import MappedLobe
+from ..domains import UNIT_INTERVAL
+from ..models.grids import BASE_COLOR_STARTS, METALLIC_STARTS, ROUGHNESS_STARTS
+from ..models.lobe import WholeLobe
 from ..models.model import LobeModel, ModelEntry
-from .gltf_model import BASE_COLOR_STARTS, METALLIC_STARTS, ROUGHNESS_STARTS
 from .principled import DEFAULTS, principled_brdf
 
 #: The parameters held at Mitsuba's default unless a user frees them (module docstring).
@@ -31,7 +31,7 @@ CLEARCOAT_STARTS = ((0.02, 0.5), (0.5, 0.8))
 
 @final
 @dataclass(frozen=True)
-class PrincipledLobe(MappedLobe):
+class PrincipledLobe(WholeLobe):
     """Mitsuba's ``principled`` BRDF as one lobe, the whole material (module docstring)."""
 
     @property
@@ -43,10 +43,6 @@ class PrincipledLobe(MappedLobe):
     channels_coupled = True  # the tints: base_color over its luminance
     anisotropy_names = ("anisotropic",)  # held at 0 (isotropic) unless freed: then checked as anisotropic
     meaningful_ends = ("metallic", "clearcoat", "clearcoat_gloss", "spec_tint", "sheen", "sheen_tint", "anisotropic")
-
-    @property
-    def albedo_domain(self) -> Domain:
-        return ALBEDO  # a whole-lobe model has no albedo (LobeModel.whole)
 
     @property
     def parameters(self):

@@ -16,11 +16,10 @@ from typing import final
 
 from ...checks import choice
 from ...errors import Argument, BrdfInputError
-from ..domains import ALBEDO, ROUGHNESS, UNIT_INTERVAL, Domain
-from ..models.grids import ROUGHNESS_GRID
-from ..models.lobe import MappedLobe
+from ..domains import ROUGHNESS, UNIT_INTERVAL
+from ..models.grids import BASE_COLOR_STARTS, ROUGHNESS_GRID
+from ..models.lobe import WholeLobe
 from ..models.model import LobeModel, ModelEntry
-from .gltf_model import BASE_COLOR_STARTS
 from .roughplastic import roughplastic_brdf
 
 #: Mitsuba's distributions for the coating.
@@ -32,7 +31,7 @@ EXT_IOR = 1.000277
 
 @final
 @dataclass(frozen=True)
-class RoughPlasticLobe(MappedLobe):
+class RoughPlasticLobe(WholeLobe):
     """Mitsuba's ``roughplastic`` BRDF as one lobe, the whole material (module docstring)."""
 
     distribution: str = "beckmann"
@@ -47,10 +46,6 @@ class RoughPlasticLobe(MappedLobe):
 
     peaks_at_mirror = True
     channel_names = ("diffuse_reflectance", "specular_reflectance")
-
-    @property
-    def albedo_domain(self) -> Domain:
-        return ALBEDO  # a whole-lobe model has no albedo (LobeModel.whole)
 
     @property
     def parameters(self):
