@@ -8,10 +8,10 @@ every ratio the same way.
 
 A pair is two samples whose directions are swapped: ``wi`` and ``wo`` exchanged where the data hold at least
 :data:`ENOUGH_PAIRS` of those, else whichever finds more of these and the isotropic pairs (for isotropic
-measurements, the light at one azimuth): the zeniths exchanged at the same ``|φo − φi|``. Directions match within a tolerance the file's own angular spacing sets
-(:func:`tolerance`: half the median distance between neighbouring measurements, at most 0.5°), looked up in a
-k-d tree: a real gonioreflectometer's positions carry jitter, and a dense retro-reflection file (ALTA's gray
-tape) holds a hundred pairs that match to 0.01° but hundreds within 0.5°.
+measurements, the light at one azimuth): the zeniths exchanged at the same ``|φo − φi|``. Directions match
+within a tolerance the file's own angular spacing sets (:func:`tolerance`: half the median distance between
+neighbouring measurements, at most 0.5°), looked up in a k-d tree: a real gonioreflectometer's positions carry
+jitter, so exact matches are rare. Pairs a cosine factor hardly changes (:data:`INFORMATIVE`) are left out.
 
 Where the file's header names a quantity, the check also says whether the data agree with it
 (:attr:`Reciprocity.header_contradicted`): a header that calls BRDF values cosine-weighted is caught.
