@@ -158,9 +158,9 @@ def _geometry_key(samples: Samples) -> tuple:
 
 
 def _pairs(geometry: tuple, samples: Samples, general: bool) -> Pairs:
-    """Indices ``(first, second)`` of reciprocal pairs, ``first`` with ``θi < θo``, each pair once: with the
-    directions swapped (``general``), or with the zeniths swapped at the same ``|φo − φi|`` (isotropic
-    measurements).
+    """Indices ``(first, second)`` of reciprocal pairs, ``first`` with ``θi < θo``, each pair once, and the tolerance
+    (radians) they matched within: with the directions swapped (``general``), or with the zeniths swapped at the
+    same ``|φo − φi|`` (isotropic measurements).
 
     They depend on the directions alone, which the texels of a capture or the materials of a gonioreflectometer
     share: the last :data:`KEPT_GEOMETRIES` are kept, by ``geometry`` (:func:`_geometry_key` of ``samples``)."""
@@ -230,9 +230,9 @@ def tolerance(points: np.ndarray, tree: cKDTree | None = None) -> float:
 
 def _paired(samples: Samples, general: bool) -> Pairs:
     """:func:`_pairs`, computed: each queried sample's swapped point (:func:`_points`) looked up in a k-d tree of
-    the samples that can be partners, its nearest taken within :func:`tolerance`. A sample within twice the
-    tolerance of its own swapped point (``wi`` near ``wo``: the two samples of such a pair hardly differ, and say
-    nothing of a cosine factor) is not asked."""
+    every sample's point, its nearest taken within :func:`tolerance`. Not asked: a sample whose cosines differ by
+    less than :data:`INFORMATIVE`, or that lies within twice the tolerance of its own swapped point (``wi`` near
+    ``wo``: it would pair with itself or its neighbour); their ratios say nothing of a cosine factor."""
     points, partners = _points(samples, general)
     tree = cKDTree(points, balanced_tree=False, compact_nodes=False)  # ~2× faster to build, as fast to query
     within = tolerance(points, tree)
