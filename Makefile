@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca bench-renderers lint format docs examples clean
+.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-reading lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -46,6 +46,11 @@ bench-pca: $(STAMP)
 # evaluated by Mitsuba at the data's directions (~10 minutes); writes benchmarks/results/renderers.{json,md}.
 bench-renderers: $(STAMP)
 	$(BIN)/python benchmarks/renderers.py
+
+# Reading a samples file (issue 29): peak memory and time per row of load_samples on CSVs of 10⁵ and 10⁶ rows
+# (~1 minute); writes benchmarks/results/reading.{json,md}.
+bench-reading: $(STAMP)
+	$(BIN)/python benchmarks/reading.py
 
 lint: $(STAMP)
 	$(BIN)/ruff format --check .

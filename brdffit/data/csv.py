@@ -14,9 +14,12 @@ Bad input raises :class:`~brdffit.errors.BrdfInputError` with one line naming th
 line in the file) and the column.
 """
 
+import functools
+import itertools
 import math
 import os
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,7 +30,7 @@ from ..errors import Argument, BrdfInputError, InputWarning
 from ..physics.geometry import direction_to_spherical
 from .cells import TableChecks, named
 from .samples import Provenance, Samples
-from .text import parse_numbers, read_text
+from .text import check_text, parse_numbers, text_lines
 
 ANGLE_COLUMNS = ("theta_i", "phi_i", "theta_o", "phi_o")
 VECTOR_COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")
@@ -37,31 +40,35 @@ ANGLE_UNITS = ("degrees", "radians")
 _GEOMETRY_PREFIXES = ("theta", "phi", "wi_", "wo_")
 
 
+#: Data rows parsed at a time where the fast parser (``numpy.loadtxt``) refuses a file and the cells are read one
+#: by one: the Python objects of one chunk (~1.4 KB a row) are all that file costs beyond its table.
+CHUNK_ROWS = 65536
+_WHAT = "a samples file"
+
+
 def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
-    """Read a samples file into :class:`Samples`; ``angles`` is the unit of its angle columns."""
+    """Read a samples file into :class:`Samples`; ``angles`` is the unit of its angle columns.
+
+    The file is streamed (``docs/formats.md``, memory): its table of float64 cells is parsed by ``numpy.loadtxt``,
+    and only a file that parser refuses is read cell by cell (in :data:`CHUNK_ROWS`-row chunks) to name the row
+    and column at fault."""
     path = Path(path)
     source = str(path)
-    text = read_text(path, "a samples file", allow_empty=True)
-    lines = [(number, line) for number, line in enumerate(text.splitlines(), start=1)]
-    content = [(number, line) for number, line in lines if line.strip() and not line.lstrip().startswith("#")]
-    if not content:
-        raise BrdfInputError(f"{source}: empty table (no header row and no data)")
-    header_line, header = content[0]
-    rows = content[1:]
-    if not rows:
-        raise BrdfInputError(f"{source}: empty table (a header row but no data rows)")
+    check_text(path, _WHAT)
+    header_line, header = _header(path, source)
     delimiter = "," if "," in header else None
     names = [name.strip() for name in header.split(delimiter)]
     layout = _Layout.from_header(names, source, header_line)
-    line_numbers = np.array([number for number, _ in rows])
-    checks = TableChecks(lambda row: f"{source}: row {row + 1} (line {line_numbers[row]})")
-    cells = [[cell.strip() for cell in line.split("#", 1)[0].split(delimiter)] for _, line in rows]
-    for row, row_cells in enumerate(cells):
-        if len(row_cells) != len(names):
-            raise BrdfInputError(
-                f"{checks.locate(row)}: {len(row_cells)} cells, but the header names {len(names)} columns"
-            )
-    table = parse_numbers(cells, checks, named(names))
+    line_of = functools.cache(functools.partial(_line_of_row, path, header_line))
+    checks = TableChecks(lambda row: f"{source}: row {row + 1} (line {line_of(row)})")
+    table = _fast_table(path, header_line, delimiter, len(names))
+    if table is None:
+        table = _table_by_cells(path, header_line, delimiter, names, checks)
+    else:
+        checks.finite(table, named(names))
+    if not len(table):
+        raise BrdfInputError(f"{source}: empty table (a header row but no data rows)")
+    rows = len(table)
 
     if layout.angles:
         angles_table = table[:, layout.geometry]
@@ -86,7 +93,76 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
     sigma = None if layout.sigma is None else np.broadcast_to(table[:, layout.sigma], values.shape)
     weight = None if layout.weight is None else table[:, layout.weight]
     sigma, weight = checks.values_sigma_weight(values, layout.channels, sigma, weight, source, layout.sigma_names)
-    return Samples(wi, wo, values, layout.channels, sigma, weight, source, Provenance("csv", rows=len(rows)))
+    return Samples(wi, wo, values, layout.channels, sigma, weight, source, Provenance("csv", rows=rows))
+
+
+def _is_content(line: str) -> bool:
+    """Whether a line holds a header or data (not blank, not a whole-line ``#`` comment)."""
+    stripped = line.lstrip()
+    return bool(stripped) and not stripped.startswith("#")
+
+
+def _header(path: Path, source: str) -> tuple[int, str]:
+    """The first content line: its number and text."""
+    for number, line in text_lines(path, _WHAT):
+        if _is_content(line):
+            return number, line
+    raise BrdfInputError(f"{source}: empty table (no header row and no data)")
+
+
+def _data_lines(path: Path, header_line: int) -> Iterator[tuple[int, str]]:
+    """``(number, line)`` of each data row: the content lines after the header."""
+    return ((number, line) for number, line in text_lines(path, _WHAT) if number > header_line and _is_content(line))
+
+
+def _line_of_row(path: Path, header_line: int, row: int) -> int:
+    """The line in the file of data row ``row`` (from 0): found again by reading the file, for a message."""
+    return next(itertools.islice(_data_lines(path, header_line), row, None))[0]
+
+
+def _fast_table(path: Path, header_line: int, delimiter: str | None, width: int) -> np.ndarray | None:
+    """The data rows as an (N, width) float64 table read by ``numpy.loadtxt`` (its C parser: ~8 bytes a cell beyond
+    the table), or None where it refuses the file or reads another width: the cells are then read one by one.
+
+    What ``loadtxt`` refuses (``1_000``, digits other than ASCII, a line of blanks, a row of other width) is judged
+    cell by cell, as before: the same numbers, the same errors."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": said as an empty table
+            table = np.loadtxt(
+                path,
+                dtype=np.float64,
+                delimiter=delimiter,
+                comments="#",
+                skiprows=header_line,
+                ndmin=2,
+                encoding="utf-8-sig",
+            )
+    except (ValueError, OverflowError):
+        return None
+    if table.size and table.shape[1] != width:
+        return None
+    return table.reshape(-1, width)
+
+
+def _table_by_cells(
+    path: Path, header_line: int, delimiter: str | None, names: list[str], checks: TableChecks
+) -> np.ndarray:
+    """The data rows as an (N, columns) float64 table read cell by cell, :data:`CHUNK_ROWS` rows at a time; the
+    first row whose cells the header does not name, or cell that is no finite number, is reported by ``checks``."""
+    blocks, done = [], 0
+    lines = _data_lines(path, header_line)
+    while chunk := list(itertools.islice(lines, CHUNK_ROWS)):
+        cells = [[cell.strip() for cell in line.split("#", 1)[0].split(delimiter)] for _, line in chunk]
+        shifted = TableChecks(lambda row, offset=done: checks.locate(offset + row))
+        for row, row_cells in enumerate(cells):
+            if len(row_cells) != len(names):
+                raise BrdfInputError(
+                    f"{shifted.locate(row)}: {len(row_cells)} cells, but the header names {len(names)} columns"
+                )
+        blocks.append(parse_numbers(cells, shifted, named(names)))
+        done += len(chunk)
+    return np.concatenate(blocks) if blocks else np.empty((0, len(names)))
 
 
 def write_csv(samples: Samples, path: str | os.PathLike) -> None:

@@ -3,7 +3,7 @@
 import numpy as np
 
 from ..physics.geometry import direction_to_spherical, to_half_difference
-from .reciprocity import MIN_PAIRS, reciprocity
+from .reciprocity import MIN_PAIRS, header_contradiction, reciprocity
 from .samples import Provenance, Samples
 
 #: Cell size of the coverage count, degrees, over Rusinkiewicz's (θh, θd) (each 0–90°).
@@ -80,12 +80,16 @@ def _provenance_lines(provenance: Provenance) -> list[str]:
 
 
 def _reciprocity_lines(samples: Samples) -> list[str]:
-    """The median ratio of reciprocal pairs under each reading of the values, and the reading that fits."""
+    """The median ratio of reciprocal pairs under each reading of the values, the reading that fits, and whether
+    the file's header contradicts the data."""
     found = reciprocity(samples)
     if found is None:
         return [f"  reciprocity: fewer than {MIN_PAIRS} reciprocal pairs, not checked"]
     readings = ", ".join(f"{ratio:.3g} as {reading}" for reading, ratio in found.ratios.items())
-    lines = [f"  reciprocity: {found.pairs} {found.kind} pairs; median f(a→b)/f(b→a), θa < θb: {readings}"]
+    lines = [
+        f"  reciprocity: {found.pairs} {found.kind} pairs (directions matched within {found.tolerance_degrees:.2g}°);"
+        f" median f(a→b)/f(b→a), θa < θb: {readings}"
+    ]
     if found.reciprocal:
         lines.append(f"  the values as read are reciprocal (median {found.as_read:.3g})")
     else:
@@ -93,6 +97,8 @@ def _reciprocity_lines(samples: Samples) -> list[str]:
             f"  the values as read are NOT reciprocal (median {found.as_read:.3g}); they are as {found.best}:"
             f" read them with --quantity {found.best}"
         )
+    if found.header_contradicted:
+        lines.append(f"  warning: {header_contradiction(found)}")
     return lines
 
 

@@ -1,6 +1,7 @@
 """What the text formats share: reading a file as text, cells as numbers, rows written back exactly."""
 
-from collections.abc import Sequence
+import codecs
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,34 @@ def read_text(path: Path, what: str, *, allow_empty: bool = False) -> str:
     if not allow_empty and not text.strip():
         raise BrdfInputError(f"{path}: empty file; {what} has a header and rows of numbers")
     return text
+
+
+#: How much of a file :func:`check_text` and :func:`text_lines` hold at once, bytes.
+CHUNK_BYTES = 1 << 20
+
+
+def check_text(path: Path, what: str) -> None:
+    """Raise what :func:`read_text` raises for a file that is not text (not UTF-8, NUL bytes), reading it in chunks
+    of :data:`CHUNK_BYTES`: a file of any size is checked in constant memory."""
+    decoder = codecs.getincrementaldecoder("utf-8-sig")()
+    with reading(path, what), open(path, "rb") as file:
+        while True:
+            chunk = file.read(CHUNK_BYTES)
+            try:
+                text = decoder.decode(chunk, final=not chunk)
+            except UnicodeDecodeError:
+                raise BrdfInputError(f"{path}: not a text file (not UTF-8); {what} is text") from None
+            if "\0" in text:
+                raise BrdfInputError(f"{path}: binary content (NUL bytes); {what} is text")
+            if not chunk:
+                return
+
+
+def text_lines(path: Path, what: str) -> Iterator[tuple[int, str]]:
+    """``(number, line)`` for each line of a text file checked by :func:`check_text`, numbered from 1, one at a
+    time (lines end at universal newlines, as an editor counts them)."""
+    with reading(path, what), open(path, encoding="utf-8-sig", newline=None) as file:
+        yield from enumerate((line.rstrip("\n") for line in file), start=1)
 
 
 def is_number(cell: str) -> bool:

@@ -17,6 +17,7 @@ import hashlib
 import io
 import os
 import zipfile
+import zlib
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -159,7 +160,7 @@ def load_basis(path: str | os.PathLike) -> Basis:
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as stored:
             arrays = {name: stored[name] for name in stored.files}
-    except (ValueError, OSError, zipfile.BadZipFile, EOFError):
+    except (ValueError, OSError, zipfile.BadZipFile, EOFError, zlib.error):  # zlib: a member's data corrupt
         raise BrdfInputError(f"{path}: not a basis file (an .npz written by brdffit basis build)") from None
     basis = _checked(path, arrays, hashlib.sha256(data).hexdigest())
     _loaded.clear()  # one basis at a time: each holds ~10 MB per component
@@ -228,6 +229,12 @@ def _checked(path: Path, arrays: dict, digest: str) -> Basis:
     if mapping not in MAPPINGS:
         raise BrdfInputError(f"{path}: mapping {mapping!r} is not one of {', '.join(MAPPINGS)}")
     components = arrays["components"]
+    for name in ("mean", "reference", "components", "explained", "filled"):
+        if arrays[name].dtype.kind not in "biuf":  # a basis's arrays are real numbers (filled: booleans)
+            raise BrdfInputError(f"{path}: {name} holds {arrays[name].dtype} values, not numbers")
+    materials = arrays.get("materials", np.array([], dtype=str))
+    if materials.ndim != 1 or materials.dtype.kind != "U":
+        raise BrdfInputError(f"{path}: materials is not a list of names (shape {materials.shape}, {materials.dtype})")
     shapes = {"mean": (N_BINS,), "reference": (N_BINS,), "filled": (N_BINS,)}
     for name, shape in shapes.items():
         if arrays[name].shape != shape:
@@ -249,6 +256,6 @@ def _checked(path: Path, arrays: dict, digest: str) -> Basis:
         components=components.astype(np.float32),
         filled=arrays["filled"].astype(bool) & horizon_filled(),  # a bin below the horizon never holds a value
         explained=arrays["explained"].astype(np.float64).reshape(-1),
-        materials=tuple(str(name) for name in arrays.get("materials", np.array([], dtype=str))),
+        materials=tuple(str(name) for name in materials),
         digest=digest,
     )

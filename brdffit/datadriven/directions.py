@@ -158,8 +158,16 @@ def read_directions(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     """``wi, wo`` (N, 3) of a directions CSV (its angle columns; other columns are ignored), with one-line errors
     naming the file and row."""
     with reading(path, "a directions file"):
-        text = Path(path).read_text(encoding="utf-8")
-    rows = [row for row in csv.reader(io.StringIO(text)) if row and not row[0].lstrip().startswith("#")]
+        data = Path(path).read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise BrdfInputError(f"{path}: not a text file (not UTF-8); a directions file is text") from None
+    lines = csv.reader(io.StringIO(text, newline=None))  # universal newlines: a bare \r ends a line, as elsewhere
+    try:
+        rows = [row for row in lines if row and not row[0].lstrip().startswith("#")]
+    except csv.Error as error:  # a field beyond csv's limit (128 KiB), an unpaired quote at the end
+        raise BrdfInputError(f"{path}: line {lines.line_num}: not a CSV row ({error})") from None
     if not rows:
         raise BrdfInputError(f"{path}: empty; a directions file has a header {','.join(COLUMNS)} and a row per pair")
     header = [name.strip().lower() for name in rows[0]]

@@ -174,3 +174,46 @@ def test_angles_that_look_like_radians_read_as_degrees_warn(tmp_path, capsys):
     assert main(["info", str(path)]) == 0
     assert "brdffit: warning: " in capsys.readouterr().err  # the command line names its flag
     assert main(["info", str(path)]) == 0 and "--angles radians" in capsys.readouterr().err
+
+
+def numbered_rows(n, bad_row=None, bad_cell="abc"):
+    """A samples file of ``n`` rows with a comment line and a blank line after every third row; row ``bad_row``
+    (from 1) has ``bad_cell`` as its value. Returns the text and the line each row is on."""
+    lines, where = ["# made by a test", "theta_i,phi_i,theta_o,phi_o,value"], {}
+    for row in range(1, n + 1):
+        lines.append(f"10,0,{20 + row % 50},90,{bad_cell if row == bad_row else 0.1}")
+        where[row] = len(lines)
+        if row % 3 == 0:
+            lines += ["# a comment", ""]
+    return "\n".join(lines) + "\n", where
+
+
+@pytest.mark.parametrize("bad_cell, problem", [("abc", "'abc' is not a number"), ("-0.5", "-0.5: negative")])
+def test_a_bad_cell_past_the_first_chunk_names_its_row_and_line(tmp_path, monkeypatch, bad_cell, problem):
+    """A cell the fast parser refuses ('abc') is found by reading the cells chunk by chunk; one it reads (-0.5) is
+    judged on the table: either way the message names the row and its line, comments and blank lines counted."""
+    from brdffit.data import csv
+
+    monkeypatch.setattr(csv, "CHUNK_ROWS", 4)
+    text, where = numbered_rows(20, bad_row=11, bad_cell=bad_cell)
+    with pytest.raises(BrdfInputError, match=rf"row 11 \(line {where[11]}\), column value: {problem}"):
+        load_samples(write(tmp_path, text))
+
+
+def test_the_cell_by_cell_reading_gives_the_fast_parsers_table(tmp_path, monkeypatch):
+    """A line of blanks sends the file to the cell-by-cell reader (numpy.loadtxt refuses it): same samples."""
+    from brdffit.data import csv
+
+    monkeypatch.setattr(csv, "CHUNK_ROWS", 4)
+    text, _ = numbered_rows(20)
+    fast = load_samples(write(tmp_path, text, "fast.csv"))
+    slow = load_samples(write(tmp_path, text.replace("# a comment\n", "   \n"), "slow.csv"))
+    for name in ("wi", "wo", "values"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name))
+    assert fast.provenance.rows == slow.provenance.rows == 20
+
+
+def test_underscores_are_not_numbers(tmp_path):
+    """Python's float reads '1_000' (numpy.loadtxt does not); a samples file's cells are plain decimals."""
+    with pytest.raises(BrdfInputError, match=r"row 1 \(line 2\), column value: '1_000' is not a number"):
+        load_samples(write(tmp_path, "theta_i,phi_i,theta_o,phi_o,value\n10,0,20,90,1_000\n"))

@@ -101,7 +101,7 @@ def test_a_fit_of_data_that_are_not_reciprocal_warns():
         warnings.simplefilter("always")
         result = fit(tape, "lambert")
     said = [str(w.message) for w in caught if issubclass(w.category, FitWarning)]
-    assert any("not reciprocal" in line and "read as cosine-weighted-out it is 1.05" in line for line in said)
+    assert any("not reciprocal" in line and "read as cosine-weighted-out it is 1.06" in line for line in said)
     assert any("not reciprocal" in line for line in result.warnings)
     assert any("not reciprocal" in line for line in result.to_dict()["fit"]["warnings"])
     with warnings.catch_warnings():

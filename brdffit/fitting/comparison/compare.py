@@ -200,7 +200,7 @@ class Comparison:
     def from_dict(cls, content: dict[str, Any], source: str = "comparison") -> "Comparison":
         """A comparison file's content, checked: a one-line error for anything else."""
         try:
-            return cls(
+            comparison = cls(
                 str(content["samples"]),
                 int(content["n_samples"]),
                 tuple(content["channels"]),
@@ -212,6 +212,9 @@ class Comparison:
             )
         except (KeyError, TypeError, ValueError, OverflowError) as error:
             raise BrdfInputError(f"{source}: not a brdffit comparison file (missing or bad {error})") from None
+        if not comparison.models:  # compare writes one model at least; every reader asks for the best
+            raise BrdfInputError(f"{source}: a comparison file of no models; brdffit compare writes one at least")
+        return comparison
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the comparison's JSON atomically."""

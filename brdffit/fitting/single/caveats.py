@@ -1,6 +1,7 @@
 """What a user must know before trusting a fit, one line each: the result's ``fit.warnings``.
 
-* the samples as read are not reciprocal (``data/reciprocity.py``): their quantity is probably wrong;
+* the samples as read are not reciprocal (``data/reciprocity.py``): their quantity is probably wrong (named as the
+  file's header's mistake where the header said it);
 * a lobe contributes less than :data:`DEAD_SHARE` of the model at every sample: it fits nothing;
 * a parameter lies beyond its plausible range (``physics/domains.py``: a roughness above 2, an exponent
   above 10⁴, an albedo above 1, a dielectric index within 10⁻⁶ of 1), or a bounded one (Schlick's ``f0``)
@@ -25,7 +26,7 @@ import numpy as np
 
 from ..._jax import float64
 from ..._programs import jit
-from ...data.reciprocity import reciprocity
+from ...data.reciprocity import header_contradiction, reciprocity
 from ...data.samples import Samples
 from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
@@ -98,10 +99,13 @@ def _not_reciprocal(samples: Samples) -> list[str]:
     found = reciprocity(samples)
     if found is None or found.reciprocal:
         return []
+    advice = f"read them with --quantity {found.best} (quantity='{found.best}' in Python)"
+    if found.header_contradicted and found.in_force == found.header:
+        return [f"{header_contradiction(found)}: {advice}"]
     return [
         f"the samples as read ({found.in_force}) are not reciprocal: over {found.pairs} reciprocal pairs the median"
         f" of f(a→b)/f(b→a) is {found.as_read:.3g}; read as {found.best} it is {found.ratios[found.best]:.3g}"
-        f": read them with --quantity {found.best} (quantity='{found.best}' in Python)"
+        f": {advice}"
     ]
 
 
