@@ -8,22 +8,30 @@ from paths import TAPE
 
 import data_synth
 from brdffit import FitWarning, fit, load_samples
+from brdffit.fitting.objective.losses import get_loss
+from brdffit.fitting.starts.lobes import SAME_MINIMUM, LobeFit, distinct_minima
 from brdffit.physics.geometry import spherical_to_direction
 
 #: The lowest costs any search found on the real tape, by how its values are read: as stored (the landed code's
 #: greedy starts with ``n_starts=30``; issue 11: 63.8 where its default stopped at 129.6) and as the view's
-#: cosine-weighted BRDF, its right reading (this code with 3 and 30 starts, and 60 random starts, which found
-#: nothing lower). With that reading the l2 loss leaves a third lobe dead: the fit warns, tested below.
+#: cosine-weighted BRDF, its right reading (this code with 3 and 30 starts, and 60 random starts). Under the l2 loss
+#: lower minima exist than the default starts reach (issue 29): 30 starts find 10,173.7 for 2 lobes as stored (a
+#: narrow retro lobe of albedo 5·10⁷), which 3 lobes reach too when every grid shape starts each lobe, and 12,466.7
+#: for 3 lobes read cosine-weighted.
 TAPE_BEST = {
     ("brdf", "log", 2): 129.6103,
     ("brdf", "log", 3): 63.8001,
-    ("brdf", "l2", 2): 14973.5,
-    ("brdf", "l2", 3): 14417.9,
+    ("brdf", "l2", 2): 10173.7,
+    ("brdf", "l2", 3): 10173.7,
     ("cosine-weighted-out", "log", 2): 142.2086,
     ("cosine-weighted-out", "log", 3): 75.9963,
     ("cosine-weighted-out", "l2", 2): 14672.62,
-    ("cosine-weighted-out", "l2", 3): 14672.62,
+    ("cosine-weighted-out", "l2", 3): 12466.7,
 }
+#: Where the default fit's third lobe ends dead (the same cost as two lobes), which the fit says.
+DEAD_THIRD_LOBE = {("cosine-weighted-out", "l2", 3)}
+#: The caveat of a fit whose starts ended in several minima under a linear loss (``starts/lobes.py``).
+MANY_MINIMA = "many local minima"
 
 
 def quiet_fit(*args, **kwargs):
@@ -33,14 +41,30 @@ def quiet_fit(*args, **kwargs):
 
 
 @pytest.mark.parametrize(("quantity", "loss", "lobes"), sorted(TAPE_BEST))
-def test_the_real_tape_reaches_the_best_known_optimum_by_default(quantity, loss, lobes):
-    """Within 1% of the lowest cost known (costs differ by rounding across machines, far less than 1%). A lobe
-    that fits nothing is said: only where a third lobe adds nothing at the optimum (the same cost as two)."""
+def test_the_real_tape_reaches_the_best_known_optimum_by_default_or_says_it_may_not(quantity, loss, lobes):
+    """Within 1% of the lowest cost known (costs differ by rounding across machines, far less than 1%), or the fit
+    says that its starts ended in several minima and more starts may find a lower one (the l2 cases); under the log
+    loss, which reaches it, nothing is said. A lobe that fits nothing is said."""
     result = quiet_fit(load_samples(TAPE, quantity=quantity), "lafortune", loss, lobes=lobes)
-    assert result.converged and result.cost <= 1.01 * TAPE_BEST[(quantity, loss, lobes)]
+    assert result.converged
+    may_not = [line for line in result.warnings if MANY_MINIMA in line]
+    assert result.cost <= 1.01 * TAPE_BEST[(quantity, loss, lobes)] or may_not
+    assert (loss == "log") == (not may_not)
+    assert not may_not or "--starts" in may_not[0]
     dead = any("contributes less than" in line for line in result.warnings)
-    adds_nothing = lobes == 3 and TAPE_BEST[(quantity, loss, 3)] >= 0.999 * TAPE_BEST[(quantity, loss, 2)]
-    assert dead == adds_nothing
+    assert dead == ((quantity, loss, lobes) in DEAD_THIRD_LOBE)
+
+
+def test_minima_are_told_apart_by_their_relative_cost():
+    """Runs within :data:`SAME_MINIMUM` of each other ended in one minimum; a failed run (non-finite) is none; only a
+    loss linear in the values says so."""
+    assert distinct_minima([2.0, 1.0, 1.0 + 1e-9, np.inf, 1.5, np.nan]) == [1.0, 1.5, 2.0]
+    assert distinct_minima([0.0, 0.0]) == [0.0]
+    l2, log = get_loss("l2"), get_loss("log")
+    assert LobeFit(None, 1.0, (3.0, 3.0 * (1 + SAME_MINIMUM / 2))).caveats(l2, 3) == []
+    assert LobeFit(None, 1.0, (3.0, 3.3, 3.0)).caveats(log, 5) == []
+    (said,) = LobeFit(None, 1.0, (3.0, 3.3, 3.0)).caveats(l2, 5)
+    assert "3 runs ended in 2 different ones" in said and "more starts than 5" in said
 
 
 def dense_tape():

@@ -37,6 +37,9 @@ class Loss:
     summary: str
     #: (values, measured, cos_i) -> transformed values.
     transform: Callable = field(repr=False)
+    #: Whether the residual grows linearly with the values (l2, cosine), so that the brightest samples (a narrow
+    #: peak) rule the cost: a model of several lobes then has minima its default starts miss (``starts/lobes.py``).
+    linear: bool = False
 
     def cache_key(self) -> list | None:
         """A built-in loss by its name (``brdffit/_programs/keys.py``); None for a loss of one's own, whose transform
@@ -55,8 +58,8 @@ def _cbrt(values, measured, cos_i):
 
 LOSSES = {
     "log": Loss("log", "ln(1 + f·cos θi) − ln(1 + y·cos θi) (Löw et al. 2012)", lambda v, y, ci: jnp.log1p(v * ci)),
-    "l2": Loss("l2", "f − y", lambda v, y, ci: v),
-    "cosine": Loss("cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci),
+    "l2": Loss("l2", "f − y", lambda v, y, ci: v, linear=True),
+    "cosine": Loss("cosine", "(f − y)·cos θi (Ngan et al. 2005)", lambda v, y, ci: v * ci, linear=True),
     "cbrt": Loss("cbrt", "cbrt(f) − cbrt(y)", _cbrt),
     "relative": Loss(
         "relative", f"(f − y) / max(y, {RELATIVE_FLOOR:g})", lambda v, y, ci: v / jnp.maximum(y, RELATIVE_FLOOR)

@@ -74,10 +74,20 @@ def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = N
         return fit_pca(samples, model, loss, start=start, max_steps=solving.max_steps, max_theta=max_theta)
     hold = None if constraints is None else constraints.hold()
     if start is None and model.n_lobes > 1:  # several lobes: placed and fitted one at a time
-        solved, fewer_lobes_cost = _lobe_by_lobe(model, loss, samples, solving, hold)
+        solved, by_lobe = _lobe_by_lobe(model, loss, samples, solving, hold)
         steps, dtype = solving.max_steps, solving.dtype
+        fewer_lobes_cost = by_lobe.fewer_lobes_cost if by_lobe.searched_all else None
         return result_of(
-            model, loss, samples, solved, steps, dtype, fewer_lobes_cost, max_theta, constraints=constraints
+            model,
+            loss,
+            samples,
+            solved,
+            steps,
+            dtype,
+            fewer_lobes_cost,
+            max_theta,
+            more_caveats=by_lobe.caveats(loss, solving.n_starts),
+            constraints=constraints,
         )
     fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=default_strategy())  # for one dataset
     given = None if start is None else start_vector(model, start, samples.n_channels)[None]
@@ -88,8 +98,9 @@ def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = N
 
 
 def _lobe_by_lobe(model: LobeModel, loss: Loss, samples: Samples, solving: Solving, hold: Hold | None):
-    """The best solve of a model of several lobes and the cost with one lobe less (``lobes.py``), searched on the
-    search subset when there is one and refined on every sample; every solve respects ``hold``."""
+    """The best solve of a model of several lobes and its :class:`~brdffit.fitting.starts.lobes.LobeFit` (the cost
+    with one lobe less, the minima its starts ended in), searched on the search subset when there is one and refined
+    on every sample; every solve respects ``hold``."""
     n_starts, max_steps, dtype, seed = solving.n_starts, solving.max_steps, solving.dtype, solving.seed
     full = build_problem(samples, dtype)
     compiled = compiled_solver(model, loss, max_steps, dtype)
@@ -115,7 +126,7 @@ def _lobe_by_lobe(model: LobeModel, loss: Loss, samples: Samples, solving: Solvi
         solved = jax.tree.map(
             lambda leaf: leaf[0], onto_bounds(batched, stacked, jax.tree.map(lambda a: a[None], hold))
         )
-    return solved, by_lobe.fewer_lobes_cost if search is full else None
+    return solved, by_lobe._replace(searched_all=search is full)
 
 
 def _row(holds: Hold) -> Hold:
