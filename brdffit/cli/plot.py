@@ -8,9 +8,10 @@ samples read, before any figure is drawn.
 import argparse
 import os
 import re
+import warnings
 from pathlib import Path
 
-from ..errors import BrdfInputError
+from ..errors import BrdfInputError, InputWarning
 from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
@@ -104,14 +105,16 @@ def run(args: argparse.Namespace) -> int:
     written = []
     if "residuals" in kinds:  # several fits' maps on one colour scale, so that they compare
         limit = max(colour_limit(result, samples) for result in results)
-    for (kind, index), path in zip(figures, outputs, strict=True):
-        if kind == "residuals":
-            KINDS[kind](results[index], samples, limit=limit, path=path)
-        elif kind == "sphere":
-            KINDS[kind](results, samples, lights=args.lights, path=path)
-        else:
-            KINDS[kind](results, samples, incidences=incidences, path=path)
-        written.append(str(path))
+    with warnings.catch_warnings():  # each figure's word on a fit read otherwise: _read_as_fitted said it, once
+        warnings.filterwarnings("ignore", ".* was fitted to samples read as ", InputWarning)
+        for (kind, index), path in zip(figures, outputs, strict=True):
+            if kind == "residuals":
+                KINDS[kind](results[index], samples, limit=limit, path=path)
+            elif kind == "sphere":
+                KINDS[kind](results, samples, lights=args.lights, path=path)
+            else:
+                KINDS[kind](results, samples, incidences=incidences, path=path)
+            written.append(str(path))
     print(f"wrote {', '.join(written)}")
     return EXIT_OK
 
@@ -154,10 +157,6 @@ def _not_a_result(path: str) -> None:
 def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> float | None:
     """Read the samples as the fits did: their quantity (unless ``--quantity`` says otherwise, which is then
     warned about) and their ``max_theta``, when the fits agree; returns that ``max_theta``."""
-    import warnings
-
-    from ..errors import InputWarning
-
     quantities = {fit.quantity for _, fit in fits if fit.quantity is not None}
     if args.quantity is None and len(quantities) == 1:
         args.quantity = quantities.pop()
