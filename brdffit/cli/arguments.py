@@ -265,6 +265,12 @@ def _with(spec: str, options: dict[str, Any]) -> str:
     return spec if not added else f"{spec}{',' if written else ':'}{','.join(added)}"
 
 
+#: What ``--bin-centres`` does, wherever a MERL table is read or written.
+BIN_CENTRES_HELP = (
+    "MERL: each bin at its centre, not its lower edge (where MERL's BRDFRead.cpp looks a direction up; the default)"
+)
+
+
 def add_loading_options(command: argparse.ArgumentParser) -> None:
     """How a samples file is read (:func:`brdffit.load_samples`'s arguments)."""
     from ..data.csv import ANGLE_UNITS
@@ -306,6 +312,7 @@ def add_loading_options(command: argparse.ArgumentParser) -> None:
     reading.add_argument(
         "--subsample-method", default="random", metavar="M", help="MERL: random (default) or stratified (over θh)"
     )
+    reading.add_argument("--bin-centres", action="store_true", help=BIN_CENTRES_HELP)
 
 
 def load(path: str, args: argparse.Namespace):
@@ -327,6 +334,7 @@ def read_options(args: argparse.Namespace) -> dict:
         subsample=args.subsample,
         subsample_method=args.subsample_method,
         seed=args.seed,
+        bin_centres=args.bin_centres,
     )
 
 
