@@ -195,10 +195,37 @@ def add_comparison_options(command: argparse.ArgumentParser) -> None:
         "--max-steps", type=int, default=MAX_STEPS, metavar="N", help=f"as for fit (default {MAX_STEPS})"
     )
     command.add_argument(
-        "--seed", type=int, default=0, help="seed of the folds, the start search's subset and --subsample (default 0)"
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the folds, the start search's subset, --subsample and the mcmc walkers (default 0)",
     )
     add_holding_options(command)
     add_loading_options(command)
+
+
+def add_mcmc_options(group) -> None:
+    """The sampler's settings, as ``fit`` and ``report`` take them with ``--uncertainty mcmc``."""
+    group.add_argument("--walkers", type=int, metavar="N", help="mcmc: walkers (default 32)")
+    group.add_argument("--steps", type=int, metavar="N", help="mcmc: steps per walker (default 2000)")
+    group.add_argument("--burn", type=int, metavar="N", help="mcmc: steps discarded as burn-in (default 500)")
+    group.add_argument("--thin", type=int, metavar="N", help="mcmc: keep every N-th step (default 1)")
+
+
+def mcmc_settings(args: argparse.Namespace, also: tuple[str, ...] = ()):
+    """The :class:`~brdffit.MCMC` settings :func:`add_mcmc_options` gave (seeded by ``--seed``), checked; None unless
+    ``--uncertainty mcmc``, when giving any of them (or of ``also``, other options that apply only to mcmc) is an
+    error."""
+    from ..uncertainty.mcmc import MCMC
+
+    given = {
+        name: getattr(args, name) for name in ("walkers", "steps", "burn", "thin") if getattr(args, name) is not None
+    }
+    if args.uncertainty != "mcmc":
+        for name in [*given, *(name for name in also if getattr(args, name))]:
+            raise BrdfInputError(Argument(name), " applies only to ", Argument("uncertainty", "mcmc"))
+        return None
+    return MCMC(**given, seed=args.seed)
 
 
 def comparison_arguments(args: argparse.Namespace) -> dict[str, Any]:
@@ -236,6 +263,12 @@ def _with(spec: str, options: dict[str, Any]) -> str:
     named = {item.partition("=")[0].strip() for item in written.split(",")}
     added = [f"{key}={value}" for key, value in options.items() if value is not None and key not in named]
     return spec if not added else f"{spec}{',' if written else ':'}{','.join(added)}"
+
+
+#: What ``--bin-centres`` does, wherever a MERL table is read or written.
+BIN_CENTRES_HELP = (
+    "MERL: each bin at its centre, not its lower edge (where MERL's BRDFRead.cpp looks a direction up; the default)"
+)
 
 
 def add_loading_options(command: argparse.ArgumentParser) -> None:
@@ -279,6 +312,7 @@ def add_loading_options(command: argparse.ArgumentParser) -> None:
     reading.add_argument(
         "--subsample-method", default="random", metavar="M", help="MERL: random (default) or stratified (over θh)"
     )
+    reading.add_argument("--bin-centres", action="store_true", help=BIN_CENTRES_HELP)
 
 
 def load(path: str, args: argparse.Namespace):
@@ -300,6 +334,7 @@ def read_options(args: argparse.Namespace) -> dict:
         subsample=args.subsample,
         subsample_method=args.subsample_method,
         seed=args.seed,
+        bin_centres=args.bin_centres,
     )
 
 

@@ -65,7 +65,7 @@ def _tabulate(args: argparse.Namespace, output: Path) -> int:
 
     enable_compilation_cache()
     result = load_result(args.input)
-    notes = write_merl(result.model, result.params, output, **result.model_options)
+    notes = write_merl(result.model, result.params, output, bin_centres=args.bin_centres, **result.model_options)
     print(f"wrote {output}: {result.model} tabulated on MERL's 90 × 90 × 180 grid")
     for note in notes:
         print(f"note: {note}")

@@ -7,8 +7,9 @@ the error is printed and stored in the file (``brdffit/export``).
 import argparse
 from pathlib import Path
 
+from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import fit_file, fit_file_files, output_file
+from .arguments import BIN_CENTRES_HELP, fit_file, fit_file_files, output_file
 from .files import Files
 
 
@@ -35,6 +36,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-o", "--output", metavar="FILE", help="the file (default: RESULT's stem with the target's suffix, here)"
     )
+    parser.add_argument("--bin-centres", action="store_true", help=BIN_CENTRES_HELP)
     parser.add_argument(
         "--samples",
         metavar="DATA",
@@ -61,10 +63,12 @@ def run(args: argparse.Namespace) -> int:
     from ..export.targets import TARGETS, export, export_format
 
     kind = export_format(args.to, args.format, args.output)
+    if args.bin_centres and args.to != "merl":
+        raise BrdfInputError(f"--bin-centres applies to --to merl, not to --to {args.to}")
     result = fit_file(args.result)
     path = output_file(_output(args), "-o")
     enable_compilation_cache()
-    lines = export(result, args.to, path, kind, args.samples)
+    lines = export(result, args.to, path, kind, args.samples, bin_centres=args.bin_centres)
     print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")
     for line in lines:
         print(f"  {line}")

@@ -14,11 +14,13 @@ from . import EXIT_BAD_INPUT, EXIT_NOT_CONVERGED, EXIT_OK
 from .arguments import (
     add_holding_options,
     add_loading_options,
+    add_mcmc_options,
     add_model_options,
     holding_arguments,
     json_argument,
     json_file,
     load,
+    mcmc_settings,
     model_options,
     output_file,
     read_options,
@@ -92,10 +94,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         metavar="METHOD",
         help="laplace (Gauss-Newton covariance at the optimum) or mcmc (emcee posterior)",
     )
-    errors.add_argument("--walkers", type=int, metavar="N", help="mcmc: walkers (default 32)")
-    errors.add_argument("--steps", type=int, metavar="N", help="mcmc: steps per walker (default 2000)")
-    errors.add_argument("--burn", type=int, metavar="N", help="mcmc: steps discarded as burn-in (default 500)")
-    errors.add_argument("--thin", type=int, metavar="N", help="mcmc: keep every N-th step (default 1)")
+    add_mcmc_options(errors)
     errors.add_argument(
         "--seed",
         type=int,
@@ -245,18 +244,12 @@ def _start(value: str | None):
 
 def _uncertainty_settings(args: argparse.Namespace):
     """The MCMC settings (None unless ``--uncertainty mcmc``), after every check of the uncertainty options."""
-    from ..uncertainty.mcmc import MCMC
     from ..uncertainty.methods import check_options
     from ..views.figures import check_figure_path
 
     check_options(args.uncertainty, chain=args.chain if args.uncertainty == "mcmc" else None)
     method = args.uncertainty
-    given = {
-        name: getattr(args, name) for name in ("walkers", "steps", "burn", "thin") if getattr(args, name) is not None
-    }
-    if method != "mcmc":
-        for name in [*given, *(["chain"] if args.chain else [])]:
-            raise BrdfInputError(Argument(name), " applies only to ", Argument("uncertainty", "mcmc"))
+    settings = mcmc_settings(args, also=("chain",))
     if args.corner and not method:
         raise BrdfInputError(Argument("corner"), " needs ", Argument("uncertainty", "mcmc"), " (or laplace)")
     if (args.chain or args.corner) and len(args.samples) > 1:
@@ -267,7 +260,7 @@ def _uncertainty_settings(args: argparse.Namespace):
         check_figure_path(args.corner, argument="corner")
         args.corner = str(output_file(args.corner, "--corner"))
         os.environ.setdefault("MPLBACKEND", "Agg")  # files only: no window, no display needed
-    return MCMC(**given, seed=args.seed) if method == "mcmc" else None
+    return settings
 
 
 def output_paths(inputs: list[str], output: str | None, model) -> list[Path] | None:

@@ -7,9 +7,11 @@ samples read, before any figure is drawn.
 
 import argparse
 import os
+import re
+import warnings
 from pathlib import Path
 
-from ..errors import BrdfInputError
+from ..errors import BrdfInputError, InputWarning
 from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
@@ -103,14 +105,16 @@ def run(args: argparse.Namespace) -> int:
     written = []
     if "residuals" in kinds:  # several fits' maps on one colour scale, so that they compare
         limit = max(colour_limit(result, samples) for result in results)
-    for (kind, index), path in zip(figures, outputs, strict=True):
-        if kind == "residuals":
-            KINDS[kind](results[index], samples, limit=limit, path=path)
-        elif kind == "sphere":
-            KINDS[kind](results, samples, lights=args.lights, path=path)
-        else:
-            KINDS[kind](results, samples, incidences=incidences, path=path)
-        written.append(str(path))
+    with warnings.catch_warnings():  # each figure's word on a fit read otherwise: _read_as_fitted said it, once
+        warnings.filterwarnings("ignore", ".* was fitted to samples read as ", InputWarning)
+        for (kind, index), path in zip(figures, outputs, strict=True):
+            if kind == "residuals":
+                KINDS[kind](results[index], samples, limit=limit, path=path)
+            elif kind == "sphere":
+                KINDS[kind](results, samples, lights=args.lights, path=path)
+            else:
+                KINDS[kind](results, samples, incidences=incidences, path=path)
+            written.append(str(path))
     print(f"wrote {', '.join(written)}")
     return EXIT_OK
 
@@ -119,14 +123,23 @@ def _results(path: str) -> list:
     """The fits a file holds: a result file's one, or a comparison file's best (and those within one s.e.)."""
     from ..fitting.comparison.compare import Comparison
     from ..fitting.single.result import FitResult, is_comparison, read_json_object
+    from ..physics.models.registry import get_model
 
     try:
         content = read_json_object(path, "brdffit result or comparison file")
     except BrdfInputError as error:
         raise BrdfInputError(f"{error}; give the result files first and the samples file last") from None
-    if not is_comparison(content):
-        return [FitResult.from_dict(content, path)]
-    return as_list(Comparison.from_dict(content, path))
+    fits = (
+        [FitResult.from_dict(content, path)]
+        if not is_comparison(content)
+        else as_list(Comparison.from_dict(content, path))
+    )
+    for fit in fits:  # its model and options name a model brdffit has, before any name or folder derives from them
+        try:
+            get_model(fit.model, **fit.model_options)
+        except BrdfInputError as error:
+            raise BrdfInputError(f"{path}: {error}") from None
+    return fits
 
 
 def _not_a_result(path: str) -> None:
@@ -144,10 +157,6 @@ def _not_a_result(path: str) -> None:
 def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> float | None:
     """Read the samples as the fits did: their quantity (unless ``--quantity`` says otherwise, which is then
     warned about) and their ``max_theta``, when the fits agree; returns that ``max_theta``."""
-    import warnings
-
-    from ..errors import InputWarning
-
     quantities = {fit.quantity for _, fit in fits if fit.quantity is not None}
     if args.quantity is None and len(quantities) == 1:
         args.quantity = quantities.pop()
@@ -184,6 +193,18 @@ def _names_a_folder(output: str | None) -> bool | None:
     return None if output is None else output.endswith(("/", os.sep)) or Path(output).is_dir()
 
 
+#: The characters a fit's label keeps in a figure's file name; any other (a ``/``, a ``\\``, a space) becomes ``-``.
+NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9_.,=+-]")
+
+
+def file_name_part(text: str) -> str:
+    """``text`` (a fit's label, which comes from the result file's content) as one component of a file name: never a
+    path. Every character outside letters, digits and ``_.,=+-`` becomes ``-`` (``cook-torrance:fresnel=a/../b`` →
+    ``cook-torrance-fresnel=a-..-b``), and a leading ``.`` too, so that no name is ``..`` or hidden."""
+    part = NAME_CHARACTERS.sub("-", text)
+    return "-" + part[1:] if part.startswith(".") else part
+
+
 def output_paths(figures, results, output: str | None, samples_path: str) -> list[Path]:
     """Where each figure goes, checked before any work: ``-o FILE`` for one figure, a folder (``-o OUTDIR/``, or
     the current folder) for several, named ``SAMPLES-stem.KIND[.SPEC].png``. (A file's suffix is checked by
@@ -194,7 +215,7 @@ def output_paths(figures, results, output: str | None, samples_path: str) -> lis
     def name(kind: str, index: int | None) -> str:
         from ..views.figures import label
 
-        which = f".{label(results[index]).replace(':', '-')}" if index is not None and several_results else ""
+        which = f".{file_name_part(label(results[index]))}" if index is not None and several_results else ""
         return f"{stem}.{kind}{which}.png"
 
     as_folder = bool(_names_a_folder(output))

@@ -4,17 +4,19 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import add_comparison_options, comparison_arguments, load, output_file
+from .arguments import add_comparison_options, add_mcmc_options, comparison_arguments, load, mcmc_settings, output_file
 from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     add_comparison_options(parser)
-    parser.add_argument(
+    errors = parser.add_argument_group("uncertainty")
+    errors.add_argument(
         "--uncertainty",
         metavar="METHOD",
         help="laplace or mcmc: error bars on the parameters of the two best models (default none)",
     )
+    add_mcmc_options(errors)
     parser.add_argument(
         "-o", "--output", metavar="FILE", help="the report (.html); default SAMPLES-stem.report.html here"
     )
@@ -38,9 +40,10 @@ def run(args: argparse.Namespace) -> int:
     enable_compilation_cache()
     arguments = comparison_arguments(args)
     check_options(args.uncertainty)
+    mcmc = mcmc_settings(args)
     output = _output(args)
     path = output_file(output, "-o")
     check_report_path(output, argument="output")
-    report(load(args.samples, args), **arguments, uncertainty=args.uncertainty, path=path, progress=None)
+    report(load(args.samples, args), **arguments, uncertainty=args.uncertainty, mcmc=mcmc, path=path, progress=None)
     print(f"wrote {output}")
     return EXIT_OK

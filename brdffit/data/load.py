@@ -90,6 +90,7 @@ def load_samples(
     subsample: int | None = None,
     subsample_method: str = "random",
     seed: int = 0,
+    bin_centres: bool = False,
 ) -> Samples:
     """Read a measurement file into :class:`Samples` holding BRDF values in 1/sr.
 
@@ -102,7 +103,8 @@ def load_samples(
     value columns named by wavelength in nm, ``xyz`` or ``rgb`` (linear sRGB) under ``illuminant`` and
     ``observer`` (colour-science names), or ``keep`` every band as a channel (default). ``subsample``
     (MERL): keep that many samples, ``subsample_method`` ``random`` or ``stratified`` over θh, seeded by
-    ``seed``.
+    ``seed``. ``bin_centres`` (MERL): each bin's sample at the bin's centre, not its lower edge (where MERL's
+    ``BRDFRead.cpp`` looks it up; ``physics/merl_table.py``).
     """
     choice("angles", angles, ANGLE_UNITS)
     given = None if quantity is None else canonical(quantity)
@@ -110,11 +112,17 @@ def load_samples(
     kind = detect_format(path, format)
     if kind != "csv" and angles != "degrees":
         raise BrdfInputError(Argument("angles"), f" applies to CSV files; {path} is {kind} (its angle units are fixed)")
-    if kind != "merl" and subsample is not None:
-        raise BrdfInputError(Argument("subsample"), f" applies to MERL files; {path} is {kind}")
+    for name, given_here in (("subsample", subsample is not None), ("bin_centres", bool(bin_centres))):
+        if kind != "merl" and given_here:
+            raise BrdfInputError(Argument(name), f" applies to MERL files; {path} is {kind}")
     reader_options = {
         "csv": {"angles": angles},
-        "merl": {"subsample": subsample, "subsample_method": subsample_method, "seed": seed},
+        "merl": {
+            "subsample": subsample,
+            "subsample_method": subsample_method,
+            "seed": seed,
+            "bin_centres": bool(bin_centres),
+        },
     }
     samples = FORMATS[kind].read(path, **reader_options.get(kind, {}))
     header = samples.provenance.header_quantity

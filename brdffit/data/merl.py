@@ -57,10 +57,13 @@ def read_merl(
     subsample: int | None = None,
     subsample_method: str = "random",
     seed: int = 0,
+    bin_centres: bool = False,
 ) -> Samples:
     """Read a MERL ``.binary`` file (Matusik et al. 2003) into :class:`Samples` with channels r, g, b in 1/sr.
 
-    Every valid bin becomes one sample at its Rusinkiewicz (1998) directions: all three channels ≥ 0,
+    Every valid bin becomes one sample at its Rusinkiewicz (1998) directions, at the bin's lower edge as MERL's
+    ``BRDFRead.cpp`` looks it up, or at its centre with ``bin_centres`` (``physics/merl_table.py``): all three
+    channels ≥ 0,
     both directions above the horizon and, with ``max_theta`` (degrees, in (0, 90]), θi and θo at most
     that. ``subsample``: keep that many of the valid samples, chosen with ``numpy.random.default_rng(seed)``;
     ``subsample_method`` ``"random"`` (uniform, without replacement) or ``"stratified"`` (an equal share
@@ -82,7 +85,7 @@ def read_merl(
             f"{source}: stored value {table[channel, index]} in channel {CHANNELS[channel]} at bin"
             f" (θh {where[0]}, θd {where[1]}, φd {where[2]}) is not allowed (values must be finite)"
         )
-    wi, wo = bin_directions()
+    wi, wo = bin_directions(bin_centres)
     present = np.all(table >= 0, axis=0)
     above = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
     index = np.flatnonzero(present & above)

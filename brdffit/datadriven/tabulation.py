@@ -26,10 +26,13 @@ def table_coordinates(wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     return np.stack([along_h, along_d, along_phi], axis=-1)
 
 
-def interpolation(wi: np.ndarray, wo: np.ndarray, filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def interpolation(
+    wi: np.ndarray, wo: np.ndarray, filled: np.ndarray, offset: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Flat bin indices (N, 8) and trilinear weights (N, 8) of the pairs; ``filled`` (bins,) says which bins
-    hold a value. The weights of each pair sum to 1, or to 0 where no neighbour is filled."""
-    coordinates = table_coordinates(wi, wo)
+    hold a value. The weights of each pair sum to 1, or to 0 where no neighbour is filled. ``offset``: where in its
+    bin each value lies, in bin indices (½ for a table of bin centres; ``physics/merl_table.py``)."""
+    coordinates = table_coordinates(wi, wo) - offset
     corners, weights = [], []
     along = []
     for axis, size in enumerate(SHAPE):

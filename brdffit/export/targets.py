@@ -15,15 +15,15 @@ from ..errors import Argument, BrdfInputError
 @dataclass(frozen=True)
 class Target:
     """An export target: ``description``, its ``formats`` (name → default suffix, the first the default) and
-    ``write(result, path, format, samples) -> lines``, the lines a user should read (exact or how far, how far from
-    the data when ``samples`` are given, notes)."""
+    ``write(result, path, format, samples, bin_centres) -> lines``, the lines a user should read (exact or how far,
+    how far from the data when ``samples`` are given, notes); ``bin_centres`` applies to MERL's table alone."""
 
     description: str
     formats: dict[str, str]
     write: Callable
 
 
-def _mitsuba(result, path: Path, kind: str, samples) -> list[str]:
+def _mitsuba(result, path: Path, kind: str, samples, bin_centres: bool = False) -> list[str]:
     from .._files import write_text_atomic
     from .mitsuba import mitsuba_bsdf
 
@@ -34,20 +34,21 @@ def _mitsuba(result, path: Path, kind: str, samples) -> list[str]:
     return exported.comment_lines()[1:]
 
 
-def _gltf(result, path: Path, kind: str, samples) -> list[str]:
+def _gltf(result, path: Path, kind: str, samples, bin_centres: bool = False) -> list[str]:
     from .gltf import write_gltf
 
     _, approximation, notes = write_gltf(result, path, binary=kind == "glb", samples=samples)
     return [f"approximate: the glTF BRDF fitted to it, {approximation.line()}", *notes]
 
 
-def _merl(result, path: Path, kind: str, samples) -> list[str]:
+def _merl(result, path: Path, kind: str, samples, bin_centres: bool = False) -> list[str]:
     from .at_data import data_error
     from .merl import merl_brdf, write_merl
 
-    notes = write_merl(result.model, result.params, path, **result.model_options)
+    notes = write_merl(result.model, result.params, path, bin_centres=bin_centres, **result.model_options)
     if samples is not None:  # the table as it was written, read back: after the write, which cannot hold it
-        notes.insert(0, data_error(result, samples, merl_brdf(path), "the written table, read back by brdffit").line())
+        written = merl_brdf(path, bin_centres)
+        notes.insert(0, data_error(result, samples, written, "the written table, read back by brdffit").line())
     return ["exact: the fitted model tabulated", *notes]
 
 
@@ -83,16 +84,21 @@ def export_format(to: str, format: str | None = None, path: str | os.PathLike | 
     return kind
 
 
-def export(result, to: str, path: str | os.PathLike, format: str | None = None, samples=None) -> list[str]:
+def export(
+    result, to: str, path: str | os.PathLike, format: str | None = None, samples=None, *, bin_centres: bool = False
+) -> list[str]:
     """Write ``result`` (a :class:`~brdffit.FitResult`) for the renderer ``to`` (:data:`TARGETS`) to ``path``,
     atomically, in ``format`` (default: the one ``path``'s suffix names, else the target's first:
     :func:`export_format`); returns the lines a user should read (whether it is exact, how far it lies otherwise,
     notes). ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read
     it), at whose directions the export is evaluated as its renderer evaluates it and compared (``at_data.py``):
-    printed first, and stored in the file where the format has room (Mitsuba's, glTF's)."""
+    printed first, and stored in the file where the format has room (Mitsuba's, glTF's). ``bin_centres`` (MERL):
+    each bin evaluated at its centre, not its lower edge (``physics/merl_table.py``)."""
     kind = export_format(to, format, path)
+    if bin_centres and to != "merl":
+        raise BrdfInputError(Argument("bin_centres"), f" applies to MERL tables (to='merl'), not to {to}")
     if samples is not None:
         from .at_data import data_for
 
         samples = data_for(result, samples)
-    return TARGETS[to].write(result, Path(path), kind, samples)
+    return TARGETS[to].write(result, Path(path), kind, samples, bin_centres)

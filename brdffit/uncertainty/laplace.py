@@ -17,10 +17,15 @@ there). Lafortune's ``(cxy, cz)`` then follow from ψ by the delta method
 proper. Parameters the fit held fixed (``fit.fixed``) have error 0: the
 inverse is taken over the free coordinates only, ``k`` counts those. The
 inverse is taken in correlation scaling, so parameters of any units are
-treated alike; a parameter whose Jacobian column is zero, or a
-direction in which ``JᵀJ`` is singular, is *undetermined*: its error is
-reported as null and a warning names it. Correlations of |ρ| ≥
-:data:`DEGENERATE_CORRELATION` are reported as a degenerate pair.
+treated alike. A parameter is *undetermined* when its Jacobian column is zero or it has weight in a
+direction in which ``JᵀJ`` is singular (no curvature), or when its error exceeds
+:data:`UNDETERMINED_SPREAD` times the width of its plausible range (its value where that range is
+unbounded): correlation scaling hides a column that is tiny in every sample (a dead lobe's roughness
+and Fresnel indices, ``1 ± 3e14``), and no Gaussian that wide says anything about the data. An
+undetermined error is reported as null, with its reason in the block's ``undetermined``, and a warning
+names it; the errors of the others are then those with the undetermined ones held (the inverse over
+the determined ones alone). Correlations of |ρ| ≥ :data:`DEGENERATE_CORRELATION` are reported as a
+degenerate pair.
 """
 
 import warnings
@@ -50,6 +55,11 @@ DEGENERATE_CORRELATION = 0.99
 HETEROSCEDASTIC_RATIO = 2.0
 #: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
 SINGULAR = 1e-12
+#: An error above this many times the width of a parameter's plausible range (its value, where that range is
+#: unbounded) is undetermined: the 1-σ interval then spans every plausible value ten times over.
+UNDETERMINED_SPREAD = 10.0
+#: Why an error is null, for a parameter with no curvature (its Jacobian zero, or in a singular direction).
+NO_CURVATURE = "no curvature: zero or singular Jacobian"
 
 
 def _mapped(gradient: np.ndarray, covariance_v: np.ndarray) -> np.ndarray:
@@ -147,23 +157,59 @@ class Curvature(NamedTuple):
     chi2: float
     inverse: np.ndarray  # (JᵀJ)⁻¹, NaN in the rows and columns of undetermined parameters
     meat: np.ndarray  # Σ_i r_i² J_iᵀJ_i
-    undetermined: list[str]
+    undetermined: dict[str, str]  # label of the sampling vector → why its error is null
     condition: float  # of the correlation-scaled JᵀJ
 
 
 @float64
 def curvature_at_optimum(density: Density) -> Curvature:
     """The curvature at the optimum over the free coordinates: a fixed one's rows and columns of the inverse are 0
-    (it has no error), and it takes no part in the null space or the condition number."""
+    (it has no error), and it takes no part in the null space or the condition number.
+
+    Undetermined coordinates (no curvature, or an error beyond :data:`UNDETERMINED_SPREAD` times their plausible
+    range; :func:`too_wide`) are found one round at a time: after each, the inverse is taken again over those left,
+    until none is newly undetermined."""
     v = np.asarray(density.optimum)
     chi2 = float(compiled_chi_squared(density.model, density.loss)(v, density.problem, density.model.prior_weight))
     hessian, meat = gauss_newton_and_meat(density, v)
-    free = np.flatnonzero(density.free)
-    inverse = np.zeros_like(hessian)
-    inverse[np.ix_(free, free)], undetermined, condition = inverse_with_null_space(
-        hessian[np.ix_(free, free)], density.free_labels
-    )
+    noise2 = 1.0 if density.has_sigma else chi2 / max(counted_values(density) - n_free(density), 1)
+    domains = density.model.sampling.domains(density.n_channels)
+    undetermined: dict[str, str] = {}
+    kept = np.flatnonzero(density.free)
+    while True:
+        labels = [density.labels[i] for i in kept]
+        inverse = np.zeros_like(hessian)
+        inverse[np.ix_(kept, kept)], singular, condition = inverse_with_null_space(hessian[np.ix_(kept, kept)], labels)
+        undetermined |= dict.fromkeys(singular, NO_CURVATURE)
+        wide = {
+            density.labels[i]: why
+            for i in kept
+            if (why := too_wide(noise2 * inverse[i, i], v[i], domains[i])) is not None
+        }
+        undetermined |= wide
+        if not wide:
+            break
+        kept = np.array([i for i in kept if density.labels[i] not in undetermined], dtype=int)
+    unknown = [i for i, label in enumerate(density.labels) if label in undetermined]
+    inverse[unknown, :] = np.nan
+    inverse[:, unknown] = np.nan
     return Curvature(chi2, inverse, meat, undetermined, condition)
+
+
+def too_wide(variance: float, value: float, domain) -> str | None:
+    """Why an error of ``sqrt(variance)`` leaves a parameter at ``value`` in ``domain`` undetermined, or None: an
+    error above :data:`UNDETERMINED_SPREAD` times the width of its plausible range, or of its value where that range
+    is unbounded (a parameter at 0 with no bounded range is never judged so)."""
+    if not np.isfinite(variance):
+        return None
+    low, high = domain.plausible
+    width, of = high - low, f"plausible range [{low:g}, {high:g}]"
+    if not np.isfinite(width):
+        width, of = abs(float(value)), f"its value {float(value):.3g}"
+    error = float(np.sqrt(variance))
+    if width <= 0 or error <= UNDETERMINED_SPREAD * width:
+        return None
+    return f"error {error:.2g} > {UNDETERMINED_SPREAD:g}× {of}"
 
 
 #: What a varying scatter means for each method's errors (the end of the ``heteroscedastic`` warning).
@@ -194,7 +240,10 @@ def laplace_estimate(
     covariance = _mapped(gradient, covariance_v)
     stderr = np.sqrt(np.diag(covariance))
     # Without sigma, s² assumes one variance for every residual; the sandwich A⁻¹BA⁻¹ (White 1980) does not.
-    robust_covariance = _mapped(gradient, inverse @ np.nan_to_num(meat) @ np.nan_to_num(inverse))
+    # (NaN, an undetermined coordinate's, taken as 0 in the product, so that it spreads to no other; _mapped puts it
+    # back where it belongs.)
+    held = np.nan_to_num(inverse)
+    robust_covariance = _mapped(gradient, np.where(np.isnan(inverse), np.nan, held @ np.nan_to_num(meat) @ held))
     robust = np.sqrt(np.diag(robust_covariance))
     robust[np.isnan(stderr)] = np.nan
 
@@ -213,14 +262,20 @@ def laplace_estimate(
             )
         )
     if undetermined:
+        why = "; ".join(f"{label} ({reason})" for label, reason in undetermined.items())
         found.append(
             Finding(
                 codes.UNDETERMINED,
-                f"not determined by these samples: {', '.join(undetermined)} (its Jacobian is zero or singular);"
-                " its error is reported as null",
+                f"not determined by these samples: {why}; its error is reported as null (the others' are those with"
+                " it held)",
             )
         )
     names = model.physical.labels(tuple(result.channels))
+    # Why each physical parameter's error is null: the reason of the first undetermined coordinate it depends on.
+    reasons = [
+        next((undetermined[labels[j]] for j in np.flatnonzero(row != 0) if labels[j] in undetermined), None)
+        for row in gradient
+    ]
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(np.isfinite(robust / stderr), robust / stderr, 0.0)
     gauss_newton = stderr
@@ -271,5 +326,6 @@ def laplace_estimate(
         covariance=covariance,
         diagnostics=diagnostics,
         findings=found,
+        undetermined=reasons,
     )
     return laid_out, found

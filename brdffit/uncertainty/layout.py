@@ -46,6 +46,25 @@ def quantile_dict(model: Model, values_per_quantile: np.ndarray, n_channels: int
     return json_ready(nest(layouts))
 
 
+def reasons_dict(model: Model, reasons: list[str | None], n_channels: int) -> dict[str, Any]:
+    """Why each error is null (one reason or None per ``model.physical.labels``), in the layout of ``params``; ``{}``
+    when every error is determined."""
+    distinct = list(dict.fromkeys(reason for reason in reasons if reason is not None))
+    if not distinct:
+        return {}
+    codes = np.array([0.0 if reason is None else distinct.index(reason) + 1.0 for reason in reasons])
+
+    def named(value):
+        if isinstance(value, dict):
+            return {key: named(item) for key, item in value.items()}
+        if isinstance(value, list | tuple):
+            return [named(item) for item in value]
+        code = round(float(value))
+        return distinct[code - 1] if code else None
+
+    return named(params_layout(model, codes, n_channels))
+
+
 def matrix_block(names: list[str], matrix: np.ndarray) -> dict[str, Any]:
     return {"names": list(names), "matrix": json_ready(np.asarray(matrix).tolist())}
 
@@ -95,9 +114,11 @@ def estimate(
     covariance: np.ndarray,
     diagnostics: dict[str, Any],
     findings: list[Finding],
+    undetermined: list[str | None] | None = None,
 ) -> Uncertainty:
     """An :class:`Uncertainty` from flat physical vectors: ``stderr`` (p,), ``quantiles`` (len(QUANTILES), p) and
-    the ``covariance`` (p, p), laid out as the result file holds them (NaN becomes None)."""
+    the ``covariance`` (p, p), laid out as the result file holds them (NaN becomes None); ``undetermined``: why each
+    null error is null (None for a determined one)."""
     names, n_channels = model.physical.labels(tuple(channels)), len(channels)
     return Uncertainty(
         method=method,
@@ -108,4 +129,5 @@ def estimate(
         diagnostics=json_ready(diagnostics),
         warnings=[finding.message for finding in findings],
         warning_codes=[finding.code for finding in findings],
+        undetermined=reasons_dict(model, undetermined or [None] * len(names), n_channels),
     )

@@ -47,8 +47,12 @@ def with_uncertainty(
     """``result`` with its uncertainty by ``method``; ``samples`` are those it was fitted to (after ``max_theta``).
 
     ``mcmc``, ``chain`` and ``progress`` apply to ``method="mcmc"`` (see :func:`brdffit.sample_posterior`).
+    A result that is not finite (:meth:`FitResult.non_finite`: data beyond float64's range) is returned as it is:
+    it has no result file, so it gets no estimate and no chain file is written.
     """
     check_options(method, mcmc, chain)
+    if result.non_finite() is not None:
+        return result
     if method == "laplace":
         return laplace_uncertainty(result, samples)
     return sample_posterior(result, samples, mcmc, chain=chain, progress=progress)

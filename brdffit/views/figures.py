@@ -5,6 +5,8 @@ no window, nothing left open when a program draws hundreds of them.
 """
 
 import os
+import re
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -13,7 +15,7 @@ import numpy as np
 from .._files import atomic_path
 from ..data.load import as_samples
 from ..data.samples import Samples
-from ..errors import Argument, BrdfInputError
+from ..errors import Argument, BrdfInputError, InputWarning
 from ..fitting.single.result import FitResult
 from ..physics.models.specs import spec_of
 
@@ -46,6 +48,33 @@ def as_list(results) -> list[FitResult]:
     return [results] if isinstance(results, FitResult) else list(results)
 
 
+#: How many characters of 8-point text fit in an inch of figure (DejaVu Sans, matplotlib's default, averages ~0.53 em
+#: a character); text of another size fits in proportion (:func:`characters_in`).
+CHARACTERS_PER_INCH_AT_8_POINTS = 17
+#: Where a line of a label or title may break: after a spec's ``:`` and ``,``, a ``;`` or a space.
+_BREAK_AFTER = re.compile(r"[^,:; ]*[,:; ]|[^,:; ]+")
+
+
+def characters_in(inches: float, points: float = 8) -> int:
+    """How many characters of ``points``-point text fit in ``inches`` (at least 8)."""
+    return max(8, int(inches * CHARACTERS_PER_INCH_AT_8_POINTS * 8 / points))
+
+
+def wrapped(text: str, width: int) -> str:
+    """``text`` (a model spec, a title) over lines of at most ``width`` characters, each line broken after a spec's
+    ``:`` or ``,`` (``cook-torrance:`` / ``distribution=ggx,`` / …), a ``;`` or a space; a part longer than a line
+    is cut where the line ends. Long specs otherwise run into their neighbours' titles or off the figure."""
+    lines = [""]
+    for part in _BREAK_AFTER.findall(text):  # a line may end in its break character beyond the width
+        if lines[-1] and len(lines[-1]) + len(part.rstrip(",:; ")) > width:
+            lines.append("")
+        lines[-1] += part
+        while len(lines[-1].rstrip(",:; ")) > width:
+            lines[-1], rest = lines[-1][:width], lines[-1][width:]
+            lines.append(rest)
+    return "\n".join(line.rstrip() for line in lines if line.strip())
+
+
 def channel_colour(channels: Sequence[str], index: int) -> str:
     """The colour of channel ``index`` of ``channels``: red, green, blue for r, g, b, grey for one channel."""
     name = channels[index]
@@ -65,15 +94,30 @@ def check_figure_path(path, argument: str = "path") -> Path:
     return path
 
 
-def checked_samples(samples) -> Samples:
-    """``samples`` if it is a :class:`Samples` (a path is read with :func:`brdffit.load_samples`'s defaults), else a
-    one-line error naming the argument."""
-    samples = as_samples(samples)
+def checked_samples(samples, results: Sequence[FitResult] = ()) -> Samples:
+    """``samples`` if it is a :class:`Samples`, else a one-line error naming the argument. A path is read with
+    :func:`brdffit.load_samples`'s defaults, but as ``results``' samples were read (their ``quantity``) when they
+    record one and agree. Warns (:class:`~brdffit.InputWarning`) about a result fitted to values read as another
+    quantity than these samples' (``brdf`` and ``cosine-weighted-out`` values of one file are different BRDFs): the
+    figure would compare them without a word."""
+    if isinstance(samples, str | os.PathLike):
+        quantities = {result.quantity for result in results if result.quantity is not None}
+        samples = as_samples(samples, **({"quantity": quantities.pop()} if len(quantities) == 1 else {}))
     if not isinstance(samples, Samples):
         kind = f"an empty {type(samples).__name__}" if isinstance(samples, Sequence) and not samples else None
         raise BrdfInputError(
             Argument("samples"), f" must be Samples (from brdffit.load_samples), got {kind or type(samples).__name__}"
         )
+    read_as = samples.provenance.quantity if samples.provenance else None  # None: made from arrays, as a fit records
+    for result in results:
+        if None not in (result.quantity, read_as) and result.quantity != read_as:
+            warnings.warn(
+                InputWarning(
+                    f"{label(result)} was fitted to samples read as {result.quantity}; {samples.source} is read as"
+                    f" {read_as}: the figure compares BRDFs made from different quantities"
+                ),
+                stacklevel=3,
+            )
     return samples
 
 

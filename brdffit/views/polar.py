@@ -16,7 +16,7 @@ from matplotlib.ticker import NullFormatter
 
 from ..data.samples import Samples
 from ..fitting.single.result import FitResult
-from .figures import FIT_STYLES, channel_colour, save_figure
+from .figures import FIT_STYLES, channel_colour, characters_in, save_figure, wrapped
 from .slices import (
     PLANE_TOLERANCE,
     Slice,
@@ -68,7 +68,11 @@ def polar(
     # leave as empty space above and below it. Sizes in inches.
     wedge, gap, left, bottom, top_margin, legend_width = WEDGE_INCHES, 0.7, 0.5, 0.45, 1.05, 2.4
     width = left + len(cuts) * wedge + (len(cuts) - 1) * gap + legend_width
-    height = bottom + wedge / 2 + top_margin
+    light = Line2D([], [], color=LIGHT_COLOUR, linewidth=1.2, marker=">", markersize=4, label="light (at −θi)")
+    handles = [*legend_handles(results, samples.channels, below_floor=False, directions=False), light]
+    # The legend hangs from 0.4 in below the top; each of its 8-point lines takes ~0.2 in with the spacing.
+    legend_height = 0.5 + 0.2 * sum(handle.get_label().count("\n") + 1 for handle in handles)
+    height = max(bottom + wedge / 2 + top_margin, legend_height)
     figure = Figure(figsize=(width, height))
     for index, cut in enumerate(cuts):
         x0 = left + index * (wedge + gap)
@@ -80,16 +84,18 @@ def polar(
         _draw_polar(
             axis, cut, results, samples.channels, min(max(floor, top / POLAR_RANGE), top / MIN_POLAR_RANGE), top
         )
-    light = Line2D([], [], color=LIGHT_COLOUR, linewidth=1.2, marker=">", markersize=4, label="light (at −θi)")
     figure.legend(
-        handles=[*legend_handles(results, samples.channels, below_floor=False, directions=False), light],
+        handles=handles,
         loc="upper left",
         bbox_to_anchor=((width - legend_width + 0.2) / width, 1 - 0.4 / height),
         fontsize=8,
         frameon=False,
     )
     figure.suptitle(
-        f"{samples.source}: plane of incidence; angle θo (> 0 on the mirror side), radius BRDF (1/sr, log scale)",
+        wrapped(
+            f"{samples.source}: plane of incidence; angle θo (> 0 on the mirror side), radius BRDF (1/sr, log scale)",
+            characters_in(width, 10),
+        ),
         fontsize=10,
         y=1 - 0.08 / height,
         va="top",

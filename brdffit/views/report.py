@@ -29,8 +29,9 @@ from ..data.summary import describe
 from ..errors import Argument, BrdfInputError, UncertaintyWarning
 from ..fitting.comparison.compare import Comparison, compare
 from ..fitting.options import Holding, Solving
-from ..fitting.single.result import FitResult, parameter_rows, value_with_error
+from ..fitting.single.result import FitResult, parameter_cells, uncertainty_line
 from ..physics.models.model import Model
+from ..uncertainty.mcmc import MCMC
 from ..uncertainty.methods import check_options, with_uncertainty
 from . import plots
 from .figures import label, text_as_typed
@@ -68,6 +69,7 @@ def report(
     folds: int = 5,
     seed: int = 0,
     uncertainty: str | None = None,
+    mcmc: MCMC | None = None,
     max_theta: float | None = None,
     n_starts: int | None = None,
     max_steps: int | None = None,
@@ -84,9 +86,10 @@ def report(
     ``models``, ``loss``, ``folds``, ``seed``, ``max_theta``, ``n_starts``, ``max_steps``, ``fixed``,
     ``bounds``, ``solving`` and ``holding`` are those of :func:`brdffit.compare`, which the report runs unless a
     ``comparison`` of these samples is given.
-    ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds error bars to the parameter tables of the models shown.
+    ``uncertainty``: ``"laplace"`` or ``"mcmc"`` adds error bars to the parameter tables of the models shown;
+    ``mcmc`` (:class:`brdffit.MCMC`: walkers, steps, burn, thin, seed) applies to ``"mcmc"``, as in :func:`brdffit.fit`.
     """
-    check_options(uncertainty)
+    check_options(uncertainty, mcmc)
     if path is not None:
         check_report_path(path)
     samples = as_samples(samples).within(max_theta)
@@ -109,7 +112,7 @@ def report(
     if uncertainty is not None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UncertaintyWarning)  # the page shows them with each model
-            shown = [with_uncertainty(result, samples, uncertainty) for result in shown]
+            shown = [with_uncertainty(result, samples, uncertainty, mcmc=mcmc) for result in shown]
     page = _page(samples, comparison, shown)
     if path is not None:
         write_text_atomic(path, page)
@@ -196,20 +199,14 @@ def _comparison_table(comparison: Comparison) -> str:
 
 
 def _parameter_table(result: FitResult) -> str:
-    errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
     header = "".join(f"<th>{html.escape(channel)}</th>" for channel in result.channels)
     rows = [f'<table><tr><th class="name">parameter</th>{header}</tr>']
-    for name, value in parameter_rows(result.params):
-        values = value if isinstance(value, list) else [value]
-        given = errors.get(name, [None] * len(values))
-        given = given if isinstance(given, list) else [given]
-        cells = "".join(
-            f"<td>{html.escape(value_with_error(v, e, bool(errors)))}</td>" for v, e in zip(values, given, strict=True)
-        )
+    for name, texts in parameter_cells(result).items():
+        cells = "".join(f"<td>{html.escape(text)}</td>" for text in texts)
         rows.append(f'<tr><td class="name">{html.escape(name)}</td>{cells}</tr>')
     rows.append("</table>")
     status = "converged" if result.converged else f"NOT converged: {result.message}"
-    method = f" · errors: {result.uncertainty['method']}" if result.uncertainty else ""
+    method = f" · {uncertainty_line(result.uncertainty)}" if result.uncertainty else ""
     rows.append(
         f'<p class="note">cost {result.cost:.6g} · rmse {result.rmse:.4g} 1/sr · {result.n_steps} steps ·'
         f" {html.escape(status)}{html.escape(method)}</p>"

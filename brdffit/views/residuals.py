@@ -18,7 +18,7 @@ from ..errors import Argument, BrdfInputError
 from ..fitting.objective.losses import LOSSES
 from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical
-from .figures import check_figure_path, checked_samples, evenly_spread, label, save_figure
+from .figures import characters_in, check_figure_path, checked_samples, evenly_spread, label, save_figure, wrapped
 
 #: Data with at most this many distinct light directions are a goniometer's: one map per light direction.
 MAX_LIGHTS = 12
@@ -55,7 +55,7 @@ def residuals(
     """
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be one FitResult, got {type(result).__name__}")
-    samples = checked_samples(samples)
+    samples = checked_samples(samples, [result])
     if tuple(result.channels) != tuple(samples.channels):
         raise BrdfInputError(
             Argument("result"),
@@ -72,7 +72,8 @@ def residuals(
         figure = _light_maps(samples, shown, limit, bar_label)
     else:
         figure = _half_difference_map(samples, shown, limit, bar_label)
-    figure.suptitle(f"{label(result)} on {samples.source}: where the fit misses", fontsize=11)
+    title = f"{label(result)} on {samples.source}: where the fit misses"
+    figure.suptitle(wrapped(title, characters_in(figure.get_figwidth(), 11)), fontsize=11)
     if path is not None:
         save_figure(figure, path)
     return figure

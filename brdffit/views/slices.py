@@ -32,11 +32,13 @@ from .figures import (
     FIT_STYLES,
     as_list,
     channel_colour,
+    characters_in,
     check_figure_path,
     checked_samples,
     evenly_spread,
     label,
     save_figure,
+    wrapped,
 )
 
 #: A sample lies in a plane when its viewer direction is within this angle (degrees) of the plane.
@@ -64,6 +66,9 @@ AXIS_LABELS = {
     "incidence": "signed θo (°), > 0 on the mirror side",
     "perpendicular": "signed θo (°), > 0 at φi + 90°",
 }
+#: The longest line of a fit's name in a legend (8-point, beside the panels); a longer spec wraps after its
+#: ``:`` and ``,``.
+LEGEND_CHARACTERS = 26
 #: Channels named in a legend; more (spectral bands) are summarised.
 LEGEND_CHANNELS = 8
 
@@ -148,7 +153,9 @@ def slices(
         fontsize=8,
         frameon=False,
     )
-    figure.suptitle(f"{samples.source}: slices through the BRDF", fontsize=11)
+    figure.suptitle(
+        wrapped(f"{samples.source}: slices through the BRDF", characters_in(figure.get_figwidth(), 11)), fontsize=11
+    )
     if path is not None:
         save_figure(figure, path)
     return figure
@@ -164,7 +171,7 @@ def checked_arguments(results, samples, path):
         raise BrdfInputError(
             Argument("results"), f" must be a FitResult or a non-empty list of them, got {_described(results)}"
         )
-    samples = checked_samples(samples)
+    samples = checked_samples(samples, listed)
     for result in listed:
         if tuple(result.channels) != tuple(samples.channels):
             raise BrdfInputError(
@@ -390,6 +397,7 @@ def legend_handles(results: list[FitResult], channels: Sequence[str], *, below_f
     """The legend: one line style per fit (named by its model spec), the data marker, the channels' colours."""
     names = [label(result) for result in results]
     named = [f"{name} ({k + 1})" if names.count(name) > 1 else name for k, name in enumerate(names)]
+    named = [wrapped(name, LEGEND_CHARACTERS) for name in named]
     handles = [
         Line2D([], [], color="0.25", linestyle=FIT_STYLES[k % len(FIT_STYLES)], label=name)
         for k, name in enumerate(named)

@@ -18,7 +18,7 @@ from ..checks import choice, whole_number
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
-from .figures import as_list, check_figure_path, checked_samples, label, save_figure
+from .figures import as_list, characters_in, check_figure_path, checked_samples, label, save_figure, wrapped
 from .render import (
     LIGHTS,
     MAX_DISTANCE_DEGREES,
@@ -42,8 +42,6 @@ PANEL_INCHES = 2.6
 NO_DATA_GREYS = (0.55, 0.7)
 #: The stripes' period, in pixels along each image axis.
 STRIPE_PIXELS = 8
-#: How many characters of the figure's 8-point title fit in an inch (it wraps to the figure's width).
-TITLE_CHARACTERS_PER_INCH = 17
 #: What the rows are called.
 _ROW_LABELS = {"point": "point light", "environment": "environment (4 lights)"}
 
@@ -69,7 +67,7 @@ def sphere(
     results = as_list(results)
     if not results or not all(isinstance(result, FitResult) for result in results):
         raise BrdfInputError(Argument("results"), " must be a FitResult or a non-empty sequence of them")
-    samples = None if samples is None else checked_samples(samples)
+    samples = None if samples is None else checked_samples(samples, results)
     choice("lights", lights, LIGHTINGS)
     size = whole_number("size", size, minimum=16, maximum=2048)
     path = None if path is None else check_figure_path(path)  # before the work
@@ -124,12 +122,12 @@ def sphere(
             if column < len(panels):
                 title, image = panels[column]
                 axis.imshow(image, interpolation="nearest")
-                axis.set_title(title, fontsize=9)
+                axis.set_title(wrapped(title, characters_in(PANEL_INCHES, 9)), fontsize=9)
         axes[row][0].text(
             -0.04, 0.5, _ROW_LABELS[lighting], transform=axes[row][0].transAxes, rotation=90, ha="right", va="center"
         )
     if notes:
-        width = int(TITLE_CHARACTERS_PER_INCH * PANEL_INCHES * n_columns)
+        width = characters_in(PANEL_INCHES * n_columns, 8)
         figure.suptitle(textwrap.fill("; ".join(dict.fromkeys(notes)), width), fontsize=8)
     if path is not None:
         save_figure(figure, path)

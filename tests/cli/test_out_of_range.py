@@ -79,3 +79,14 @@ def test_a_result_that_is_not_finite_is_no_json():
     with pytest.raises(BrdfInputError, match="the fit's rmse is inf"):
         result.to_json()
     assert dataclasses.replace(result, rmse=1.0).non_finite() is None
+
+
+def test_a_fit_that_is_not_finite_writes_no_chain(out_of_range, tmp_path, capsys):
+    """Issue 29: with ``--uncertainty mcmc --chain`` the chain was written while sampling, before the result was found
+    not finite: the command refused the result but left the chain. A result that is not finite gets no estimate."""
+    samples, output, chain = out_of_range["rmse"], tmp_path / "result.json", tmp_path / "chain.npz"
+    argv = ["fit", samples, "--model", "lambert", "--uncertainty", "mcmc", "--walkers", "8", "--steps", "40"]
+    status, out, err = run([*argv, "--burn", "10", "--chain", chain, "-o", output], capsys)
+    assert status == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"brdffit: error: {samples}: the fit's rmse is inf, not a finite number"), err
+    assert out == "" and sorted(path.name for path in tmp_path.iterdir()) == ["huge.csv", "tiny-sigma.csv"]

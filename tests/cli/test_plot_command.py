@@ -123,3 +123,40 @@ def test_an_existing_file_is_no_folder(files, tmp_path, capsys):
     afile.write_text("")
     status, _, err = run(["plot", files / "ward.json", files / "ward.csv", "-o", f"{afile}/"], capsys)
     assert status == 2 and f"-o {afile}/: {afile} is a file; give a folder (OUTDIR/)" in err
+
+
+def test_a_result_whose_options_hold_a_path_writes_nothing_anywhere(files, tmp_path, capsys):
+    """Issue 29: a figure's name came from the result's model options, so ``fresnel = "a/../../x"`` made ``plot``
+    create folders outside ``-o``'s before it refused the model. The options are checked as the file is read, before
+    any name or folder is made."""
+    content = json.loads((files / "ward.json").read_text())
+    content.update(model="cook-torrance", model_options={"fresnel": "a/../../../escaped"})
+    hostile = tmp_path / "inputs" / "hostile.json"
+    hostile.parent.mkdir()
+    hostile.write_text(json.dumps(content))
+    status, out, err = run(
+        ["plot", hostile, files / "lambert.json", files / "ward.csv", "--kind", "residuals", "-o", f"{tmp_path}/o/"],
+        capsys,
+    )
+    assert status == 2 and out == "" and err.count("\n") == 1, err
+    assert f"{hostile}: " in err and "is not known" in err
+    assert sorted(path.name for path in tmp_path.rglob("*")) == ["hostile.json", "inputs"]
+
+
+@pytest.mark.parametrize(
+    ("label", "part"),
+    [
+        ("ward", "ward"),
+        ("cook-torrance:fresnel=conductor", "cook-torrance-fresnel=conductor"),
+        ("lafortune:lobes=2", "lafortune-lobes=2"),
+        ("x:a=/../../b", "x-a=-..-..-b"),
+        ("..", "-."),
+        ("x:a=b\\c d\n", "x-a=b-c-d-"),
+    ],
+)
+def test_a_fits_label_is_one_file_name_component(label, part):
+    """Whatever a result file says, the part of a figure's name it gives is one component: no separator, never ``..``
+    or hidden."""
+    from brdffit.cli.plot import file_name_part
+
+    assert file_name_part(label) == part

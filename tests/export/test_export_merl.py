@@ -32,3 +32,53 @@ def test_a_model_of_two_channels_is_refused_and_one_is_written_grey(tmp_path):
     notes = write_merl("lambert", {"rho_d": [0.5]}, tmp_path / "grey.binary")
     assert notes == ["one channel: written as grey, the same values in r, g and b"]
     assert (tmp_path / "grey.binary").exists()
+
+
+def test_bin_centres_on_write_and_read(tmp_path, capsys):
+    """Issue 29: MERL's BRDFRead.cpp looks a direction up at its bin's lower edge, which is brdffit's default;
+    ``--bin-centres`` evaluates (and reads) each bin at its centre instead, half a bin further along each index:
+    bin (i, j, k) at θh = ((i + ½)/90)²·90°, θd = j + ½ degrees, φd = k + ½ degrees. A table written at the centres
+    and read at them holds the model at the sample directions (to a few ulp, as above); read at the lower edges it
+    does not (the lobe moves by half a bin). Read back by interpolation at the centres, the table gives its bins'
+    values there (trilinear weights 1 at a bin's own position)."""
+    from brdffit.cli import main
+    from brdffit.data.load import load_samples
+    from brdffit.export.merl import merl_brdf
+    from brdffit.physics.merl_table import bin_angles
+
+    result = tmp_path / "ward.json"
+    result.write_text(
+        '{"model": "ward", "channels": ["r", "g", "b"], "params": '
+        '{"rho_d": [0.1, 0.2, 0.3], "rho_s": [0.05, 0.04, 0.03], "alpha": 0.2},'
+        ' "fit": {"loss": "log", "cost": 0, "rmse": 0, "n_samples": 1, "n_steps": 1, "converged": true}}'
+    )
+    centred, converted = tmp_path / "centred.binary", tmp_path / "converted.binary"
+    assert main(["export", str(result), "--to", "merl", "--bin-centres", "-o", str(centred)]) == 0
+    assert "each bin evaluated at its centre" in capsys.readouterr().out
+    assert main(["convert", str(result), str(converted), "--bin-centres"]) == 0
+    assert centred.read_bytes() == converted.read_bytes()
+    theta_h, theta_d, phi_d = (np.degrees(angles[3, 4, 5]) for angles in bin_angles(centres=True))
+    assert (theta_h, theta_d, phi_d) == pytest.approx(((3.5 / 90) ** 2 * 90, 4.5, 5.5), rel=1e-14)
+    at_centres = load_samples(centred, bin_centres=True)
+    np.testing.assert_allclose(at_centres.values, evaluate("ward", WARD, at_centres.wi, at_centres.wo), rtol=1e-12)
+    at_edges = load_samples(centred)
+    assert np.max(np.abs(at_edges.values / evaluate("ward", WARD, at_edges.wi, at_edges.wo) - 1)) > 0.01
+    pick = np.random.default_rng(2).choice(at_centres.n_samples, 2000, replace=False)
+    read_back = merl_brdf(centred, bin_centres=True)(at_centres.wi[pick], at_centres.wo[pick])
+    np.testing.assert_allclose(read_back, at_centres.values[pick], rtol=1e-9)
+
+
+def test_bin_centres_apply_to_merl_alone(tmp_path, capsys):
+    from brdffit.cli import main
+    from brdffit.data.load import load_samples
+    from brdffit.export.targets import export
+
+    csv = tmp_path / "s.csv"
+    csv.write_text("theta_i,phi_i,theta_o,phi_o,value\n10,0,20,180,0.1\n")
+    with pytest.raises(BrdfInputError, match=r"bin_centres applies to MERL files; .*s\.csv is csv"):
+        load_samples(csv, bin_centres=True)
+    assert main(["info", str(csv), "--bin-centres"]) == 2
+    assert "--bin-centres applies to MERL files" in capsys.readouterr().err
+    with pytest.raises(BrdfInputError, match="applies to MERL tables"):
+        export(None, "gltf", tmp_path / "x.gltf", bin_centres=True)
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["s.csv"]

@@ -149,9 +149,71 @@ def test_zero_specular_albedo_leaves_the_roughness_undetermined():
     with pytest.warns(UncertaintyWarning, match="not determined by these samples: alpha"):
         estimated = laplace_uncertainty(result, samples)
     assert estimated.uncertainty["stderr"]["alpha"] is None
+    assert estimated.uncertainty.undetermined["alpha"] == "no curvature: zero or singular Jacobian"
     assert all(e > 0 for e in estimated.uncertainty["stderr"]["rho_d"])
+    assert estimated.uncertainty.undetermined["rho_d"] == [None, None, None]
     json.loads(estimated.to_json())  # null, not NaN
-    assert "alpha" in estimated.table() and "± ?" in estimated.table()
+    (row,) = [line for line in estimated.table().splitlines() if line.lstrip().startswith("alpha")]
+    assert row.endswith(" 0.146 ± undetermined (no curvature: zero or singular Jacobian)")
+
+
+@pytest.fixture(scope="module")
+def dead_conductor_lobe():
+    """Cook-Torrance with a conductor's Fresnel fitted to a Lambertian surface (ρ = 0.25, 432 pairs, 1%
+    multiplicative noise, no sigma): ks is held at 1, so the lobe dies by its roughness and indices, whose Jacobian
+    columns are ~1e-16 of kd's but not zero. Issue 29 found ``k = 0 ± 2.1e13`` on such a fit, and its robust
+    errors (their ratio to the Gauss-Newton ones set by those columns' rounding) replaced kd's too."""
+    samples = data_synth.synthesize("lambert", {"rho_d": [0.25]}, *SMALL_GRID, noise=0.01, seed=5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FitWarning)
+        result = fit(samples, "cook-torrance", fresnel="conductor")
+    with pytest.warns(UncertaintyWarning, match="not determined by these samples") as caught:
+        estimated = laplace_uncertainty(result, samples)
+    return samples, estimated, [str(warning.message) for warning in caught]
+
+
+def test_an_error_beyond_the_plausible_range_is_undetermined(dead_conductor_lobe):
+    """The lobe's m, eta and k are null, each with its reason (an error over 10× the width of its plausible range:
+    m's range [0, 2], eta's [0, 10], k's [0, 20]); kd's error is the standard one, with them held: the Gauss-Newton
+    error of Lambert's ρ fitted alone (the same residuals), its noise scale s² = Σr²/(n − k) taken with k = 4 free
+    parameters instead of 1 (rel 1e-6: what couples the held ones, ~1e-16 of kd's column, is far below)."""
+    samples, estimated, found = dead_conductor_lobe
+    block = estimated.uncertainty
+    (said,) = [message for message in found if message.startswith("not determined by these samples: ")]
+    assert all(f"{name} (error " in said for name in ("m", "eta[value]", "k[value]"))
+    assert block["method"] == "laplace" and "heteroscedastic" not in block["warning_codes"]
+    assert block["stderr"]["m"] is None and block["stderr"]["eta"] == [None] and block["stderr"]["k"] == [None]
+    assert block.undetermined["m"].endswith("> 10× plausible range [0, 2]")
+    assert block.undetermined["eta"][0].endswith("> 10× plausible range [0, 10]")
+    assert block.undetermined["k"][0].endswith("> 10× plausible range [0, 20]")
+    assert block.undetermined["kd"] == [None]
+    alone = laplace_uncertainty(fit(samples, "lambert"), samples).uncertainty
+    n = 432
+    assert block["stderr"]["kd"][0] == pytest.approx(alone["stderr"]["rho_d"][0] * np.sqrt((n - 1) / (n - 4)), rel=1e-6)
+    table = estimated.table()
+    assert "k  " in table and "± undetermined (error " in table and "e+" not in table.split("± undetermined")[0]
+    assert "± Laplace standard errors (Gauss-Newton covariance" in table
+    assert json.loads(estimated.to_json())["uncertainty"]["undetermined"] == block.undetermined
+
+
+def test_undetermined_reasons_are_read_back_by_every_reader(dead_conductor_lobe, tmp_path):
+    """The block's ``undetermined`` survives the result file; a file written before it (no such field) reads as
+    ``{}`` and its null errors show as ``± undetermined``."""
+    from brdffit import load_result
+    from brdffit.fitting.single.result import Uncertainty
+
+    _, estimated, _ = dead_conductor_lobe
+    path = tmp_path / "r.json"
+    estimated.save(path)
+    assert load_result(path).uncertainty == estimated.uncertainty
+    older = json.loads(path.read_text())
+    del older["uncertainty"]["undetermined"]
+    block = Uncertainty.from_dict(older["uncertainty"])
+    assert block.undetermined == {}
+    (row,) = [line for line in replace(estimated, uncertainty=block).table().splitlines() if line.startswith("  m ")]
+    assert row.endswith(" ± undetermined")
+    with pytest.raises(BrdfInputError, match=r"uncertainty\.undetermined must be a JSON object"):
+        Uncertainty.from_dict(older["uncertainty"] | {"undetermined": []})
 
 
 # ------------------------------------------------------------------ calibration (issue 4 acceptance)

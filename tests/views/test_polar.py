@@ -114,3 +114,19 @@ def test_bad_arguments_give_one_line_naming_the_argument(samples, results, argum
     with pytest.raises(BrdfInputError, match=message) as error:
         polar(call.pop("results"), samples, **call)
     assert "\n" not in str(error.value)
+
+
+def test_a_long_spec_wraps_and_the_legend_stays_on_the_figure(samples):
+    """Issue 29: a long model spec in the legend ran off the figure's right edge. It wraps after its ``:`` and ``,``
+    and the figure grows tall enough for the legend's lines."""
+    options = {"distribution": "ggx", "shadowing": "smith-correlated", "fresnel": "dielectric"}
+    params = {"kd": [0.1] * 3, "ks": [0.5] * 3, "m": 0.2, "eta": 1.5}
+    long = [result_of("cook-torrance", params, **options), result_of("cook-torrance", params | {"m": 0.3}, **options)]
+    figure = polar(long, samples)
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    (legend,) = figure.legends
+    box = legend.get_window_extent(canvas.get_renderer())
+    assert figure.bbox.x0 <= box.x0 and box.x1 <= figure.bbox.x1
+    assert figure.bbox.y0 <= box.y0 and box.y1 <= figure.bbox.y1
+    assert [text.get_text().split("\n")[0] for text in legend.get_texts()[:2]] == ["cook-torrance:"] * 2

@@ -45,7 +45,7 @@ def test_the_report_says_what_the_data_are_which_model_and_its_errors(page, samp
     assert [spec for _, _, spec in ranking] == ["ward", "lambert"] and ranking[0][0] == "best"
     assert "<h3>1. <code>ward</code></h3>" in text and "<h3>2. <code>lambert</code></h3>" in text
     assert re.search(r"<td>0\.\d+ ± 0\.\d+</td>", text)  # a value with its Laplace error
-    assert "errors: laplace" in text
+    assert "± Laplace standard errors" in text or "± Laplace robust errors, for every parameter" in text
 
 
 def test_bad_arguments_write_nothing(samples, tmp_path):
@@ -89,3 +89,18 @@ def test_a_headless_browser_shows_the_table_and_the_images(page, tmp_path):
     assert best_row.sum() > 10_000
     coloured = np.ptp(pixels, axis=-1) > 60  # saturated pixels: the figures' data, curves and spheres
     assert coloured.sum() > 5_000
+
+
+def test_report_takes_the_samplers_settings_as_fit_does(samples, tmp_path, capsys):
+    """Issue 29: a short chain's warning says "run N steps or more", but ``report`` had no ``--steps``. It takes
+    ``--walkers``, ``--steps``, ``--burn`` and ``--thin`` as ``fit`` does, and the page says what ran; without
+    ``--uncertainty mcmc`` they are refused, before any work."""
+    data = tmp_path / "ward.csv"
+    save_samples(samples, data)
+    output = tmp_path / "r.html"
+    settings = ["--walkers", "8", "--steps", "60", "--burn", "20", "--thin", "2"]
+    argv = ["report", str(data), "--models", "lambert", "--folds", "2", *settings, "-o", str(output)]
+    assert main(argv) == 2
+    assert "--walkers applies only to --uncertainty mcmc" in capsys.readouterr().err and not output.exists()
+    assert main([*argv, "--uncertainty", "mcmc"]) == 0, capsys.readouterr().err
+    assert "± posterior standard deviation (emcee: 8 walkers × 60 steps, 20 burn-in;" in output.read_text()

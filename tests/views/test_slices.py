@@ -179,3 +179,29 @@ def test_bad_arguments_give_one_line_naming_the_argument(ward_and_lambert, argum
     with pytest.raises(BrdfInputError, match=message) as error:
         slices(call.pop("results"), call.pop("samples"), **call)
     assert "\n" not in str(error.value)
+
+
+def test_a_fit_of_cosine_weighted_values_is_drawn_against_them_read_so():
+    """Issue 29: a fit of the tape read as cosine-weighted-out (values f·cos θo, made BRDF by dividing by cos θo)
+    was drawn against the file read as brdf (``slices(result, path)`` reads a path with the defaults): f·cos θo on a
+    BRDF axis, without a word. A path is read as the result's samples were; Samples read otherwise draw a warning."""
+    import warnings
+
+    from paths import TAPE
+
+    from brdffit import InputWarning
+    from brdffit.views.figures import checked_samples
+
+    as_fitted = load_samples(TAPE, quantity="cosine-weighted-out")
+    result = result_of("lambert", {"rho_d": [0.5]}, channels=as_fitted.channels)
+    result = FitResult(**{**result.__dict__, "quantity": "cosine-weighted-out"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read = checked_samples(TAPE, [result])
+        slices(result, TAPE)
+    assert read.provenance.quantity == "cosine-weighted-out"
+    np.testing.assert_array_equal(read.values, as_fitted.values)
+    with pytest.warns(
+        InputWarning, match=r"lambert was fitted to samples read as cosine-weighted-out; .* is read as brdf"
+    ):
+        slices(result, load_samples(TAPE, quantity="brdf"))

@@ -97,3 +97,30 @@ def test_bad_arguments_are_one_line_errors_naming_them():
         sphere(result("ward", WARD), 3)
     with pytest.raises(BrdfInputError, match=r"^nowhere/samples.csv: no such file$"):  # a path is read
         sphere(result("ward", WARD), "nowhere/samples.csv")
+
+
+LONG_OPTIONS = {"distribution": "ggx", "shadowing": "smith-correlated", "fresnel": "conductor", "anisotropic": True}
+LONG_CONDUCTOR = {
+    "kd": [0.01] * 3,
+    "ks": [1.0] * 3,
+    "alpha_u": 0.2,
+    "alpha_v": 0.1,
+    "phi_t": 10.0,
+    "eta": [0.2, 0.5, 1.4],
+    "k": [3.9, 2.5, 1.9],
+}
+
+
+def test_long_specs_wrap_so_that_titles_neither_overlap_nor_leave_the_figure():
+    """Issue 29: a 79-character spec (``cook-torrance:distribution=ggx,shadowing=smith-correlated,…``) ran into the
+    next panel's title and off the figure. Titles wrap after the spec's ``:`` and ``,``: every title's box, as drawn,
+    lies inside the figure and apart from the others."""
+    long = result("cook-torrance", LONG_CONDUCTOR, **LONG_OPTIONS)
+    figure = sphere([long, long, result("ward", WARD)], size=32)
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    renderer, whole = canvas.get_renderer(), figure.bbox
+    boxes = [axis.title.get_window_extent(renderer) for axis in image_axes(figure)]
+    assert figure.axes[0].get_title().startswith("cook-torrance:distribution=ggx,\nshadowing=smith-correlated,\n")
+    assert all(whole.x0 <= box.x0 and box.x1 <= whole.x1 for box in boxes)
+    assert all(not a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1 :])

@@ -30,8 +30,9 @@ class Uncertainty(Mapping[str, Any]):
     value is None); ``covariance`` and ``correlation`` are ``{"names": [...], "matrix": [[...]]}`` over the flat
     physical parameters (``rho_d[r]``, ``lobes[0].cxy``); ``diagnostics`` depend on the method; ``warnings`` say
     what a user must know about the estimate, and ``warning_codes`` (``brdffit/uncertainty/findings.py``) which
-    finding each is, for programs. Also a read-only mapping of those names, as the JSON has them
-    (``result.uncertainty["stderr"]``).
+    finding each is, for programs. ``undetermined``: why each null error of ``stderr`` is null, in its layout (a
+    reason where the error is null, None elsewhere; ``{}`` when every error is determined, and in files written before
+    it). Also a read-only mapping of those names, as the JSON has them (``result.uncertainty["stderr"]``).
     """
 
     method: str
@@ -42,6 +43,7 @@ class Uncertainty(Mapping[str, Any]):
     diagnostics: dict[str, Any]
     warnings: list[str]
     warning_codes: list[str]
+    undetermined: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -334,18 +336,9 @@ def result_table(result: FitResult, source: str | None = None) -> str:
     options = f" ({options})" if options else ""
     size = f"{result.n_samples} samples × {len(result.channels)} channel(s)"
     lines = [f"{result.model}{options} fit{what}: {size}, loss {result.loss}"]
-    rows = list(parameter_rows(result.params))
-    errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
-    fixed = {label for label, _ in parameter_rows(_nested(result.fixed))}
-    label_width = max(len("parameter"), *(len(label) for label, _ in rows))
+    cells = parameter_cells(result)
+    label_width = max(len("parameter"), *(len(label) for label in cells))
     columns = [str(c) for c in result.channels]
-    cells = {
-        label: [
-            f"= {v:.10g}" if label in fixed else value_with_error(v, e, bool(errors))
-            for v, e in zip(_as_list(value), _as_list(errors.get(label, [None] * len(_as_list(value)))), strict=True)
-        ]
-        for label, value in rows
-    }
     cell = max(12, *(len(c) + 2 for c in columns), *(len(text) + 2 for texts in cells.values() for text in texts))
     lines.append("  " + "parameter".ljust(label_width) + "".join(c.rjust(cell) for c in columns))
     for label, texts in cells.items():
@@ -359,9 +352,38 @@ def result_table(result: FitResult, source: str | None = None) -> str:
         lines.append(f"  bounds: {bounds}")
     if result.uncertainty:
         held = "; fixed parameters (= value) have no error" if result.fixed else ""
-        lines.append("  " + _uncertainty_line(result.uncertainty) + held)
+        lines.append("  " + uncertainty_line(result.uncertainty) + held)
     lines += [f"  warning: {caveat}" for caveat in result.warnings]
     return "\n".join(lines)
+
+
+def parameter_cells(result: FitResult) -> dict[str, list[str]]:
+    """The text of each parameter's cells, one per channel (one for a shared parameter), by row label
+    (:func:`parameter_rows`): ``value ± error``, ``value ± undetermined (why)``, or ``= value`` for a held one."""
+    errors = dict(parameter_rows(result.uncertainty["stderr"])) if result.uncertainty else {}
+    why = dict(parameter_rows(result.uncertainty.undetermined)) if result.uncertainty else {}
+    fixed = {label for label, _ in parameter_rows(_nested(result.fixed))}
+
+    def per_channel(table: dict, label: str, value) -> list:
+        return _as_list(table.get(label, [None] * len(_as_list(value))))
+
+    return {
+        label: [
+            f"= {v:.10g}" if label in fixed else value_with_error(v, e, bool(errors), reason)
+            for v, e, reason in zip(
+                _as_list(value), per_channel(errors, label, value), per_channel(why, label, value), strict=True
+            )
+        ]
+        for label, value in parameter_rows(result.params)
+    }
+
+
+#: What the ``±`` of each method's errors is, as the table's footer and the report name them.
+ERRORS_SHOWN = {
+    "laplace": "Laplace standard errors",
+    "laplace-robust": "Laplace robust errors, for every parameter",
+    "mcmc": "posterior standard deviation",
+}
 
 
 def parameter_rows(params: dict[str, Any]):
@@ -406,15 +428,17 @@ def _as_list(value) -> list:
     return value if isinstance(value, list) else [value]
 
 
-def value_with_error(value: float, error: float | None = None, has_error: bool = False) -> str:
+def value_with_error(value: float, error: float | None = None, has_error: bool = False, why: str | None = None) -> str:
     """``value`` to 6 significant digits, or ``value ± error`` with the error to 2 digits and the value to match.
 
-    ``has_error`` with ``error`` None (undetermined) gives ``value ± ?``.
+    ``has_error`` with ``error`` None (undetermined) gives ``value ± undetermined (why)`` (``± undetermined`` when a
+    file says no reason).
     """
     if not math.isfinite(value):
         return str(value)
     if error is None or not math.isfinite(error) or error <= 0:
-        return f"{value:.6g}" + (" ± ?" if has_error and error is None else "")
+        reason = f" ({why})" if why else ""
+        return f"{value:.6g}" + (f" ± undetermined{reason}" if has_error and error is None else "")
     decimals = max(0, 1 - math.floor(math.log10(error)))
     if decimals > 7 or abs(value) >= 1e6:  # fixed point would be long: the value to its error's digits, in e-form
         digits = max(0, math.floor(math.log10(abs(value))) - math.floor(math.log10(error))) + 1 if value else 1
@@ -422,25 +446,26 @@ def value_with_error(value: float, error: float | None = None, has_error: bool =
     return f"{value:.{decimals}f} ± {error:.{decimals}f}"
 
 
-def _uncertainty_line(block) -> str:
-    """One line on how the errors were found."""
+def uncertainty_line(block) -> str:
+    """One line on which errors the ``±`` shows (:data:`ERRORS_SHOWN`) and how they were found."""
     diagnostics = block.get("diagnostics", {})
     if block.get("method") == "mcmc":
         tau = max((t for t in diagnostics.get("autocorr_time", []) if t is not None), default=float("nan"))
         ess = min((e for e in diagnostics.get("effective_samples", []) if e is not None), default=float("nan"))
         return (
-            f"± posterior standard deviation (emcee: {diagnostics.get('n_walkers')} walkers × "
+            f"± {ERRORS_SHOWN['mcmc']} (emcee: {diagnostics.get('n_walkers')} walkers × "
             f"{diagnostics.get('n_steps')} steps, {diagnostics.get('burn')} burn-in; acceptance "
             f"{diagnostics.get('acceptance', float('nan')):.2f}, τ ≤ {tau:.0f} steps, ≥ {ess:.0f} effective samples)"
         )
     noise, chi2 = diagnostics.get("noise_scale"), diagnostics.get("reduced_chi2")
     if block.get("method") == "laplace-robust":
         return (
-            "± Laplace standard error, heteroscedasticity-robust (sandwich A⁻¹BA⁻¹ at the optimum: the residuals'"
-            " scatter varies, so the Gauss-Newton errors would be too small)"
+            f"± {ERRORS_SHOWN['laplace-robust']} (heteroscedasticity-robust: sandwich A⁻¹BA⁻¹ at the"
+            " optimum), in place of the standard errors, which assume one scatter for every residual where the"
+            " residuals' scatter varies; both are in uncertainty.diagnostics"
         )
     if noise is not None:
         how = f"no sigma: scaled by the residuals' scatter, {noise:.3g} in the loss's units"
     else:
         how = f"sigma given; reduced χ² {chi2:.4g}" if isinstance(chi2, float) else "sigma given"
-    return f"± Laplace standard error (Gauss-Newton covariance at the optimum; {how})"
+    return f"± {ERRORS_SHOWN['laplace']} (Gauss-Newton covariance at the optimum; {how})"
