@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-reading lint format docs examples clean
+.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-reading bench-threads lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -51,6 +51,11 @@ bench-renderers: $(STAMP)
 # (~1 minute); writes benchmarks/results/reading.{json,md}.
 bench-reading: $(STAMP)
 	$(BIN)/python benchmarks/reading.py
+
+# Issue 29's race: 300 files fitted with --threads 16, 10 runs, counting crashes (~5 minutes); writes
+# benchmarks/results/threads.{json,md}.
+bench-threads: $(STAMP)
+	$(BIN)/python benchmarks/threads.py
 
 lint: $(STAMP)
 	$(BIN)/ruff format --check .
