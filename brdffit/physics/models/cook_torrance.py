@@ -93,9 +93,12 @@ class CookTorranceLobe(MappedLobe):
         started below 1 does not cross)."""
         for name, _, starts in FRESNEL[self.fresnel].parameters:
             shapes = [shape | {name: start} for shape in shapes for start in starts]
-        reflectance = FRESNEL[self.fresnel].reflectance
+        if not shapes or not FRESNEL[self.fresnel].parameters:
+            return tuple(shapes)
+        stacked = {name: np.array([shape[name] for shape in shapes]) for name in shapes[0]}
         with jax.ensure_compile_time_eval():  # numbers, also where a program being traced asks for the grid
-            return tuple(shape for shape in shapes if float(reflectance(np.float64(1.0), shape)) > 0.0)
+            at_normal = np.asarray(FRESNEL[self.fresnel].reflectance(np.ones(len(shapes)), stacked))
+        return tuple(shape for shape, reflects in zip(shapes, at_normal > 0.0, strict=True) if reflects)
 
     @property
     def channel_names(self) -> tuple[str, ...]:
