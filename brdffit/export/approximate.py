@@ -20,7 +20,8 @@ import numpy as np
 from ..data.samples import Samples
 from ..fitting.options import HOLDING_NOTHING, Holding, Solving
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
-from ..fitting.single.fit import fit_one
+from ..errors import BrdfInputError
+from ..fitting.single.fit import fit_one, start_vector
 from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
 from ..physics.models.model import Model
@@ -258,10 +259,16 @@ def coarse_refit(
 
 def refined(known: Reference, coarse: FitResult, holding: Holding = HOLDING_NOTHING) -> FitResult:
     """The :func:`coarse_refit` ``coarse`` solved again on the fine grid of ``known`` from its optimum (no start
-    search): solved in float32 and refined in float64 (:data:`REFIT_SOLVING`)."""
+    search; the search again where the optimum is one no start may be, ``fitting/single/fit.start_vector``): solved in
+    float32 and refined in float64 (:data:`REFIT_SOLVING`)."""
     model = get_model(coarse.model, **coarse.model_options)
     holding = _freed(model, holding)
-    return fit_one(known.fine, model, known.result.loss, start=coarse.params, solving=REFIT_SOLVING, holding=holding)
+    loss = known.result.loss
+    try:
+        start_vector(model, coarse.params, len(coarse.channels))
+    except BrdfInputError:  # a shape run off to where no fit moves (a conductor's eta of 10⁸): every start searched
+        return fit_one(known.fine, model, loss, solving=REFIT_SOLVING, holding=holding)
+    return fit_one(known.fine, model, loss, start=coarse.params, solving=REFIT_SOLVING, holding=holding)
 
 
 def _freed(model: Model, holding: Holding) -> Holding:
