@@ -23,6 +23,7 @@ import datetime
 import json
 import os
 import platform
+import resource
 import statistics
 import subprocess
 import sys
@@ -53,16 +54,20 @@ FITS = {
 RENDER = ["--size", "256", "--spp", "64"]
 
 
-def brdffit(checkout: Path, *arguments: str, cache: Path) -> tuple[float, str]:
-    """Run ``brdffit ARGUMENTS`` from ``checkout`` in a fresh process; its wall seconds and its output."""
+def brdffit(checkout: Path, *arguments: str, cache: Path) -> tuple[float, float, str]:
+    """Run ``brdffit ARGUMENTS`` from ``checkout`` in a fresh process; its wall seconds, its CPU seconds (user and
+    system, all its threads: what a shared machine's load does not inflate as much) and its output."""
     environment = os.environ | {"PYTHONPATH": str(checkout), "BRDFFIT_CACHE_DIR": str(cache)}
     command = [sys.executable, "-c", "import sys; from brdffit.cli import main; sys.exit(main(sys.argv[1:]))"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run([*command, *arguments], env=environment, capture_output=True, text=True, check=False)
     seconds = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if done.returncode != 0:
         raise RuntimeError(f"brdffit {' '.join(arguments)} failed ({done.returncode}): {done.stderr.strip()}")
-    return seconds, done.stdout
+    return seconds, cpu, done.stdout
 
 
 def commands(folder: Path) -> dict[str, list[str]]:
@@ -90,16 +95,25 @@ def measured(checkouts: dict[str, Path], repeats: int, folder: Path) -> dict:
                 for state in ("cold", "warm"):
                     if state == "cold":  # the cache of this command's programs emptied: a first run
                         caches[label] = Path(tempfile.mkdtemp(prefix=f"brdffit-bench-{label}-"))
-                    seconds, out = brdffit(checkout, *arguments, cache=caches[label])
-                    runs.setdefault(label, {}).setdefault(command, {}).setdefault(state, []).append(seconds)
-                    runs[label][command]["says"] = out.splitlines()[1].strip()[:160] if "\n" in out else ""
-                    print(f"  round {round_ + 1}: {label:8} {state}  {seconds:6.2f} s  {command}", flush=True)
+                    seconds, cpu, out = brdffit(checkout, *arguments, cache=caches[label])
+                    timing = runs.setdefault(label, {}).setdefault(command, {})
+                    timing.setdefault(state, []).append(seconds)
+                    timing.setdefault(f"{state}_cpu", []).append(cpu)
+                    timing["says"] = out.splitlines()[1].strip()[:160] if "\n" in out else ""
+                    print(
+                        f"  round {round_ + 1}: {label:8} {state}  {seconds:6.2f} s ({cpu:5.2f} s CPU)  {command}",
+                        flush=True,
+                    )
     return {
         label: {
             command: {
-                state: {"median_s": statistics.median(times), "runs_s": times}
-                for state, times in timing.items()
-                if state != "says"
+                state: {
+                    "median_s": statistics.median(timing[state]),
+                    "runs_s": timing[state],
+                    "median_cpu_s": statistics.median(timing[f"{state}_cpu"]),
+                    "runs_cpu_s": timing[f"{state}_cpu"],
+                }
+                for state in ("cold", "warm")
             }
             | {"says": timing["says"]}
             for command, timing in by_command.items()
@@ -118,14 +132,18 @@ def table(results: dict) -> str:
         for label in labels:
             timing = results["timings"][label].get(command)
             for state in ("cold", "warm"):
-                cells.append("—" if timing is None else f"{timing[state]['median_s']:.2f} s")
+                cells.append(
+                    "—"
+                    if timing is None
+                    else f"{timing[state]['median_s']:.2f} s ({timing[state]['median_cpu_s']:.2f} s CPU)"
+                )
         lines.append(f"| `brdffit {command}` | " + " | ".join(cells) + " |")
     machine = results["machine"]
     lines.append("")
     lines.append(
         f"{results['date']}, {machine['cpus']} cores ({machine['processor'] or machine['platform']}), medians of"
-        f" {results['repeats']} runs, each a fresh process; cold: an empty compilation cache, warm: the cache the"
-        " cold run filled."
+        f" {results['repeats']} runs, each a fresh process: wall seconds, process start to exit (and the process's"
+        " CPU seconds, user and system); cold: an empty compilation cache, warm: the cache the cold run filled."
     )
     return "\n".join(lines)
 
@@ -142,6 +160,7 @@ def main() -> None:
         cache = Path(tempfile.mkdtemp(prefix="brdffit-bench-fits-"))
         for name, options in FITS.items():
             brdffit(ROOT, "fit", str(EXAMPLE), *options, "-o", str(folder / f"{name}.json"), cache=cache)
+            print(f"  fitted {name}", flush=True)
         results = {
             "date": datetime.date.today().isoformat(),
             "repeats": args.repeats,

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.samples import Samples
+from ..errors import BrdfInputError
 from ..fitting.options import HOLDING_NOTHING, Holding, Solving
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
-from ..errors import BrdfInputError
 from ..fitting.single.fit import fit_one, start_vector
 from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical, spherical_to_direction

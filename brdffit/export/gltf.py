@@ -1,8 +1,9 @@
 """A fitted BRDF as a glTF 2.0 material: the glTF metallic-roughness BRDF (``gltf_material.py``) fitted to it, and the
 ``.gltf`` or ``.glb`` file.
 
-**The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.dense_grid`
-(:func:`~brdffit.export.approximate.tabulated`) and the glTF parameters are fitted to it with the fit's own loss
+**The fit** (:func:`fit_gltf`): the fitted BRDF is tabulated on :func:`~brdffit.export.approximate.fitting_grid`
+(:func:`~brdffit.export.approximate.reference`: half the dense grid where the fit is mirror-symmetric, and a coarse
+subset of it the starts are ranked on) and the glTF parameters are fitted to it with the fit's own loss
 (residual ``T(f) − T(y)``, ``fitting/objective/losses.py``) by Levenberg-Marquardt (``optimistix.least_squares`` with
 brdffit's solver, ``fitting/solver/levenberg_marquardt.py``: :func:`_solve` says why not optimistix's own), in
 unconstrained coordinates (logistic maps onto [0, 1]), from a few starts; then again with the extensions' parameters
@@ -433,7 +434,7 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
 def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:
     """The glTF material closest to ``result``'s fitted BRDF, and how far it lies from it.
 
-    The fitted BRDF is tabulated on ``export.approximate.dense_grid`` and :func:`fit_material` fits glTF's BRDF to
+    The fitted BRDF is tabulated on ``export.approximate.fitting_grid`` and :func:`fit_material` fits glTF's BRDF to
     it with ``result``'s loss. Channels: r, g, b (any three) as they are; x, y, z (CIE XYZ) converted to linear
     sRGB first (``views/render.display_rgb``); one channel as grey; other counts are refused. The
     :class:`~brdffit.export.approximate.Approximation` compares the material with the fit in the fit's own

@@ -32,7 +32,8 @@ rational approximation (2007, eq. 27), within 0.5% of the exact ``erf`` form brd
 
 Every other model (Ward, Phong, Lafortune, the V-groove and height-correlated shadowing, Schlick's Fresnel) has no
 Mitsuba counterpart: the export fits Mitsuba's model (GGX and Beckmann ``roughconductor`` with a diffuse term,
-the better of the two) to the fitted BRDF (``approximate.py``) and reports how far it lies.
+the better of the two; one whose coarse fit lies :data:`CANNOT_WIN` times farther than the other's is not refined)
+to the fitted BRDF (``approximate.py``) and reports how far it lies.
 """
 
 import dataclasses

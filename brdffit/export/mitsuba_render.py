@@ -15,6 +15,9 @@ Given the data (``samples``), the PNG shows three spheres side by side at the on
 export, brdffit's render of the fit (``views/render.py``: the same light, an orthographic camera) and the data's own
 sphere (each pixel's nearest sample; lit pixels no sample is near are striped grey): an export that renders too dark
 or a highlight the fit misses shows at once.
+
+A Mitsuba BSDF file (``brdffit export --to mitsuba``'s XML, :func:`render_bsdf_file`) renders in the same scene as it
+is, loaded by Mitsuba: an export is made once and rendered as often as wanted, with nothing fitted again.
 """
 
 import os
