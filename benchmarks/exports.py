@@ -61,7 +61,10 @@ def brdffit(checkout: Path, *arguments: str, cache: Path) -> tuple[float, float,
     command = [sys.executable, "-c", "import sys; from brdffit.cli import main; sys.exit(main(sys.argv[1:]))"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    done = subprocess.run([*command, *arguments], env=environment, capture_output=True, text=True, check=False)
+    # Run outside any checkout: ``python -c`` puts the working folder first on the path, ahead of PYTHONPATH.
+    done = subprocess.run(
+        [*command, *arguments], env=environment, capture_output=True, text=True, check=False, cwd=cache
+    )
     seconds = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
