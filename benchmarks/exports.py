@@ -90,14 +90,14 @@ def measured(checkouts: dict[str, Path], repeats: int, folder: Path) -> dict:
     """Every command of :func:`commands` for each checkout, cold and warm, ``repeats`` times, taking turns."""
     runs: dict = {}
     for round_ in range(repeats):
-        caches = {label: Path(tempfile.mkdtemp(prefix=f"brdffit-bench-{label}-")) for label in checkouts}
+        caches = {label: Path(tempfile.mkdtemp(prefix=f"cache-{label}-", dir=folder)) for label in checkouts}
         for command, arguments in commands(folder).items():
             for label, checkout in checkouts.items():
                 if arguments[0] == "render" and arguments[1].endswith(".xml") and label != "this":
                     continue  # an older brdffit cannot render a BSDF file
                 for state in ("cold", "warm"):
                     if state == "cold":  # the cache of this command's programs emptied: a first run
-                        caches[label] = Path(tempfile.mkdtemp(prefix=f"brdffit-bench-{label}-"))
+                        caches[label] = Path(tempfile.mkdtemp(prefix=f"cache-{label}-", dir=folder))
                     seconds, cpu, out = brdffit(checkout, *arguments, cache=caches[label])
                     timing = runs.setdefault(label, {}).setdefault(command, {})
                     timing.setdefault(state, []).append(seconds)
@@ -160,7 +160,7 @@ def main() -> None:
     checkouts = {"this": ROOT} | ({"baseline": args.baseline.resolve()} if args.baseline else {})
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-exports-") as folder:
         folder = Path(folder)
-        cache = Path(tempfile.mkdtemp(prefix="brdffit-bench-fits-"))
+        cache = Path(tempfile.mkdtemp(prefix="cache-fits-", dir=folder))
         for name, options in FITS.items():
             brdffit(ROOT, "fit", str(EXAMPLE), *options, "-o", str(folder / f"{name}.json"), cache=cache)
             print(f"  fitted {name}", flush=True)
