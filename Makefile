@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-reading bench-threads lint format docs examples clean
+.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-exports bench-reading bench-threads lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -46,6 +46,11 @@ bench-pca: $(STAMP)
 # evaluated by Mitsuba at the data's directions (~10 minutes); writes benchmarks/results/renderers.{json,md}.
 bench-renderers: $(STAMP)
 	$(BIN)/python benchmarks/renderers.py
+
+# Exports and renders timed in fresh processes, cold and warm (issue 28; ~10 minutes); writes
+# benchmarks/results/exports.{json,md}. BASELINE=CHECKOUT times another checkout in the same rounds.
+bench-exports: $(STAMP)
+	$(BIN)/python benchmarks/exports.py $(if $(BASELINE),--baseline $(BASELINE))
 
 # Reading a samples file (issue 29): peak memory and time per row of load_samples on CSVs of 10⁵ and 10⁶ rows
 # (~1 minute); writes benchmarks/results/reading.{json,md}.

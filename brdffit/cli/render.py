@@ -1,4 +1,5 @@
-"""``brdffit render RESULT.json -o sphere.png``: a sphere with the fit's Mitsuba 3 BSDF, rendered by Mitsuba."""
+"""``brdffit render RESULT.json -o sphere.png``: a sphere with the fit's Mitsuba 3 BSDF, rendered by Mitsuba; ``brdffit
+render BSDF.xml`` renders an exported BSDF file as it is, without fitting anything again."""
 
 import argparse
 from pathlib import Path
@@ -12,7 +13,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "result",
         metavar="RESULT.json",
-        help="a result file of brdffit fit, or a comparison file of brdffit compare -o (its best model)",
+        help="a result file of brdffit fit, or a comparison file of brdffit compare -o (its best model), or a Mitsuba"
+        " BSDF file (.xml, brdffit export --to mitsuba's): rendered as it is, nothing fitted again",
     )
     parser.add_argument(
         "-o",
@@ -38,8 +40,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def files(args: argparse.Namespace) -> Files:
-    """What ``render`` reads and writes (:func:`~brdffit.cli.arguments.fit_file_files`)."""
+    """What ``render`` reads and writes (:func:`~brdffit.cli.arguments.fit_file_files`; a BSDF file and the image)."""
+    if _is_bsdf_file(args.result):
+        return Files.of(inputs={"RESULT.json": args.result, "--samples": args.samples}, outputs={"-o": _output(args)})
     return fit_file_files(args, _output(args))
+
+
+def _is_bsdf_file(path: str) -> bool:
+    """Whether RESULT names a Mitsuba BSDF file (by its suffix, ``export.mitsuba_render.XML_SUFFIX``)."""
+    return Path(path).suffix.lower() == ".xml"
 
 
 def _output(args: argparse.Namespace) -> str:
@@ -58,11 +67,37 @@ def run(args: argparse.Namespace) -> int:
     output = _output(args)
     if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
+    if _is_bsdf_file(args.result):
+        return _run_bsdf_file(args, output, exposure)
     result = fit_file(args.result)
     path = output_file(output, "-o")
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
+    from .._programs.cache import enable_compilation_cache
+
+    enable_compilation_cache()  # the export's programs, compiled once per machine (as export's)
     exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=args.samples)
     print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
     for line in exported.comment_lines()[1:]:
+        print(f"  {line}")
+    return EXIT_OK
+
+
+def _run_bsdf_file(args: argparse.Namespace, output: str, exposure) -> int:
+    """``render BSDF.xml``: the file's BSDF rendered as it is (``export.mitsuba_render.render_bsdf_file``)."""
+    from ..errors import BrdfInputError
+    from ..export.mitsuba_render import mitsuba, render_bsdf_file
+
+    if args.samples is not None:
+        raise BrdfInputError(
+            f"--samples {args.samples}: the render beside the data needs the fit, which {args.result} does not hold;"
+            " give the result file it was exported from"
+        )
+    if not Path(args.result).is_file():
+        raise BrdfInputError(f"{args.result}: no such file")
+    path = output_file(output, "-o")
+    mitsuba()
+    lines = render_bsdf_file(args.result, path, size=args.size, spp=args.spp, exposure=exposure)
+    print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}, as the file is")
+    for line in lines[1:]:  # the first says what made it; the rest how far it lies
         print(f"  {line}")
     return EXIT_OK

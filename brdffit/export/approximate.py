@@ -1,11 +1,15 @@
 """A fitted BRDF approximated by another model: what an export does when a renderer has no exact counterpart.
 
-The fitted model is tabulated on a dense hemisphere grid (:func:`dense_grid`); the renderer's model is fitted to
-those values with the fit's own loss; how far the two differ is reported (:class:`Approximation`): the rmse over
-:func:`error_grid` (the dense grid and the plane of incidence, where the highlight is: the dense grid's azimuths are
-bins' midpoints, which never sample the mirror direction), in 1/sr, and the worst relative difference of their
-directional albedos ``∫ f cos θo dωo`` (the light a surface reflects, at the incidences
-``fitting/single/caveats.py`` checks: 0°, 30°, 60°, 80°).
+The fitted model is tabulated on a dense hemisphere grid (:func:`fitting_grid`: :func:`dense_grid`, or half of it
+where the fitted BRDF is mirror-symmetric about the plane of incidence, as a light at azimuth 0 makes every isotropic
+BRDF: the other half repeats it, and the optimum is the same); the renderer's model is fitted to those values with the
+fit's own loss, coarse to fine (:func:`refit`: the fit's own start search on a coarse subset of the grid, its optimum
+solved again on the whole); how far the two differ is reported (:class:`Approximation`): the rmse over
+:func:`error_grid` (the dense grid and the plane of incidence with each light's mirror direction, where the highlight
+is: the dense grid's azimuths are bins' midpoints, which never sample the mirror direction), in 1/sr, and the worst
+relative difference of their directional albedos ``∫ f cos θo dωo`` (the light a surface reflects, at the incidences
+``fitting/single/caveats.py`` checks: 0°, 30°, 60°, 80°). What an approximation needs of the fit is computed once for
+every candidate model (:class:`Reference`).
 """
 
 from collections.abc import Callable
@@ -14,9 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.samples import Samples
+from ..errors import BrdfInputError
 from ..fitting.options import HOLDING_NOTHING, Holding, Solving
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
-from ..fitting.single.fit import fit_one
+from ..fitting.single.fit import fit_one, start_vector
 from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical, spherical_to_direction
 from ..physics.models.model import Model
@@ -24,9 +29,17 @@ from ..physics.models.registry import get_model
 
 #: An approximation whose rmse exceeds this fraction of the BRDF's own rms misses its shape, and says so.
 POOR_SHAPE = 0.5
-#: The grid a fit is tabulated on: light zeniths, viewer zeniths (midpoints of equal bins over [0°, 90°)) and viewer
-#: azimuths (midpoints of equal bins over [0°, 360°)); 12 × 45 × 72 = 38,880 pairs, every 2° in θo and 5° in φo.
+#: The grid an approximation's error is measured on (:func:`dense_grid`): light zeniths, viewer zeniths (midpoints of
+#: equal bins over [0°, 90°)) and viewer azimuths (midpoints of equal bins over [0°, 360°)); 12 × 45 × 72 = 38,880
+#: pairs, every 2° in θo and 5° in φo.
 GRID = (12, 45, 72)
+#: The grid a renderer's model is fitted on (:func:`fitting_grid`): :data:`GRID`, halved where the BRDF is
+#: mirror-symmetric (19,440 pairs: the same optimum as the whole grid's, for half the work).
+FIT_GRID = GRID
+#: The grid the start search runs on (:func:`coarse_refit`, and glTF's ``fit_material``): a subset of :data:`GRID`, its
+#: 12 light zeniths, every third viewer zenith (6°) and every third azimuth (15°); 12 × 15 × 12 = 2,160 pairs where
+#: the BRDF is mirror-symmetric. (Fewer light zeniths, 6, put the search's optimum of glTF's model in another valley.)
+COARSE_GRID = (12, 15, 24)
 
 
 def dense_grid(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarray]:
@@ -38,6 +51,31 @@ def dense_grid(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarr
     azimuth = (np.arange(n_phi) + 0.5) * (2 * np.pi) / n_phi
     theta_i, theta_o, phi_o = (a.ravel() for a in np.meshgrid(light, view, azimuth, indexing="ij"))
     return spherical_to_direction(theta_i, 0.0 * theta_i), spherical_to_direction(theta_o, phi_o)
+
+
+def fitting_grid(shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Direction pairs ``wi``, ``wo`` (N, 3) a renderer's model is fitted on: :func:`dense_grid`'s (``shape[2]``
+    even), or with ``symmetric`` those of its azimuths in (0°, 180°) alone, for a BRDF that is the same at ``φo`` and
+    ``−φo`` (:func:`mirror_symmetric`): the azimuths' midpoints lie in mirror pairs (``φo`` and ``360° − φo``), so
+    the half grid's cost is half the whole one's at every parameter, and its optimum the same."""
+    wi, wo = dense_grid(shape)
+    if not symmetric:
+        return wi, wo
+    upper = wo[:, 1] > 0.0
+    return wi[upper], wo[upper]
+
+
+#: A BRDF whose values at ``φo`` and ``−φo`` agree within this (relative) is mirror-symmetric: float64 rounding.
+SYMMETRY_TOLERANCE = 1e-9
+
+
+def mirror_symmetric(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> bool:
+    """Whether ``brdf(wi, wo) -> (N, C)`` is the same with the viewer mirrored about the plane of incidence (``wo_y →
+    −wo_y``, the light at azimuth 0): every isotropic BRDF, and an anisotropic one whose axes lie along and across
+    that plane. Checked on the coarse grid (:data:`COARSE_GRID`)."""
+    wi, wo = dense_grid(COARSE_GRID)
+    values, mirrored = (np.asarray(brdf(wi, w)) for w in (wo, wo * np.array([1.0, -1.0, 1.0])))
+    return bool(np.all(np.abs(values - mirrored) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
 
 
 def plane_of_incidence(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarray]:
@@ -116,19 +154,47 @@ class Approximation:
         )
 
 
-def tabulated(result: FitResult, shape: tuple[int, int, int] = GRID) -> Samples:
-    """The fitted BRDF of ``result`` on :func:`dense_grid`, as samples (its channels; values, not measurements)."""
-    wi, wo = dense_grid(shape)
+@dataclass(frozen=True)
+class Reference:
+    """A fit as its approximations need it, computed once for all the candidate models an export tries: the fitted
+    BRDF tabulated on :func:`fitting_grid` (``fine``, :data:`FIT_GRID`) and on the coarse grid its start search runs on
+    (``coarse``, :data:`COARSE_GRID`), half of each where it is mirror-symmetric (``symmetric``,
+    :func:`mirror_symmetric`); its values on :func:`error_grid` (``values``, (N, C) 1/sr) and its directional albedos
+    (``albedos``, (incidences, C))."""
+
+    result: FitResult
+    symmetric: bool
+    fine: Samples | None
+    coarse: Samples | None
+    values: np.ndarray
+    albedos: np.ndarray
+
+
+def reference(result: FitResult) -> Reference:
+    """The :class:`Reference` of ``result``."""
+    symmetric = mirror_symmetric(result.predict)
+    fine, coarse = (tabulated(result, shape, symmetric) for shape in (FIT_GRID, COARSE_GRID))
+    wi, wo = error_grid()
+    return Reference(result, symmetric, fine, coarse, np.asarray(result.predict(wi, wo)), _albedos(result.predict))
+
+
+def tabulated(result: FitResult, shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False) -> Samples:
+    """The fitted BRDF of ``result`` on :func:`fitting_grid`, as samples (its channels; values, not measurements)."""
+    wi, wo = fitting_grid(shape, symmetric)
     return Samples.from_arrays(wi, wo, result.predict(wi, wo), channels=result.channels, source="the fitted BRDF")
 
 
-def approximation_error(result: FitResult, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> Approximation:
-    """How far ``brdf(wi, wo) -> (N, C)`` (1/sr) lies from ``result``'s fitted BRDF (:class:`Approximation`)."""
+def approximation_error(
+    result: FitResult, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], known: Reference | None = None
+) -> Approximation:
+    """How far ``brdf(wi, wo) -> (N, C)`` (1/sr) lies from ``result``'s fitted BRDF (:class:`Approximation`);
+    ``known``: ``result``'s :class:`Reference`, when it was computed already."""
+    known = reference_values(result) if known is None else known
     wi, wo = error_grid()
-    fitted, approximated = result.predict(wi, wo), np.asarray(brdf(wi, wo))
+    fitted, approximated = known.values, np.asarray(brdf(wi, wo))
     rmse = float(np.sqrt(np.mean((approximated - fitted) ** 2)))
     relative = rmse / max(float(np.sqrt(np.mean(fitted**2))), 1e-300)
-    original = _albedos(lambda a, b: result.predict(a, b))
+    original = known.albedos
     approximate = _albedos(brdf)
     albedo = np.abs(approximate - original) / np.maximum(original, 1e-12)
     worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)
@@ -147,25 +213,70 @@ def approximation_error(result: FitResult, brdf: Callable[[np.ndarray, np.ndarra
     )
 
 
-#: How a renderer's model is fitted to a fit: the model in float32, refined in float64 (the optimum is float64's).
-#: Measured on the oak example's Ward fit, Mitsuba's GGX stand-in on the 38,880 pairs: 3.1 s, against 6.8 s in
-#: float64, the same cost to 7 digits (2-core Xeon, warm).
-REFIT_SOLVING = Solving(dtype="float32")
+def reference_values(result: FitResult) -> Reference:
+    """What :func:`approximation_error` needs of ``result`` alone (no tabulation): its values on :func:`error_grid`
+    and its albedos."""
+    wi, wo = error_grid()
+    return Reference(result, False, None, None, np.asarray(result.predict(wi, wo)), _albedos(result.predict))
+
+
+def grid_rmse(known: Reference, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> float:
+    """The rmse (1/sr) of ``brdf(wi, wo) -> (N, C)`` against the fit of ``known`` over :func:`error_grid`: how
+    :func:`approximation_error` ranks approximations, without their albedos."""
+    wi, wo = error_grid()
+    return float(np.sqrt(np.mean((np.asarray(brdf(wi, wo)) - known.values) ** 2)))
+
+
+#: How a renderer's model is solved on the fine grid from its coarse optimum: in float64 (a few steps from there; the
+#: float32 solve and its float64 refinement that a search from the grid's starts took cost a program more, and ended
+#: at the same optimum to 8 digits on the oak example's Ward fit).
+REFIT_SOLVING = Solving()
 
 
 def refit(
-    result: FitResult, model: Model | str, holding: Holding = HOLDING_NOTHING, **model_options
+    result: FitResult,
+    model: Model | str,
+    holding: Holding = HOLDING_NOTHING,
+    known: Reference | None = None,
+    **model_options,
 ) -> tuple[FitResult, Approximation]:
-    """``model`` fitted to ``result``'s BRDF on :func:`dense_grid` with ``result``'s loss, and how far it lies. Every
-    parameter the renderer's model has is free (a conductor's ``ks`` too, which a fit holds at 1 by default: the
-    renderer's ``specular_reflectance`` takes any value) but what ``holding`` holds (a renderer's range:
-    ``{"ks": (0, 1)}``). Solved in float32 and refined in float64 (:data:`REFIT_SOLVING`)."""
+    """``model`` fitted to ``result``'s BRDF with ``result``'s loss (:func:`coarse_refit`, then :func:`refined`), and
+    how far it lies; ``known``: ``result``'s :class:`Reference`, when it was computed already."""
+    known = reference(result) if known is None else known
+    fitted = refined(known, coarse_refit(known, model, holding, **model_options), holding)
+    return fitted, approximation_error(result, fitted.predict, known)
+
+
+def coarse_refit(
+    known: Reference, model: Model | str, holding: Holding = HOLDING_NOTHING, **model_options
+) -> FitResult:
+    """``model`` fitted to the BRDF of ``known`` (a :class:`Reference`) on its coarse grid with the fit's loss and
+    every start a fit searches: where the optimum lies, found on 2,160 pairs. Every parameter the renderer's model has
+    is free (a conductor's ``ks`` too, which a fit holds at 1 by default: the renderer's ``specular_reflectance``
+    takes any value) but what ``holding`` holds (a renderer's range: ``{"ks": (0, 1)}``)."""
     model = get_model(model, **model_options)
+    return fit_one(known.coarse, model, known.result.loss, holding=_freed(model, holding))
+
+
+def refined(known: Reference, coarse: FitResult, holding: Holding = HOLDING_NOTHING) -> FitResult:
+    """The :func:`coarse_refit` ``coarse`` solved again on the fine grid of ``known`` from its optimum (no start
+    search; the search again where the optimum is one no start may be, ``fitting/single/fit.start_vector``), in float64
+    (:data:`REFIT_SOLVING`)."""
+    model = get_model(coarse.model, **coarse.model_options)
+    holding = _freed(model, holding)
+    loss = known.result.loss
+    try:
+        start_vector(model, coarse.params, len(coarse.channels))
+    except BrdfInputError:  # a shape run off to where no fit moves (a conductor's eta of 10⁸): every start searched
+        return fit_one(known.fine, model, loss, solving=REFIT_SOLVING, holding=holding)
+    return fit_one(known.fine, model, loss, start=coarse.params, solving=REFIT_SOLVING, holding=holding)
+
+
+def _freed(model: Model, holding: Holding) -> Holding:
+    """``holding`` with every parameter the model holds by default (a conductor's ``ks``) freed, unless it holds it."""
     held = holding.fixed.keys() | holding.bounds.keys()
     freed = {name: None for name, _ in getattr(model, "held", ()) if name not in held}
-    holding = Holding(fixed=freed | dict(holding.fixed), bounds=holding.bounds)
-    fitted = fit_one(tabulated(result), model, result.loss, solving=REFIT_SOLVING, holding=holding)
-    return fitted, approximation_error(result, fitted.predict)
+    return Holding(fixed=freed | dict(holding.fixed), bounds=holding.bounds)
 
 
 def _albedos(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], n: int = 128) -> np.ndarray:

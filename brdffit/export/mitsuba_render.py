@@ -15,6 +15,9 @@ Given the data (``samples``), the PNG shows three spheres side by side at the on
 export, brdffit's render of the fit (``views/render.py``: the same light, an orthographic camera) and the data's own
 sphere (each pixel's nearest sample; lit pixels no sample is near are striped grey): an export that renders too dark
 or a highlight the fit misses shows at once.
+
+A Mitsuba BSDF file (``brdffit export --to mitsuba``'s XML, :func:`render_bsdf_file`) renders in the same scene as it
+is, loaded by Mitsuba: an export is made once and rendered as often as wanted, with nothing fitted again.
 """
 
 import os
@@ -70,6 +73,72 @@ def render_sphere(
     exported = mitsuba_bsdf(result)
     if data is not None:
         exported = exported.compared_with(result, data)
+    radiance = rendered_radiance(mi, exported.bsdf, size, spp)
+    if Path(path).suffix.lower() == ".exr":
+        write_exr(mi, radiance, path)
+    elif data is None:
+        write_png(radiance, path, exposure)
+    else:
+        write_beside_the_data(radiance, result, data, path, exposure)
+    return exported
+
+
+#: The suffix of a Mitsuba BSDF file :func:`render_bsdf_file` renders (``brdffit export --to mitsuba``'s XML).
+XML_SUFFIX = ".xml"
+
+
+def render_bsdf_file(
+    bsdf_file: str | os.PathLike,
+    path: str | os.PathLike,
+    *,
+    size: int = 256,
+    spp: int = 64,
+    exposure: float | str = EXPOSURE,
+) -> list[str]:
+    """Render the BSDF of a Mitsuba 3 XML file (``brdffit export --to mitsuba``'s, or one's own) as
+    :func:`render_sphere` renders a fit's: the same scene, loaded by Mitsuba from the file as it is, so nothing is
+    fitted again (an export's render is the render of its file, pixel for pixel); written to ``path`` (PNG, or
+    OpenEXR for ``.exr``; atomically). Returns the lines of the file's leading comments (brdffit's export writes
+    what it made and how far it lies there). One-line errors for a file Mitsuba cannot load or that is not a BSDF."""
+    exposure = checked_exposure(exposure)
+    if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
+        raise BrdfInputError(
+            Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
+        )
+    mi = mitsuba()
+    try:
+        text = Path(bsdf_file).read_text(encoding="utf-8")
+        loaded = mi.load_string(text)
+    except (OSError, UnicodeDecodeError, RuntimeError) as error:
+        why = str(error).strip().splitlines()[-1] if str(error).strip() else type(error).__name__
+        raise BrdfInputError(f"{bsdf_file}: not a file Mitsuba 3 loads ({why})") from None
+    if not isinstance(loaded, mi.BSDF):
+        raise BrdfInputError(f"{bsdf_file}: holds a Mitsuba {type(loaded).__name__}, not a BSDF; give one BSDF")
+    radiance = rendered_radiance(mi, loaded, size, spp)
+    if Path(path).suffix.lower() == ".exr":
+        write_exr(mi, radiance, path)
+    else:
+        write_png(radiance, path, exposure)
+    return leading_comments(text)
+
+
+def leading_comments(xml: str) -> list[str]:
+    """The text of the ``<!-- … -->`` comments before an XML document's first element, one line each."""
+    lines = []
+    rest = xml.lstrip()
+    while rest.startswith("<?"):
+        rest = rest[rest.find("?>") + 2 :].lstrip() if "?>" in rest else ""
+    while rest.startswith("<!--") and "-->" in rest:
+        end = rest.index("-->")
+        lines.append(" ".join(rest[4:end].split()))
+        rest = rest[end + 3 :].lstrip()
+    return lines
+
+
+def rendered_radiance(mi, bsdf, size: int, spp: int) -> np.ndarray:
+    """The radiance (size, size, 3) of the module docstring's scene, a sphere with ``bsdf`` (the dictionary
+    ``mitsuba.load_dict`` takes, or a loaded BSDF), rendered by Mitsuba with ``spp`` samples per pixel (its
+    ``independent`` sampler's default seed: the same BSDF renders the same image)."""
     scene = mi.load_dict(
         {
             "type": "scene",
@@ -81,7 +150,7 @@ def render_sphere(
                 "film": {"type": "hdrfilm", "width": size, "height": size},
                 "sampler": {"type": "independent", "sample_count": spp},
             },
-            "sphere": {"type": "sphere", "bsdf": exported.bsdf},
+            "sphere": {"type": "sphere", "bsdf": bsdf},
             "key": {
                 "type": "directional",
                 "direction": [1.0, -1.0, -1.0],
@@ -89,14 +158,7 @@ def render_sphere(
             },
         }
     )
-    radiance = np.asarray(mi.render(scene), dtype=float)
-    if Path(path).suffix.lower() == ".exr":
-        write_exr(mi, radiance, path)
-    elif data is None:
-        write_png(radiance, path, exposure)
-    else:
-        write_beside_the_data(radiance, result, data, path, exposure)
-    return exported
+    return np.asarray(mi.render(scene), dtype=float)
 
 
 def write_beside_the_data(
