@@ -6,8 +6,8 @@ transmittance ``T`` and internal reflectance ``Ri`` tabulated over ``α``. Param
 ``alpha`` (the coating's roughness), ``diffuse_reflectance`` and ``specular_reflectance`` (in [0, 1], one per
 channel; the latter held at Mitsuba's 1 unless freed: "for physical realism, this parameter should never be
 touched", Mitsuba's documentation). Options: ``distribution`` (``beckmann``, Mitsuba's default, or ``ggx``) and
-``int_ior`` (the coating's index, Mitsuba's 1.49 by default; the tables are computed once per index, ~2.5 s). The
-material is the whole BRDF: a whole-lobe model (``LobeModel.whole``), no albedos beside it.
+``int_ior`` (the coating's index, Mitsuba's 1.49 by default, whose tables ship; another's are computed once a
+process, ~2.5 s). The material is the whole BRDF: a whole-lobe model (``LobeModel.whole``), no albedos beside it.
 """
 
 import math
