@@ -52,8 +52,18 @@ CLEARCOAT_STARTS = ((0.02, 0.1), (0.5, 0.1))
 #: every roughness, metallic and coat start comes with each of three rotations, 60° apart, so that one lies within 30°
 #: of any tangent (a rotation 90° from the truth is a stationary point of the cost, where a fit would stay).
 ANISOTROPY_STARTS = ((0.4, 0.0), (0.4, math.pi / 3), (0.4, -math.pi / 3))
-#: What the fit holds unless a user frees it: glTF's index, and no anisotropy.
-HELD = (("ior", DEFAULT_IOR), ("anisotropy_strength", 0.0), ("anisotropy_rotation", 0.0))
+#: Starting sheens ``(sheen_color, sheen_roughness)``, one beside each base colour of :data:`BASE_COLOR_STARTS` as the
+#: anisotropies are: held (the default) they are all 0 and add no start; freed, every start has a sheen of colour 0.1
+#: (grey) at roughness 0.3, 0.5 or 0.8 (a sheen's roughness moves its lobe, from the horizon towards the normal).
+SHEEN_STARTS = ((0.1, 0.3), (0.1, 0.5), (0.1, 0.8))
+#: What the fit holds unless a user frees it: glTF's index, no anisotropy and no sheen (KHR_materials_sheen's defaults).
+HELD = (
+    ("ior", DEFAULT_IOR),
+    ("anisotropy_strength", 0.0),
+    ("anisotropy_rotation", 0.0),
+    ("sheen_roughness", 0.0),
+    ("sheen_color", 0.0),
+)
 
 
 @final
@@ -81,11 +91,13 @@ class GltfLobe(WholeLobe):
             ("clearcoat_roughness", UNIT_INTERVAL),
             ("anisotropy_strength", UNIT_INTERVAL),
             ("anisotropy_rotation", AXIS_ANGLE),
-            ("base_color", UNIT_INTERVAL),  # the per-channel one last (Lobe.channel_names)
+            ("sheen_roughness", UNIT_INTERVAL),
+            ("base_color", UNIT_INTERVAL),  # the per-channel ones last (Lobe.channel_names)
+            ("sheen_color", UNIT_INTERVAL),
         )
 
-    channel_names = ("base_color",)
-    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength")
+    channel_names = ("base_color", "sheen_color")
+    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength", "sheen_color")
     anisotropy_names = ("anisotropy_strength", "anisotropy_rotation")
 
     @property
@@ -94,9 +106,12 @@ class GltfLobe(WholeLobe):
             {"roughness": roughness, "metallic": metallic, "ior": DEFAULT_IOR, "base_color": base}
             | {"clearcoat": clearcoat, "clearcoat_roughness": coat_roughness}
             | {"anisotropy_strength": strength, "anisotropy_rotation": rotation}
+            | {"sheen_color": sheen_color, "sheen_roughness": sheen_roughness}
             for roughness in ROUGHNESS_STARTS
             for metallic in METALLIC_STARTS
-            for base, (strength, rotation) in zip(BASE_COLOR_STARTS, ANISOTROPY_STARTS, strict=True)
+            for base, (strength, rotation), (sheen_color, sheen_roughness) in zip(
+                BASE_COLOR_STARTS, ANISOTROPY_STARTS, SHEEN_STARTS, strict=True
+            )
             for clearcoat, coat_roughness in CLEARCOAT_STARTS
         )
 
@@ -115,6 +130,8 @@ class GltfLobe(WholeLobe):
             coat_reflectance=f0,
             anisotropy_strength=shape["anisotropy_strength"],
             anisotropy_rotation=shape["anisotropy_rotation"],
+            sheen_color=shape["sheen_color"],
+            sheen_roughness=shape["sheen_roughness"],
         )
 
 
