@@ -228,7 +228,7 @@ def test_a_freed_sheen_is_recovered_and_exported_as_khr_materials_sheen(tmp_path
     freed = fit(samples, "gltf", fixed=FREE_SHEEN)
     assert freed.converged and freed.warnings == []
     assert freed.fixed == {"ior": 1.5, "anisotropy_strength": 0.0, "anisotropy_rotation": 0.0}
-    assert freed.cost < 0.01 * held.cost  # measured: 470× lower; a base alone misses the sheen's grazing lobe
+    assert freed.cost < 0.01 * held.cost  # measured: 350× lower; a base alone misses the sheen's grazing lobe
     # 3,000 pairs × 3 channels at 1% noise: measured within 0.2% (sheen colour and roughness, base colour and
     # roughness); the tolerances "a few %" as the issue asks, ten times that
     np.testing.assert_allclose(freed.params["sheen_color"], VELVET.sheen_color, rtol=0.02)

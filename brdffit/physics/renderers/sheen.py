@@ -20,10 +20,13 @@ finite derivatives).
 Estevez & Kulla 2017) dims the base by it (``gltf.py``). The viewer reads ``E`` from a precomputed table
 (``assets/images/lut_sheen_E.png``, looked up at ``(N·V, sheen_roughness)``); brdffit computes its own by quadrature
 of the lobe above, clamp included (:func:`albedo_quadrature`), stores it on a grid (``sheen_table.py``) and
-interpolates it with Catmull-Rom cubics (:func:`sheen_albedo`): smooth, with finite derivatives everywhere. The
-viewer's table is an 8-bit image, which this module could not read from a stored source; it cannot hold the values
-above 1 that ``E`` takes at grazing views of smooth sheens (1.6 at ``μ = 0.01``, ``r = 0.05``), so the two differ
-there at least.
+interpolates it with Catmull-Rom cubics (:func:`sheen_albedo`): smooth (C¹), with finite derivatives everywhere, within
+10⁻³ of the quadrature for ``μ`` and ``r`` from 0.02 to 1 (median 10⁻⁵; ``tests/physics/test_sheen.py``). ``E`` exceeds
+1 at grazing views of smooth sheens (1.61 at ``μ = 0.01``, ``r = 0.05``; 1.36 at ``r = 0.1``): the interpolated ``E`` is
+clipped to 1 there, so that the scaling never turns negative. The viewer's table is an image
+(``lut_sheen_E.png``), whose values lie in [0, 1] as well; brdffit could not read its numbers from a stored source, so
+how close the two are elsewhere is not measured: this module matches the extension's definition of ``E`` (the
+directional albedo of the sheen BRDF with Charlie's visibility), not the viewer's table.
 """
 
 import math
@@ -45,6 +48,10 @@ LAMBDA_FIT = (
 )
 #: The viewer's ceiling on the sheen visibility ``V`` (``V_Sheen``'s ``clamp(…, 0, 1)``).
 MAX_SHEEN_VISIBILITY = 1.0
+#: The ceiling on the interpolated ``E``: the quadrature's ``E`` exceeds 1 at grazing views of smooth sheens, where the
+#: albedo scaling ``1 − max(sheen_color) · E`` would turn negative and subtract the base (a negative BRDF near the
+#: mirror, where the sheen's lobe is 0); an image, the viewer's table holds ``E`` in [0, 1].
+MAX_SHEEN_ALBEDO = 1.0
 
 
 def sheen_alpha(sheen_roughness):
@@ -135,7 +142,8 @@ def _catmull_rom(values, position):
 
 def sheen_albedo(cos_theta, sheen_roughness):
     """``E(μ, r)``: the stored table (``sheen_table.py``, nodes uniform in ``sqrt μ`` and ``sqrt r``) interpolated by
-    Catmull-Rom cubics in both, at ``μ = cos_theta`` (N,) and ``r = sheen_roughness`` (a number); at least 0."""
+    Catmull-Rom cubics in both, at ``μ = cos_theta`` (N,) and ``r = sheen_roughness`` (a number); clipped to [0, 1]
+    (:data:`MAX_SHEEN_ALBEDO`)."""
     from .sheen_table import SHEEN_ALBEDO
 
     xp = namespace(cos_theta, sheen_roughness)
@@ -145,4 +153,4 @@ def sheen_albedo(cos_theta, sheen_roughness):
     along_roughness = _catmull_rom(table.T, xp.broadcast_to(row, (n_cosine,)))  # (cosine nodes,): E at r
     column = xp.sqrt(xp.clip(cos_theta, 1e-12, 1.0)) * (n_cosine - 1)
     rows = xp.broadcast_to(along_roughness, (*xp.shape(column), n_cosine))
-    return xp.maximum(_catmull_rom(rows, column), 0.0)
+    return xp.clip(_catmull_rom(rows, column), 0.0, MAX_SHEEN_ALBEDO)
