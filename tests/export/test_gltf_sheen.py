@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from conftest import directions_from_degrees, random_directions
 
+from brdffit import BrdfInputError
 from brdffit.export.gltf_material import GltfMaterial, gltf_brdf
 from brdffit.fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from brdffit.physics.renderers.sheen import albedo_quadrature as sheen_albedo_quadrature
@@ -154,3 +155,21 @@ def test_a_white_sheen_over_a_white_base_never_gains_energy_where_the_base_does_
         albedos = white_albedos(metallic, roughness, **sheen)
         assert np.all(albedos <= 1.005), dict(zip(ALBEDO_INCIDENCE, albedos, strict=True))
     assert np.all(white_albedos(0.0, 0.5, **sheen) < white_albedos(0.0, 0.5)[-1])
+
+
+def test_the_material_writes_the_extension_only_when_a_sheen_colour_is_not_0_and_checks_its_factors():
+    bare = GltfMaterial((0.5, 0.1, 0.15), 0.0, 0.8, sheen_roughness=0.5)  # a roughness alone: no sheen
+    assert bare.extensions == () and "extensions" not in bare.material_object("bare")
+    velvet = GltfMaterial((0.5, 0.1, 0.15), 0.0, 0.8, sheen_color=(0.5, 0.45, 0.0), sheen_roughness=0.5)
+    assert velvet.extensions == ("KHR_materials_sheen",)
+    assert velvet.material_object("velvet")["extensions"] == {
+        "KHR_materials_sheen": {"sheenColorFactor": [0.5, 0.45, 0.0], "sheenRoughnessFactor": 0.5}
+    }
+    assert velvet.to_gltf("velvet")["extensionsUsed"] == ["KHR_materials_sheen"]
+    for factors, named in (
+        ({"sheen_color": (1.2, 0.0, 0.0)}, "sheen_color"),
+        ({"sheen_roughness": 1.5}, "sheen_rough"),
+    ):
+        with pytest.raises(BrdfInputError, match=f"^{named}") as caught:
+            GltfMaterial((0.5, 0.5, 0.5), 0.0, 0.5, **factors)
+        assert "\n" not in str(caught.value) and "[0, 1]" in str(caught.value)

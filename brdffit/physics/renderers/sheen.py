@@ -30,10 +30,12 @@ directional albedo of the sheen BRDF with Charlie's visibility), not the viewer'
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from ..._jax import namespace
+from .sheen_table import NODES, SHEEN_ALBEDO
 
 #: The viewer's floor on the sheen roughness (``D_Charlie``, ``V_Sheen``: ``max(sheenRoughness, 0.000001)``).
 MIN_SHEEN_ROUGHNESS = 1e-6
@@ -144,8 +146,6 @@ def sheen_albedo(cos_theta, sheen_roughness):
     """``E(μ, r)``: the stored table (``sheen_table.py``, nodes uniform in ``sqrt μ`` and ``sqrt r``) interpolated by
     Catmull-Rom cubics in both, at ``μ = cos_theta`` (N,) and ``r = sheen_roughness`` (a number); clipped to [0, 1]
     (:data:`MAX_SHEEN_ALBEDO`)."""
-    from .sheen_table import SHEEN_ALBEDO
-
     xp = namespace(cos_theta, sheen_roughness)
     table = xp.asarray(np.asarray(SHEEN_ALBEDO))  # (roughness nodes, cosine nodes)
     n_roughness, n_cosine = table.shape
@@ -154,3 +154,34 @@ def sheen_albedo(cos_theta, sheen_roughness):
     column = xp.sqrt(xp.clip(cos_theta, 1e-12, 1.0)) * (n_cosine - 1)
     rows = xp.broadcast_to(along_roughness, (*xp.shape(column), n_cosine))
     return xp.clip(_catmull_rom(rows, column), 0.0, MAX_SHEEN_ALBEDO)
+
+
+#: Where ``sheen_table.py``'s table starts: a regeneration (:func:`write_table`) rewrites the file from there.
+_TABLE_START = "# fmt: off\n"
+
+
+def table_text(rows) -> str:
+    """The ``SHEEN_ALBEDO`` assignment of ``rows`` (lists of numbers), six numbers a line, to 12 decimals."""
+    lines = [_TABLE_START.rstrip("\n"), "SHEEN_ALBEDO = ("]
+    for row in rows:
+        numbers = [f"{value:.12f}".rstrip("0").rstrip(".") + "," for value in row]
+        lines += ["    (", *("        " + " ".join(numbers[k : k + 6]) for k in range(0, len(numbers), 6)), "    ),"]
+    return "\n".join([*lines, ")", "# fmt: on"]) + "\n"
+
+
+def computed_table(nodes: int = NODES) -> list[list[float]]:
+    """``E`` at ``r = (i/(nodes − 1))²``, ``μ = (j/(nodes − 1))²`` by :func:`albedo_quadrature` (rows ``i``)."""
+    return [
+        [albedo_quadrature((j / (nodes - 1)) ** 2, (i / (nodes - 1)) ** 2) for j in range(nodes)] for i in range(nodes)
+    ]
+
+
+def write_table() -> None:
+    """Rewrite ``sheen_table.py``'s table from :func:`computed_table` (its docstring and ``NODES`` kept)."""
+    path = Path(__file__).with_name("sheen_table.py")
+    text = path.read_text()
+    path.write_text(text[: text.rindex(_TABLE_START)] + table_text(computed_table()))
+
+
+if __name__ == "__main__":
+    write_table()

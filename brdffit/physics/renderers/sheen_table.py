@@ -3,39 +3,12 @@
 ``SHEEN_ALBEDO[i][j]`` is ``E`` at ``r = (i/32)²`` (the sheen roughness; 10⁻⁶ at ``i = 0``, the floor) and
 ``μ = (j/32)²`` (the viewer's ``N·V``; 10⁻⁶ at ``j = 0``), by ``sheen.albedo_quadrature`` with n = 400 (agreeing with
 n = 800 to 10⁻⁴), to 12 decimals. Nodes uniform in ``sqrt μ`` and ``sqrt r`` crowd where ``E`` changes fastest:
-grazing views of smooth sheens. Regenerate with ``python -m brdffit.physics.renderers.sheen_table`` (about a minute)
-after changing the lobe.
+grazing views of smooth sheens. Regenerate with ``python -m brdffit.physics.renderers.sheen`` (about a minute) after
+changing the lobe.
 """
 
 #: Nodes per axis: ``sqrt μ`` and ``sqrt r`` at ``k/(NODES − 1)``.
 NODES = 33
-#: The table's first line, where a regeneration starts writing.
-_START = "# fmt: off\n"
-
-
-def table_text(rows) -> str:
-    """The ``SHEEN_ALBEDO`` assignment of ``rows`` (NODES lists of NODES numbers), six numbers a line."""
-    lines = [_START.rstrip("\n"), "SHEEN_ALBEDO = ("]
-    for row in rows:
-        numbers = [f"{value:.12f}".rstrip("0").rstrip(".") + "," for value in row]
-        lines += ["    (", *("        " + " ".join(numbers[k : k + 6]) for k in range(0, len(numbers), 6)), "    ),"]
-    return "\n".join([*lines, ")", "# fmt: on"]) + "\n"
-
-
-def computed_rows(nodes: int = NODES) -> list[list[float]]:
-    """The table computed afresh by ``sheen.albedo_quadrature``."""
-    from .sheen import albedo_quadrature
-
-    return [
-        [albedo_quadrature((j / (nodes - 1)) ** 2, (i / (nodes - 1)) ** 2) for j in range(nodes)] for i in range(nodes)
-    ]
-
-
-if __name__ == "__main__":  # rewrite this file's table
-    with open(__file__) as handle:
-        text = handle.read()
-    with open(__file__, "w") as handle:
-        handle.write(text[: text.rindex(_START)] + table_text(computed_rows()))
 
 # fmt: off
 SHEEN_ALBEDO = (
