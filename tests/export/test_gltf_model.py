@@ -282,19 +282,17 @@ def test_the_exact_export_is_valid_gltf(rng, tmp_path):
     # A coated, anisotropic one. The validator (2.0.0-dev.3.10) knows both extensions (it checks their factors'
     # ranges) but not that KHR_materials_anisotropy uses the mesh's tangents: it reports them as an info, not a
     # warning, UNUSED_MESH_TANGENT ("the material has no normal texture"), which the extension's MUST overrules.
-    brushed = fit(measured_lobes(BRUSHED), "gltf", fixed=FREE_ANISOTROPY)
-    result = replace(brushed, params=brushed.params | {"clearcoat": 0.3})
-    for name in ("brushed.gltf", "brushed.glb"):
-        material, _, _ = write_gltf(result, tmp_path / name)
-        assert material.extensions == ("KHR_materials_clearcoat", "KHR_materials_anisotropy")
-        assert_valid(tmp_path / name)
     # A velvet under a coat, its sheen written as KHR_materials_sheen (the validator checks its factors' ranges).
-    velvet = fit(measured_lobes(VELVET), "gltf", fixed=FREE_SHEEN)
-    result = replace(velvet, params=velvet.params | {"clearcoat": 0.3})
-    for name in ("velvet.gltf", "velvet.glb"):
-        material, _, _ = write_gltf(result, tmp_path / name)
-        assert material.extensions == ("KHR_materials_clearcoat", "KHR_materials_sheen")
-        assert_valid(tmp_path / name)
+    for stem, truth, free, extension in (
+        ("brushed", BRUSHED, FREE_ANISOTROPY, "KHR_materials_anisotropy"),
+        ("velvet", VELVET, FREE_SHEEN, "KHR_materials_sheen"),
+    ):
+        fitted = fit(measured_lobes(truth), "gltf", fixed=free)
+        result = replace(fitted, params=fitted.params | {"clearcoat": 0.3})
+        for name in (f"{stem}.gltf", f"{stem}.glb"):
+            material, _, _ = write_gltf(result, tmp_path / name)
+            assert material.extensions == ("KHR_materials_clearcoat", extension)
+            assert_valid(tmp_path / name)
 
 
 @pytest.mark.heavy
