@@ -75,8 +75,8 @@ class GltfLobe(WholeLobe):
     @property
     def summary(self) -> str:
         return (
-            "Appendix B (height-correlated Smith GGX, Schlick) under a clear coat (Schlick in N·V); anisotropic GGX"
-            " along +x turned by anisotropy_rotation"
+            "Appendix B (height-correlated Smith GGX, Schlick) under a Charlie sheen (albedo scaling) and a clear coat"
+            " (Schlick in N·V); anisotropic GGX along +x turned by anisotropy_rotation"
         )
 
     peaks_at_mirror = True
@@ -142,7 +142,7 @@ class GltfLobe(WholeLobe):
 def gltf() -> LobeModel:
     """glTF 2.0's metallic-roughness material with a clear coat and anisotropy (module docstring); ``ior`` held at
     1.5 and the anisotropy at 0 unless freed."""
-    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy)"
+    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy, _sheen)"
     return LobeModel("gltf", summary, GltfLobe(), 1, held=HELD, whole=True, isotropic=True)
 
 
