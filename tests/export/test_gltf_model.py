@@ -14,7 +14,7 @@ from conftest import random_directions
 from gltf_validator import assert_valid, needs_validator
 
 import data_synth
-from brdffit import FitWarning, Samples, fit, get_model
+from brdffit import FitWarning, Samples, fit, get_model, load_result
 from brdffit.cli import main
 from brdffit.data.load import save_samples
 from brdffit.export.gltf import write_gltf
@@ -324,3 +324,10 @@ def test_the_command_line_fits_and_exports_it(rng, tmp_path, capsys):
     assert material["baseColorFactor"][:3] == result["params"]["base_color"]
     assert main(["fit", str(path), "--model", "gltf", "--fix", "kd=0", "-o", str(tmp_path / "x.json")]) == 2
     assert "gltf has no parameter 'kd'" in capsys.readouterr().err
+    # A result file written before the model had a sheen loads with none (its holds' values) and exports as it was.
+    older = dict(result)
+    older["params"] = {name: value for name, value in result["params"].items() if not name.startswith("sheen_")}
+    (tmp_path / "older.json").write_text(json.dumps(older))
+    assert load_result(tmp_path / "older.json").params == result["params"]
+    assert main(["export", str(tmp_path / "older.json"), "--to", "gltf", "-o", str(tmp_path / "older.gltf")]) == 0
+    assert "exact" in capsys.readouterr().out

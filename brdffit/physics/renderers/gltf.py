@@ -91,8 +91,21 @@ then), and the core form elsewhere. The clamp binds where ``N·L · N·V ≲ 1/4
 strength reaches its threshold. With ``α_t = α_b = α`` and no floor or clamp the anisotropic form is the core one (GGX's
 ``D`` and Smith's ``Λ`` see the slopes through ``α(φ)`` alone), so one evaluation serves both (:func:`_ggx_lobe`).
 
+**KHR_materials_sheen** (ratified; its "Implementation Notes", non-normative) lays a sheen over the material, under
+the coat ("If clearcoat (KHR_materials_clearcoat) is active at the same time, clearcoat is layered on top of sheen"),
+combined by albedo scaling (Conty Estevez & Kulla 2017) as the Sample Viewer does for each light (``pbr.frag``:
+``l_albedoSheenScaling = min(1.0 - max3(sheenColor) * albedoSheenScalingLUT(NdotV, sheenRoughness), 1.0 - max3(…) *
+albedoSheenScalingLUT(NdotL, …))``, then ``l_color = l_sheen + l_color * l_albedoSheenScaling``)::
+
+    sheened = sheen_color · D_s · V_s + min(1 − max(sheen_color) E(N·V), 1 − max(sheen_color) E(N·L)) · material
+
+with the Charlie lobe ``D_s · V_s`` and its directional albedo ``E`` of ``sheen.py``. Taking the smaller of both
+directions' scalings keeps the material **reciprocal** (the extension's cheaper ``1 − max(sheen_color) E(N·V)``
+alone, which the viewer applies to its environment light, would not be). The coat is then laid over the sheened
+material as above.
+
 Sources: the extensions' READMEs in KhronosGroup/glTF (``extensions/2.0/Khronos/KHR_materials_clearcoat``,
-``KHR_materials_anisotropy``); the Sample Viewer's shaders in KhronosGroup/glTF-Sample-Viewer
+``KHR_materials_anisotropy``, ``KHR_materials_sheen``); the Sample Viewer's shaders in KhronosGroup/glTF-Sample-Viewer
 (``source/Renderer/shaders``: ``brdf.glsl``, ``punctual.glsl``, ``material_info.glsl``, ``pbr.frag``). The
 ``gltf`` fit model (``gltf_model.py``) and the glTF export (``export/gltf_material.py``) both evaluate it here.
 """

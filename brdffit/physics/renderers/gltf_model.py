@@ -3,9 +3,11 @@
 The BRDF is the one a glTF viewer renders (``gltf.py``: the specification's Appendix B complete model,
 ``mix(dielectric_brdf, metal_brdf, metallic)``, GGX with height-correlated Smith, Schlick's Fresnel term), with
 ``KHR_materials_ior``'s index for the dielectric, ``KHR_materials_clearcoat``'s coat over it and
-``KHR_materials_anisotropy``'s stretched lobe, each as the Khronos glTF Sample Viewer evaluates it::
+``KHR_materials_anisotropy``'s stretched lobe and ``KHR_materials_sheen``'s sheen, each as the Khronos glTF Sample
+Viewer evaluates it::
 
-    f = (1 − clearcoat · F_c) · m + clearcoat · F_c · V_c·D_c
+    f = (1 − clearcoat · F_c) · s + clearcoat · F_c · V_c·D_c
+    s = sheen_color · D_s·V_s + min(1 − max(sheen_color) E(N·V), 1 − max(sheen_color) E(N·L)) · m
     m = (1 − metallic) · [(1 − F_d) · base_color/π + F_d · V·D] + metallic · (base_color + (1 − base_color) S) · V·D
     S = (1 − |V·H|)⁵,   F_d = f0 + (1 − f0) S,   f0 = ((1 − ior)/(1 + ior))²,   α = roughness²
     F_c = f0 + (1 − f0)(1 − N·V)⁵,   V_c·D_c: GGX and height-correlated Smith at α_c = clearcoat_roughness²
@@ -21,7 +23,10 @@ Parameters: ``roughness``, ``metallic``, ``clearcoat``, ``clearcoat_roughness`` 
 ``clearcoat_roughness``. Held unless freed: ``ior`` at glTF's 1.5 (``--free ior``: ``KHR_materials_ior``, for a
 dielectric whose reflectance at normal incidence is not 4%; the coat's follows it, as in the Sample Viewer), and the
 anisotropy at 0 (``--free anisotropy_strength,anisotropy_rotation``): one gonioreflectometer's few planes
-seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry.
+seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry; and
+the sheen at 0 (``--free sheen_color,sheen_roughness``; ``sheen_color`` in [0, 1] per channel, ``sheen_roughness`` in
+[0, 1]): Estevez & Kulla's "Charlie" lobe ``D_s·V_s`` and its directional albedo ``E`` (``sheen.py``), which a velvet
+or a cloth shows towards grazing angles.
 
 The model says it is isotropic (``LobeModel.isotropic``), as it is with its default holds: the fit's checks take the
 shortcuts an isotropic model allows (the albedo on half the grid; at normal incidence, one azimuth), which keep a
