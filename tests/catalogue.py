@@ -8,7 +8,17 @@ import pytest
 
 
 def gltf_params(
-    roughness, metallic, *, base_color, ior=1.5, clearcoat=0.0, clearcoat_roughness=0.0, strength=0.0, rotation=0.0
+    roughness,
+    metallic,
+    *,
+    base_color,
+    ior=1.5,
+    clearcoat=0.0,
+    clearcoat_roughness=0.0,
+    strength=0.0,
+    rotation=0.0,
+    sheen_color=0.0,
+    sheen_roughness=0.0,
 ) -> dict:
     """The ``gltf`` model's parameters in its order (a result file's), its held ones at their defaults unless given."""
     return {
@@ -19,7 +29,9 @@ def gltf_params(
         "clearcoat_roughness": clearcoat_roughness,
         "anisotropy_strength": strength,
         "anisotropy_rotation": rotation,
+        "sheen_roughness": sheen_roughness,
         "base_color": base_color,
+        "sheen_color": sheen_color if isinstance(sheen_color, list) else [sheen_color] * len(base_color),
     }
 
 
@@ -111,6 +123,8 @@ CASES = [
     # anisotropy at 0 unless freed (tests/export/test_gltf_model.py frees them)
     ("gltf", {}, gltf_params(0.35, 0.0, clearcoat=0.5, clearcoat_roughness=0.1, base_color=[0.6, 0.2, 0.05])),
     ("gltf", {}, gltf_params(0.3, 0.9, clearcoat=0.8, clearcoat_roughness=0.15, base_color=[0.95, 0.64, 0.54])),
+    # a velvet: a tinted sheen (KHR_materials_sheen, held at 0 unless freed) over a rough red dielectric
+    ("gltf", {}, gltf_params(0.8, 0.0, base_color=[0.5, 0.1, 0.15], sheen_color=[0.5, 0.45, 0.4], sheen_roughness=0.5)),
     (  # Mitsuba's principled (a whole-lobe model): a blue paint under a clear coat; tints, sheen, anisotropy held at 0
         "principled",
         {},
@@ -138,7 +152,8 @@ CASES = [
 def reciprocal(case) -> bool:
     """Whether the case's BRDF is reciprocal, ``f(wi, wo) = f(wo, wi)``: every model's but glTF's under a clear coat,
     which KHR_materials_clearcoat weights by Schlick's Fresnel term of the viewer's direction alone
-    (``tests/export/test_gltf.py`` measures by how much)."""
+    (``tests/export/test_gltf.py`` measures by how much). glTF's sheen is reciprocal: its albedo scaling takes the
+    smaller of the viewer's and the light's (``tests/export/test_gltf_sheen.py``)."""
     model, _, params = case
     return not (model == "gltf" and params["clearcoat"] > 0)
 
@@ -150,7 +165,8 @@ RECIPROCAL_CASES = [case for case in CASES if reciprocal(case)]
 def case_id(case) -> str:
     model, options, params = case
     name = model + "".join(f"-{key if value is True else value}" for key, value in options.items())
-    return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "")
+    sheen = "-sheen" if max(params.get("sheen_color", [0.0])) > 0 else ""
+    return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "") + sheen
 
 
 def parametrize_cases(cases=CASES):

@@ -377,12 +377,13 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
     """The material of a fit of the ``gltf`` model, its numbers unchanged (the model's exact export): ``ior`` as
     ``KHR_materials_ior`` where it is not glTF's 1.5, the coat as ``KHR_materials_clearcoat`` where ``clearcoat`` is
     not 0, the anisotropy as ``KHR_materials_anisotropy`` where ``anisotropy_strength`` is not 0 (its tangent the
-    data's ``+x``: :func:`_tangent_notes`). None for channels a glTF material holds only converted (CIE XYZ); one
-    channel is grey."""
+    data's ``+x``: :func:`_tangent_notes`), the sheen as ``KHR_materials_sheen`` where ``sheen_color`` is not 0. None
+    for channels a glTF material holds only converted (CIE XYZ); one channel is grey (its base and sheen colours)."""
     if _channel_plan(result.channels)[0] == "xyz":
         return None
     params = result.params
     base_color = [float(value) for value in params["base_color"]]
+    sheen_color = [float(value) for value in params["sheen_color"]]
     ior = float(params["ior"])
     return GltfMaterial(
         tuple(base_color * 3 if len(base_color) == 1 else base_color),
@@ -393,6 +394,8 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
         clearcoat_roughness=float(params["clearcoat_roughness"]),
         anisotropy_strength=float(params["anisotropy_strength"]),
         anisotropy_rotation=float(params["anisotropy_rotation"]),
+        sheen_color=tuple(sheen_color * 3 if len(sheen_color) == 1 else sheen_color),
+        sheen_roughness=float(params["sheen_roughness"]),
     )
 
 

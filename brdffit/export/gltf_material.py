@@ -38,6 +38,8 @@ def gltf_brdf(
     clearcoat_roughness=0.0,
     anisotropy_strength=0.0,
     anisotropy_rotation=0.0,
+    sheen_color=0.0,
+    sheen_roughness=0.0,
 ):
     """The glTF 2.0 metallic-roughness BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3), JAX.
 
@@ -46,7 +48,9 @@ def gltf_brdf(
     ``KHR_materials_ior``'s; ``clearcoat`` and ``clearcoat_roughness`` (in [0, 1]) ``KHR_materials_clearcoat``'s, the
     coat's reflectance at normal incidence that of ``ior`` (as the Sample Viewer takes it); ``anisotropy_strength`` (in
     [0, 1]) and ``anisotropy_rotation`` (radians from the data's ``+x``, counter-clockwise towards ``+y``)
-    ``KHR_materials_anisotropy``'s. Their defaults give the core model exactly. The model is
+    ``KHR_materials_anisotropy``'s; ``sheen_color`` (3,) (in [0, 1]) and ``sheen_roughness`` (in [0, 1])
+    ``KHR_materials_sheen``'s, layered by albedo scaling (``physics/renderers/sheen.py``). Their defaults give the core
+    model exactly. The model is
     ``physics/renderers/gltf.py``'s: Appendix B's complete model ``mix(dielectric_brdf, metal_brdf, metallic)`` (not
     its former single-F shortcut), GGX with height-correlated Smith (as the Khronos Sample Viewer and Filament
     implement it; Appendix B writes the separable Smith form), Schlick's Fresnel term in ``|V·H|``, the coat's in
@@ -72,11 +76,26 @@ def gltf_brdf(
         coat_reflectance=ior_f0(ior),
         anisotropy_strength=anisotropy_strength,
         anisotropy_rotation=anisotropy_rotation,
+        sheen_color=sheen_color,
+        sheen_roughness=sheen_roughness,
     )
 
 
 @jit
-def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_color, ior, coat, anisotropy, wi, wo):
+def _gltf_brdf_compiled(
+    base_color,
+    metallic,
+    roughness,
+    specular,
+    specular_color,
+    ior,
+    coat,
+    anisotropy,
+    sheen_color,
+    sheen_roughness,
+    wi,
+    wo,
+):
     return gltf_brdf(
         base_color,
         metallic,
@@ -90,6 +109,8 @@ def _gltf_brdf_compiled(base_color, metallic, roughness, specular, specular_colo
         clearcoat_roughness=coat[1],
         anisotropy_strength=anisotropy[0],
         anisotropy_rotation=anisotropy[1],
+        sheen_color=sheen_color,
+        sheen_roughness=sheen_roughness,
     )
 
 
@@ -129,7 +150,9 @@ class GltfMaterial:
     ``KHR_materials_clearcoat``, used where ``clearcoat`` is not 0; ``anisotropy_strength`` (in [0, 1]) and
     ``anisotropy_rotation`` (radians, any finite number) of ``KHR_materials_anisotropy``, used where the strength is
     not 0 (the tangent is the mesh's ``TANGENT``, the data's ``+x`` for a fit); a strength below
-    ``physics/renderers/gltf.py``'s ``MIN_ANISOTROPY`` (10⁻⁶) is none, and is set to 0."""
+    ``physics/renderers/gltf.py``'s ``MIN_ANISOTROPY`` (10⁻⁶) is none, and is set to 0; ``sheen_color`` (3 floats in
+    [0, 1], linear RGB) and ``sheen_roughness`` (in [0, 1]) of ``KHR_materials_sheen``, used where a sheen colour is not
+    0 (the extension: "If sheenColorFactor is zero, the whole sheen layer is disabled")."""
 
     base_color: tuple[float, float, float]
     metallic: float
@@ -141,10 +164,14 @@ class GltfMaterial:
     clearcoat_roughness: float = 0.0
     anisotropy_strength: float = 0.0
     anisotropy_rotation: float = 0.0
+    sheen_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    sheen_roughness: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "base_color", _three_numbers("base_color", self.base_color, 1.0))
-        for name in ("metallic", "roughness", "clearcoat", "clearcoat_roughness", "anisotropy_strength"):
+        object.__setattr__(self, "sheen_color", _three_numbers("sheen_color", self.sheen_color, 1.0))
+        names = ("metallic", "roughness", "clearcoat", "clearcoat_roughness", "anisotropy_strength", "sheen_roughness")
+        for name in names:
             object.__setattr__(self, name, _unit_interval(name, getattr(self, name)))
         if self.anisotropy_strength < MIN_ANISOTROPY:  # none, as the BRDF takes it: no extension written either
             object.__setattr__(self, "anisotropy_strength", 0.0)
@@ -176,6 +203,8 @@ class GltfMaterial:
             used.append("KHR_materials_clearcoat")
         if self.anisotropy_strength != 0.0:
             used.append("KHR_materials_anisotropy")
+        if any(self.sheen_color):
+            used.append("KHR_materials_sheen")
         return tuple(used)
 
     @property
@@ -197,6 +226,8 @@ class GltfMaterial:
                 DEFAULT_IOR if self.ior is None else self.ior,
                 np.array([self.clearcoat, self.clearcoat_roughness]),
                 np.array([self.anisotropy_strength, self.anisotropy_rotation]),
+                np.asarray(self.sheen_color),
+                self.sheen_roughness,
                 np.asarray(wi, dtype=np.float64),
                 np.asarray(wo, dtype=np.float64),
             )
@@ -234,6 +265,11 @@ class GltfMaterial:
             extensions["KHR_materials_anisotropy"] = {
                 "anisotropyStrength": self.anisotropy_strength,
                 "anisotropyRotation": self.anisotropy_rotation,
+            }
+        if "KHR_materials_sheen" in self.extensions:
+            extensions["KHR_materials_sheen"] = {
+                "sheenColorFactor": list(self.sheen_color),
+                "sheenRoughnessFactor": self.sheen_roughness,
             }
         if extensions:
             material["extensions"] = extensions

@@ -12,7 +12,13 @@ Mitsuba's ``Ni_palik``):
   functions' range), for spectral data (channels named by wavelength: ``450``, ``450nm``), interpolated again at
   the data's bands (held constant beyond the ends).
 
-Titanium and iron, which Mitsuba's tables lack, are not here. Data whose channels are neither ``r, g, b`` nor
+Titanium and iron, which Mitsuba's tables lack, are Johnson & Christy's (P. B. Johnson and R. W. Christy, "Optical
+constants of transition metals: Ti, V, Cr, Mn, Fe, Co, Ni, and Pd", Phys. Rev. B 9, 5056-5070, 1974, room
+temperature; as the refractiveindex.info database tabulates them, ``main/Ti/nk/Johnson.yml`` and
+``main/Fe/nk/Johnson.yml``), linearly interpolated to the same bands; their ``rgb`` is the same conversion Mitsuba
+makes, done here: each 10 nm table interpolated to every 1 nm, weighted by the CIE 1931 2° colour-matching functions,
+divided by ``∫ ȳ`` and taken to linear sRGB by the XYZ → sRGB matrix (which gives Mitsuba's ``rgb`` of the eight
+metals above within 0.002; ``tests/fitting/test_metals.py``). Data whose channels are neither ``r, g, b`` nor
 wavelengths start from the grid alone.
 """
 
@@ -23,7 +29,8 @@ import numpy as np
 
 
 class Metal(NamedTuple):
-    """One metal's index: Mitsuba's table name, linear sRGB ``(r, g, b)``, the spectral samples at :data:`BANDS_NM`."""
+    """One metal's index: its table's name (Mitsuba's, or the source's), linear sRGB ``(r, g, b)``, the spectral
+    samples at :data:`BANDS_NM`."""
 
     table: str
     eta_rgb: tuple[float, float, float]
@@ -125,6 +132,28 @@ METALS = {
          3.7399, 3.7641, 3.7541, 3.6785, 3.6022, 3.5206, 3.4389, 3.4196, 3.4345, 3.4494, 3.4728, 3.4965, 3.5202,
          3.5386, 3.557, 3.5754, 3.58, 3.58, 3.58, 3.5779, 3.5606, 3.5433, 3.5261, 3.5085, 3.4865, 3.4646, 3.4426,
          3.4207, 3.3991, 3.3778, 3.3565, 3.3352, 3.3139, 3.3059),
+    ),
+    "Ti": Metal(
+        "Ti: Johnson & Christy 1974", (3.2754, 2.37979, 2.02467), (4.57204, 3.22455, 2.72791),
+        (1.8543, 1.9138, 1.9831, 2.0406, 2.0912, 2.1288, 2.1672, 2.2061, 2.237, 2.267, 2.2925, 2.3175, 2.3344,
+         2.3504, 2.3728, 2.4048, 2.4368, 2.4721, 2.5079, 2.5418, 2.56, 2.5782, 2.5964, 2.616, 2.636, 2.656, 2.6764,
+         2.6979, 2.7193, 2.7407, 2.7622, 2.7844, 2.8067, 2.8289, 2.8511, 2.8762, 2.9031, 2.93, 2.9569, 2.9838,
+         3.0129, 3.0452, 3.0775, 3.1098, 3.1422, 3.1745, 3.2068, 3.2201),
+        (2.8829, 2.9046, 2.9277, 2.9412, 2.9556, 2.9744, 2.9917, 3.0083, 3.0235, 3.0385, 3.067, 3.097, 3.1324,
+         3.1684, 3.2076, 3.2516, 3.2956, 3.3418, 3.3882, 3.4345, 3.48, 3.5255, 3.5709, 3.612, 3.652, 3.692, 3.7286,
+         3.7571, 3.7857, 3.8143, 3.8427, 3.8693, 3.896, 3.9227, 3.9493, 3.9658, 3.9754, 3.985, 3.9946, 4.0042, 4.01,
+         4.01, 4.01, 4.01, 4.01, 4.01, 4.01, 4.0037),
+    ),
+    "Fe": Metal(
+        "Fe: Johnson & Christy 1974", (3.51477, 2.76963, 2.30167), (3.69502, 2.7861, 2.49289),
+        (1.9686, 2.0354, 2.1123, 2.1875, 2.2606, 2.3294, 2.4006, 2.4728, 2.5295, 2.5845, 2.626, 2.666, 2.6952,
+         2.7232, 2.7592, 2.8072, 2.8552, 2.8889, 2.9211, 2.9497, 2.9467, 2.9436, 2.9406, 2.9263, 2.9091, 2.892,
+         2.8829, 2.8924, 2.9019, 2.9114, 2.9187, 2.9053, 2.892, 2.8787, 2.8653, 2.8612, 2.8631, 2.865, 2.8669,
+         2.8688, 2.8743, 2.8851, 2.8958, 2.9066, 2.9174, 2.9282, 2.9389, 2.9425),
+        (2.3843, 2.4408, 2.4946, 2.545, 2.5931, 2.6369, 2.6733, 2.7067, 2.737, 2.767, 2.7925, 2.8175, 2.8416, 2.8656,
+         2.8848, 2.8968, 2.9088, 2.9164, 2.9236, 2.9318, 2.95, 2.9682, 2.9864, 3.0037, 3.0209, 3.038, 3.0536, 3.0655,
+         3.0774, 3.0893, 3.102, 3.122, 3.142, 3.162, 3.182, 3.2004, 3.2177, 3.235, 3.2523, 3.2696, 3.2868, 3.3037,
+         3.3206, 3.3375, 3.3545, 3.3714, 3.3883, 3.4115),
     ),
 }
 # fmt: on

@@ -22,7 +22,8 @@ from brdffit.export.targets import export_format
 #: dielectric and a metal), with KHR_materials_specular alone (f0 ≤ 0.04), with an index of refraction (f0 up to
 #: that of ior 4) and with ``ior = 0`` (f0 = the specular colour, beyond ior 4), and at the factors' ends (0 and 1);
 #: and those a ``gltf`` fit maps exactly: under a clear coat (KHR_materials_clearcoat), anisotropic
-#: (KHR_materials_anisotropy, the sphere with its tangents), and both with an index.
+#: (KHR_materials_anisotropy, the sphere with its tangents), and both with an index; a velvet (KHR_materials_sheen),
+#: and a sheen at its factors' ends (colour 1 and 0, roughness 1) under a coat.
 MATERIALS = {
     "dielectric": GltfMaterial((0.5, 0.4, 0.3), 0.0, 0.35),
     "metal": GltfMaterial((0.95, 0.64, 0.54), 1.0, 0.2),
@@ -34,6 +35,16 @@ MATERIALS = {
     "anisotropic": GltfMaterial((0.91, 0.92, 0.92), 1.0, 0.25, anisotropy_strength=0.6, anisotropy_rotation=-1.2),
     "coat-anisotropy-ior": GltfMaterial(
         (0.6, 0.2, 0.05), 0.4, 0.3, ior=1.6, clearcoat=1.0, clearcoat_roughness=0.0, anisotropy_strength=1.0
+    ),
+    "sheen": GltfMaterial((0.5, 0.1, 0.15), 0.0, 0.8, sheen_color=(0.5, 0.45, 0.4), sheen_roughness=0.5),
+    "sheen-ends-coat": GltfMaterial(
+        (0.3, 0.3, 0.3),
+        0.0,
+        0.6,
+        clearcoat=0.5,
+        clearcoat_roughness=0.2,
+        sheen_color=(1.0, 1.0, 0.0),
+        sheen_roughness=1.0,
     ),
 }
 

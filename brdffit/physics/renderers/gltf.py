@@ -91,8 +91,21 @@ then), and the core form elsewhere. The clamp binds where ``N·L · N·V ≲ 1/4
 strength reaches its threshold. With ``α_t = α_b = α`` and no floor or clamp the anisotropic form is the core one (GGX's
 ``D`` and Smith's ``Λ`` see the slopes through ``α(φ)`` alone), so one evaluation serves both (:func:`_ggx_lobe`).
 
+**KHR_materials_sheen** (ratified; its "Implementation Notes", non-normative) lays a sheen over the material, under
+the coat ("If clearcoat (KHR_materials_clearcoat) is active at the same time, clearcoat is layered on top of sheen"),
+combined by albedo scaling (Conty Estevez & Kulla 2017) as the Sample Viewer does for each light (``pbr.frag``:
+``l_albedoSheenScaling = min(1.0 - max3(sheenColor) * albedoSheenScalingLUT(NdotV, sheenRoughness), 1.0 - max3(…) *
+albedoSheenScalingLUT(NdotL, …))``, then ``l_color = l_sheen + l_color * l_albedoSheenScaling``)::
+
+    sheened = sheen_color · D_s · V_s + min(1 − max(sheen_color) E(N·V), 1 − max(sheen_color) E(N·L)) · material
+
+with the Charlie lobe ``D_s · V_s`` and its directional albedo ``E`` of ``sheen.py``. Taking the smaller of both
+directions' scalings keeps the material **reciprocal** (the extension's cheaper ``1 − max(sheen_color) E(N·V)``
+alone, which the viewer applies to its environment light, would not be). The coat is then laid over the sheened
+material as above.
+
 Sources: the extensions' READMEs in KhronosGroup/glTF (``extensions/2.0/Khronos/KHR_materials_clearcoat``,
-``KHR_materials_anisotropy``); the Sample Viewer's shaders in KhronosGroup/glTF-Sample-Viewer
+``KHR_materials_anisotropy``, ``KHR_materials_sheen``); the Sample Viewer's shaders in KhronosGroup/glTF-Sample-Viewer
 (``source/Renderer/shaders``: ``brdf.glsl``, ``punctual.glsl``, ``material_info.glsl``, ``pbr.frag``). The
 ``gltf`` fit model (``gltf_model.py``) and the glTF export (``export/gltf_material.py``) both evaluate it here.
 """
@@ -102,6 +115,7 @@ import math
 from ..._jax import jnp
 from ..geometry import above_horizon, half_vector, in_turned_frame
 from ..microfacet import ggx_anisotropic_distribution
+from .sheen import sheen_albedo, sheen_lobe
 
 #: The dielectric's index of refraction in core glTF (Appendix B), and the extension's default.
 DEFAULT_IOR = 1.5
@@ -147,12 +161,15 @@ def material_brdf(
     coat_reflectance=DEFAULT_F0,
     anisotropy_strength=0.0,
     anisotropy_rotation=0.0,
+    sheen_color=0.0,
+    sheen_roughness=0.0,
 ):
     """The glTF BRDF (N, 3) in 1/sr, with the dielectric's ``f0`` (3,) given directly (the module docstring).
 
     ``clearcoat``, ``clearcoat_roughness`` (KHR_materials_clearcoat, in [0, 1]) with the coat's ``f0``
     ``coat_reflectance``; ``anisotropy_strength`` in [0, 1] and ``anisotropy_rotation`` in radians from the data's
-    ``+x`` (KHR_materials_anisotropy). Each extension is left out of the computation where its weight is the number
+    ``+x`` (KHR_materials_anisotropy); ``sheen_color`` (3,) (or one number for all channels) and ``sheen_roughness``
+    in [0, 1] (KHR_materials_sheen). Each extension is left out of the computation where its weight is the number
     0 (the export's fits of the core material), and gives the core model exactly at 0 in any case."""
     visible, wi, wo = above_horizon(wi, wo)
     h = half_vector(wi, wo)
@@ -184,6 +201,8 @@ def material_brdf(
     dielectric_brdf = (1.0 - specular * jnp.max(fresnel, axis=-1, keepdims=True)) * diffuse_brdf
     dielectric_brdf = dielectric_brdf + specular * fresnel * specular_brdf
     material = (1.0 - metallic) * dielectric_brdf + metallic * metal_brdf
+    if not _is_zero(sheen_color):
+        material = _with_sheen(material, jnp.asarray(sheen_color), sheen_roughness, wi, wo, h)
     if not _is_zero(clearcoat):
         coat_alpha = jnp.maximum(clearcoat_roughness * clearcoat_roughness, MIN_ALPHA)
         coat_brdf = _ggx_lobe(wi, wo, h, coat_alpha, coat_alpha)
@@ -193,8 +212,25 @@ def material_brdf(
     return jnp.where(visible[:, None], material, 0.0)
 
 
+def _with_sheen(material, sheen_color, sheen_roughness, wi, wo, h):
+    """``material`` (N, 3) under KHR_materials_sheen's sheen of ``sheen_color`` (3,) or (), layered by albedo scaling
+    as the Sample Viewer does for a light (``sheen.py`` has the lobe and ``E``)::
+
+        sheen_color · D · V + min(1 − max(sheen_color) · E(N·V, r), 1 − max(sheen_color) · E(N·L, r)) · material
+    """
+    cos_i, cos_o = wi[:, 2], wo[:, 2]
+    lobe = sheen_lobe(cos_i, cos_o, h[:, 2], sheen_roughness)[:, None]
+    strongest = jnp.max(sheen_color)  # max3(sheenColor)
+    scaling = jnp.minimum(
+        1.0 - strongest * sheen_albedo(cos_o, sheen_roughness), 1.0 - strongest * sheen_albedo(cos_i, sheen_roughness)
+    )
+    return sheen_color * lobe + scaling[:, None] * material
+
+
 def _is_zero(weight) -> bool:
     """Whether ``weight`` is the number 0 (not an array a program traces): its term is then skipped, not computed."""
+    if isinstance(weight, tuple | list):
+        return all(_is_zero(value) for value in weight)
     return isinstance(weight, int | float) and weight == 0
 
 

@@ -3,9 +3,11 @@
 The BRDF is the one a glTF viewer renders (``gltf.py``: the specification's Appendix B complete model,
 ``mix(dielectric_brdf, metal_brdf, metallic)``, GGX with height-correlated Smith, Schlick's Fresnel term), with
 ``KHR_materials_ior``'s index for the dielectric, ``KHR_materials_clearcoat``'s coat over it and
-``KHR_materials_anisotropy``'s stretched lobe, each as the Khronos glTF Sample Viewer evaluates it::
+``KHR_materials_anisotropy``'s stretched lobe and ``KHR_materials_sheen``'s sheen, each as the Khronos glTF Sample
+Viewer evaluates it::
 
-    f = (1 − clearcoat · F_c) · m + clearcoat · F_c · V_c·D_c
+    f = (1 − clearcoat · F_c) · s + clearcoat · F_c · V_c·D_c
+    s = sheen_color · D_s·V_s + min(1 − max(sheen_color) E(N·V), 1 − max(sheen_color) E(N·L)) · m
     m = (1 − metallic) · [(1 − F_d) · base_color/π + F_d · V·D] + metallic · (base_color + (1 − base_color) S) · V·D
     S = (1 − |V·H|)⁵,   F_d = f0 + (1 − f0) S,   f0 = ((1 − ior)/(1 + ior))²,   α = roughness²
     F_c = f0 + (1 − f0)(1 − N·V)⁵,   V_c·D_c: GGX and height-correlated Smith at α_c = clearcoat_roughness²
@@ -21,7 +23,10 @@ Parameters: ``roughness``, ``metallic``, ``clearcoat``, ``clearcoat_roughness`` 
 ``clearcoat_roughness``. Held unless freed: ``ior`` at glTF's 1.5 (``--free ior``: ``KHR_materials_ior``, for a
 dielectric whose reflectance at normal incidence is not 4%; the coat's follows it, as in the Sample Viewer), and the
 anisotropy at 0 (``--free anisotropy_strength,anisotropy_rotation``): one gonioreflectometer's few planes
-seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry.
+seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry; and
+the sheen at 0 (``--free sheen_color,sheen_roughness``; ``sheen_color`` in [0, 1] per channel, ``sheen_roughness`` in
+[0, 1]): Estevez & Kulla's "Charlie" lobe ``D_s·V_s`` and its directional albedo ``E`` (``sheen.py``), which a velvet
+or a cloth shows towards grazing angles.
 
 The model says it is isotropic (``LobeModel.isotropic``), as it is with its default holds: the fit's checks take the
 shortcuts an isotropic model allows (the albedo on half the grid; at normal incidence, one azimuth), which keep a
@@ -52,8 +57,18 @@ CLEARCOAT_STARTS = ((0.02, 0.1), (0.5, 0.1))
 #: every roughness, metallic and coat start comes with each of three rotations, 60° apart, so that one lies within 30°
 #: of any tangent (a rotation 90° from the truth is a stationary point of the cost, where a fit would stay).
 ANISOTROPY_STARTS = ((0.4, 0.0), (0.4, math.pi / 3), (0.4, -math.pi / 3))
-#: What the fit holds unless a user frees it: glTF's index, and no anisotropy.
-HELD = (("ior", DEFAULT_IOR), ("anisotropy_strength", 0.0), ("anisotropy_rotation", 0.0))
+#: Starting sheens ``(sheen_color, sheen_roughness)``, one beside each base colour of :data:`BASE_COLOR_STARTS` as the
+#: anisotropies are: held (the default) they are all 0 and add no start; freed, every start has a sheen of colour 0.1
+#: (grey) at roughness 0.3, 0.5 or 0.8 (a sheen's roughness moves its lobe, from the horizon towards the normal).
+SHEEN_STARTS = ((0.1, 0.3), (0.1, 0.5), (0.1, 0.8))
+#: What the fit holds unless a user frees it: glTF's index, no anisotropy and no sheen (KHR_materials_sheen's defaults).
+HELD = (
+    ("ior", DEFAULT_IOR),
+    ("anisotropy_strength", 0.0),
+    ("anisotropy_rotation", 0.0),
+    ("sheen_roughness", 0.0),
+    ("sheen_color", 0.0),
+)
 
 
 @final
@@ -65,8 +80,8 @@ class GltfLobe(WholeLobe):
     @property
     def summary(self) -> str:
         return (
-            "Appendix B (height-correlated Smith GGX, Schlick) under a clear coat (Schlick in N·V); anisotropic GGX"
-            " along +x turned by anisotropy_rotation"
+            "Appendix B (height-correlated Smith GGX, Schlick) under a Charlie sheen (albedo scaling) and a clear coat"
+            " (Schlick in N·V); anisotropic GGX along +x turned by anisotropy_rotation"
         )
 
     peaks_at_mirror = True
@@ -81,11 +96,17 @@ class GltfLobe(WholeLobe):
             ("clearcoat_roughness", UNIT_INTERVAL),
             ("anisotropy_strength", UNIT_INTERVAL),
             ("anisotropy_rotation", AXIS_ANGLE),
-            ("base_color", UNIT_INTERVAL),  # the per-channel one last (Lobe.channel_names)
+            ("sheen_roughness", UNIT_INTERVAL),
+            ("base_color", UNIT_INTERVAL),  # the per-channel ones last (Lobe.channel_names)
+            ("sheen_color", UNIT_INTERVAL),
         )
 
-    channel_names = ("base_color",)
-    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength")
+    channel_names = ("base_color", "sheen_color")
+    # the sheen's albedo scaling takes max(sheen_color) over the channels: each channel depends on every channel's sheen
+    # colour, so the fit takes the whole Jacobian (measured: a 3,000-pair fit 15-25% slower than with one tangent per
+    # parameter for all channels at once, which would be wrong in the sheen colour's columns)
+    channels_coupled = True
+    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength", "sheen_color")
     anisotropy_names = ("anisotropy_strength", "anisotropy_rotation")
 
     @property
@@ -94,9 +115,12 @@ class GltfLobe(WholeLobe):
             {"roughness": roughness, "metallic": metallic, "ior": DEFAULT_IOR, "base_color": base}
             | {"clearcoat": clearcoat, "clearcoat_roughness": coat_roughness}
             | {"anisotropy_strength": strength, "anisotropy_rotation": rotation}
+            | {"sheen_color": sheen_color, "sheen_roughness": sheen_roughness}
             for roughness in ROUGHNESS_STARTS
             for metallic in METALLIC_STARTS
-            for base, (strength, rotation) in zip(BASE_COLOR_STARTS, ANISOTROPY_STARTS, strict=True)
+            for base, (strength, rotation), (sheen_color, sheen_roughness) in zip(
+                BASE_COLOR_STARTS, ANISOTROPY_STARTS, SHEEN_STARTS, strict=True
+            )
             for clearcoat, coat_roughness in CLEARCOAT_STARTS
         )
 
@@ -115,13 +139,15 @@ class GltfLobe(WholeLobe):
             coat_reflectance=f0,
             anisotropy_strength=shape["anisotropy_strength"],
             anisotropy_rotation=shape["anisotropy_rotation"],
+            sheen_color=shape["sheen_color"],
+            sheen_roughness=shape["sheen_roughness"],
         )
 
 
 def gltf() -> LobeModel:
     """glTF 2.0's metallic-roughness material with a clear coat and anisotropy (module docstring); ``ior`` held at
     1.5 and the anisotropy at 0 unless freed."""
-    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy)"
+    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy, _sheen)"
     return LobeModel("gltf", summary, GltfLobe(), 1, held=HELD, whole=True, isotropic=True)
 
 
