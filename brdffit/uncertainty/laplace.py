@@ -19,8 +19,8 @@ inverse is taken over the free coordinates only, ``k`` counts those. The
 inverse is taken in correlation scaling, so parameters of any units are
 treated alike. A parameter is *undetermined* when its Jacobian column is zero or it has weight in a
 direction in which ``JᵀJ`` is singular (no curvature), or when its error exceeds
-:data:`UNDETERMINED_SPREAD` times the width of its plausible range (its value where that range is
-unbounded): correlation scaling hides a column that is tiny in every sample (a dead lobe's roughness
+:data:`UNDETERMINED_SPREAD` times the width of its plausible range (where it has a bounded one): correlation
+scaling hides a column that is tiny in every sample (a dead lobe's roughness
 and Fresnel indices, ``1 ± 3e14``), and no Gaussian that wide says anything about the data. An
 undetermined error is reported as null, with its reason in the block's ``undetermined``, and a warning
 names it; the errors of the others are then those with the undetermined ones held (the inverse over
@@ -55,8 +55,8 @@ DEGENERATE_CORRELATION = 0.99
 HETEROSCEDASTIC_RATIO = 2.0
 #: Eigenvalues of the correlation-scaled JᵀJ below this fraction of the largest count as zero.
 SINGULAR = 1e-12
-#: An error above this many times the width of a parameter's plausible range (its value, where that range is
-#: unbounded) is undetermined: the 1-σ interval then spans every plausible value ten times over.
+#: An error above this many times the width of a parameter's (bounded) plausible range is undetermined: the 1-σ
+#: interval then spans every plausible value ten times over.
 UNDETERMINED_SPREAD = 10.0
 #: Why an error is null, for a parameter with no curvature (its Jacobian zero, or in a singular direction).
 NO_CURVATURE = "no curvature: zero or singular Jacobian"
@@ -182,9 +182,7 @@ def curvature_at_optimum(density: Density) -> Curvature:
         inverse[np.ix_(kept, kept)], singular, condition = inverse_with_null_space(hessian[np.ix_(kept, kept)], labels)
         undetermined |= dict.fromkeys(singular, NO_CURVATURE)
         wide = {
-            density.labels[i]: why
-            for i in kept
-            if (why := too_wide(noise2 * inverse[i, i], v[i], domains[i])) is not None
+            density.labels[i]: why for i in kept if (why := too_wide(noise2 * inverse[i, i], domains[i])) is not None
         }
         undetermined |= wide
         if not wide:
@@ -196,20 +194,19 @@ def curvature_at_optimum(density: Density) -> Curvature:
     return Curvature(chi2, inverse, meat, undetermined, condition)
 
 
-def too_wide(variance: float, value: float, domain) -> str | None:
-    """Why an error of ``sqrt(variance)`` leaves a parameter at ``value`` in ``domain`` undetermined, or None: an
-    error above :data:`UNDETERMINED_SPREAD` times the width of its plausible range, or of its value where that range
-    is unbounded (a parameter at 0 with no bounded range is never judged so)."""
+def too_wide(variance: float, domain) -> str | None:
+    """Why an error of ``sqrt(variance)`` leaves a parameter in ``domain`` undetermined, or None: an error above
+    :data:`UNDETERMINED_SPREAD` times the width of its plausible range. A parameter without a bounded plausible
+    range (a data-driven model's coefficient) is never judged so: an error large beside its value says only that the
+    value is not far from 0 (a coefficient of 0.01 ± 0.2 is measured), not that the data leave it free."""
     if not np.isfinite(variance):
         return None
     low, high = domain.plausible
-    width, of = high - low, f"plausible range [{low:g}, {high:g}]"
-    if not np.isfinite(width):
-        width, of = abs(float(value)), f"its value {float(value):.3g}"
+    width = high - low
     error = float(np.sqrt(variance))
-    if width <= 0 or error <= UNDETERMINED_SPREAD * width:
+    if not np.isfinite(width) or width <= 0 or error <= UNDETERMINED_SPREAD * width:
         return None
-    return f"error {error:.2g} > {UNDETERMINED_SPREAD:g}× {of}"
+    return f"error {error:.2g} > {UNDETERMINED_SPREAD:g}× plausible range [{low:g}, {high:g}]"
 
 
 #: What a varying scatter means for each method's errors (the end of the ``heteroscedastic`` warning).

@@ -77,7 +77,10 @@ def test_fixed_eta_recovers_the_rest_and_narrows_the_errors_of_ks(dielectric):
 
 def test_a_degenerate_pair_stops_being_degenerate_when_one_is_fixed(near_normal):
     free = quiet_fit(near_normal, "cook-torrance", uncertainty="laplace")
-    assert "degenerate" in " ".join(free.uncertainty["warnings"])
+    # Only ks·f0 is measured: the pair is said degenerate, or one of it undetermined (an error beyond 10× its
+    # plausible range, issue 29) and held while the other's error is taken.
+    pair_said = "degenerate" in " ".join(free.uncertainty["warnings"])
+    assert pair_said or any(name.split("[")[0] in ("f0", "ks") for name in free.uncertainty.undetermined)
     for fixed in ({"f0": 0.04}, {"ks": 0.5}):
         held = quiet_fit(near_normal, "cook-torrance", uncertainty="laplace", fixed=fixed)
         assert not any("degenerate" in line for line in held.uncertainty["warnings"]), fixed

@@ -162,11 +162,13 @@ def dead_conductor_lobe():
     """Cook-Torrance with a conductor's Fresnel fitted to a Lambertian surface (ρ = 0.25, 432 pairs, 1%
     multiplicative noise, no sigma): ks is held at 1, so the lobe dies by its roughness and indices, whose Jacobian
     columns are ~1e-16 of kd's but not zero. Issue 29 found ``k = 0 ± 2.1e13`` on such a fit, and its robust
-    errors (their ratio to the Gauss-Newton ones set by those columns' rounding) replaced kd's too."""
+    errors (their ratio to the Gauss-Newton ones set by those columns' rounding) replaced kd's too. Started where
+    the grid's race once started it, at ``eta = 1, k = 0`` (``F = 0``: the lobe dead, and no derivative moves it)."""
     samples = data_synth.synthesize("lambert", {"rho_d": [0.25]}, *SMALL_GRID, noise=0.01, seed=5)
+    dead = {"kd": [0.25], "ks": [1.0], "m": 0.3, "eta": [1.0], "k": [0.0]}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FitWarning)
-        result = fit(samples, "cook-torrance", fresnel="conductor")
+        result = fit(samples, "cook-torrance", fresnel="conductor", start=dead)
     with pytest.warns(UncertaintyWarning, match="not determined by these samples") as caught:
         estimated = laplace_uncertainty(result, samples)
     return samples, estimated, [str(warning.message) for warning in caught]

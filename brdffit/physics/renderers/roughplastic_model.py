@@ -20,13 +20,10 @@ from ..domains import ROUGHNESS, UNIT_INTERVAL
 from ..models.grids import BASE_COLOR_STARTS, ROUGHNESS_GRID
 from ..models.lobe import WholeLobe
 from ..models.model import LobeModel, ModelEntry
-from .roughplastic import roughplastic_brdf
+from .roughplastic import DEFAULT_INT_IOR, EXT_IOR, roughplastic_brdf
 
 #: Mitsuba's distributions for the coating.
 DISTRIBUTIONS = {"beckmann": "Beckmann (Mitsuba's default)", "ggx": "GGX (Trowbridge-Reitz)"}
-#: Mitsuba's default index of the coating (polypropylene) and of the air outside (``ext_ior``, fixed here).
-DEFAULT_INT_IOR = 1.49
-EXT_IOR = 1.000277
 
 
 @final
