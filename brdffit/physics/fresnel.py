@@ -10,6 +10,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from .._jax import jnp
 from .domains import UNIT_INTERVAL, GreaterThan, MappedDomain, Positive
 
@@ -80,18 +82,30 @@ class Fresnel:
     summary: str
     parameters: tuple[tuple[str, MappedDomain, tuple[float, ...]], ...]
     reflectance: Callable[[Any, Mapping[str, Any]], Any]
+    #: The reflectance at normal incidence of a shape of numbers (numpy, never traced; Pharr, Jakob & Humphreys,
+    #: *PBRT* §8.2: ``((η − 1)² + k²)/((η + 1)² + k²)``, Schlick's ``f0``): where it is 0 the lobe reflects nothing.
+    at_normal: Callable[[Mapping[str, Any]], Any] = lambda shape: 1.0
     per_channel: tuple[str, ...] = ()
+
+
+def _conductor_at_normal(eta, k):
+    """A conductor's reflectance at normal incidence, ``((η − 1)² + k²)/((η + 1)² + k²)`` (numpy)."""
+    return ((eta - 1.0) ** 2 + k * k) / ((eta + 1.0) ** 2 + k * k)
 
 
 #: The kinds of Fresnel term, by the name the ``fresnel`` option takes; the first is the default.
 FRESNEL = {
     "schlick": Fresnel(
-        "Schlick 1994", (("f0", UNIT_INTERVAL, (0.04, 0.3, 0.9)),), lambda c, shape: fresnel_schlick(c, shape["f0"])
+        "Schlick 1994",
+        (("f0", UNIT_INTERVAL, (0.04, 0.3, 0.9)),),
+        lambda c, shape: fresnel_schlick(c, shape["f0"]),
+        lambda shape: np.asarray(shape["f0"], float),
     ),
     "dielectric": Fresnel(
         "exact, real index eta",
         (("eta", GreaterThan(1.0, plausible_margin=1e-6), (1.5, 3.0)),),
         lambda c, shape: fresnel_dielectric(c, shape["eta"]),
+        lambda shape: ((np.asarray(shape["eta"], float) - 1.0) / (np.asarray(shape["eta"], float) + 1.0)) ** 2,
     ),
     "conductor": Fresnel(
         "exact, complex index eta + i k per channel",
@@ -106,6 +120,7 @@ FRESNEL = {
             ("k", CONDUCTOR_EXTINCTION, (0.0, 1.0, 2.0, 3.0, 4.0, 6.0)),
         ),
         lambda c, shape: fresnel_conductor(c, shape["eta"], shape["k"]),
+        lambda shape: _conductor_at_normal(np.asarray(shape["eta"], float), np.asarray(shape["k"], float)),
         per_channel=("eta", "k"),
     ),
     "none": Fresnel("F = 1", (), lambda c, shape: jnp.ones_like(c)),

@@ -282,6 +282,9 @@ def test_no_grid_start_of_cook_torrance_reflects_nothing(fresnel, anisotropic):
     lobe = get_model("cook-torrance", fresnel=fresnel, anisotropic=anisotropic).lobe
     reflectance = FRESNEL[fresnel].reflectance
     assert lobe.grid and all(float(reflectance(np.float64(1.0), shape)) > 0.0 for shape in lobe.grid)
+    for shape in lobe.grid:  # the closed form the grid uses is the reflectance at normal incidence (rounding)
+        at_normal = float(np.asarray(FRESNEL[fresnel].at_normal(shape)))
+        assert at_normal == pytest.approx(float(reflectance(np.float64(1.0), shape)), rel=1e-12, abs=1e-15)
 
 
 def test_a_conductor_fit_of_a_non_metal_does_not_start_from_a_dead_lobe():

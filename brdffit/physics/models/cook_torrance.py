@@ -26,7 +26,7 @@ from typing import final
 
 import numpy as np
 
-from ..._jax import jax, jnp
+from ..._jax import jnp
 from ...checks import boolean, choice
 from ..domains import ALBEDO, AXIS_AZIMUTH, NON_NEGATIVE, ROUGHNESS, Domain
 from ..fresnel import FRESNEL
@@ -96,8 +96,7 @@ class CookTorranceLobe(MappedLobe):
         if not shapes or not FRESNEL[self.fresnel].parameters:
             return tuple(shapes)
         stacked = {name: np.array([shape[name] for shape in shapes]) for name in shapes[0]}
-        with jax.ensure_compile_time_eval():  # numbers, also where a program being traced asks for the grid
-            at_normal = np.asarray(FRESNEL[self.fresnel].reflectance(np.ones(len(shapes)), stacked))
+        at_normal = np.broadcast_to(FRESNEL[self.fresnel].at_normal(stacked), (len(shapes),))  # numpy: never traced
         return tuple(shape for shape, reflects in zip(shapes, at_normal > 0.0, strict=True) if reflects)
 
     @property
