@@ -14,8 +14,28 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 
-# The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own.
-os.environ.setdefault("BRDFFIT_CACHE_DIR", tempfile.mkdtemp(prefix="brdffit-test-cache-"))
+# The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own, one for each
+# pytest-xdist worker (the controller's, which the workers inherit, was shared by both: two processes writing one
+# cache's entries at once).
+if "PYTEST_XDIST_WORKER" in os.environ or "BRDFFIT_CACHE_DIR" not in os.environ:
+    os.environ["BRDFFIT_CACHE_DIR"] = tempfile.mkdtemp(prefix="brdffit-test-cache-")
+
+
+@pytest.fixture(autouse=True)
+def _compilation_cache_off_after_each_test():
+    """A command run in-process turns JAX's persistent cache on for the rest of the worker's life, and every later
+    compile of every test then serialises its executable into it; three whole runs of the suite on 2026-11-26 lost a
+    worker to a native crash inside that serialisation (XLA's ``serialize``, after hundreds of tests). Each test
+    that wants the cache turns it on itself; after it, the cache is off again."""
+    yield
+    from brdffit._programs import cache
+
+    if cache._enabled is not None:
+        from jax._src import compilation_cache
+
+        cache._enabled = None
+        jax.config.update("jax_compilation_cache_dir", None)
+        compilation_cache.reset_cache()
 
 
 @pytest.fixture
