@@ -24,9 +24,10 @@ if "PYTEST_XDIST_WORKER" in os.environ or "BRDFFIT_CACHE_DIR" not in os.environ:
 @pytest.fixture(autouse=True)
 def _compilation_cache_off_after_each_test():
     """A command run in-process turns JAX's persistent cache on for the rest of the worker's life, and every later
-    compile of every test then serialises its executable into it; three whole runs of the suite on 2026-11-26 lost a
-    worker to a native crash inside that serialisation (XLA's ``serialize``, after hundreds of tests). Each test
-    that wants the cache turns it on itself; after it, the cache is off again."""
+    compile of every test then serialises its executable into it. Each test that wants the cache turns it on itself;
+    after it, the cache is off again. (Whole runs on 2026-11-26 lost a worker to a native crash inside XLA's
+    ``serialize`` while writing that cache; this confinement did not stop it: the crash also comes within a test
+    that turned the cache on. Its cause is open.)"""
     yield
     from brdffit._programs import cache
 
