@@ -33,7 +33,15 @@ def cluster_client(address: str | None, workers: int | None) -> Iterator:
         with client, _killed_workers(distributed, f"--scheduler {address}"):
             yield client
         return
-    cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+    try:
+        cluster = distributed.LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+        )
+    except Exception as error:  # Dask's event loop gives up after 10 s on a loaded machine (a bare AssertionError)
+        reason = f"{type(error).__name__}: {error}".splitlines()[0].rstrip(": ")
+        raise BrdfInputError(
+            f"--workers {workers}: a local Dask cluster did not start ({reason}); nothing written"
+        ) from None
     with cluster, distributed.Client(cluster) as client, _killed_workers(distributed, f"--workers {workers}"):
         yield client
 

@@ -258,10 +258,28 @@ def test_workers_killed_by_a_fit_are_one_line(files, tmp_path, capsys, monkeypat
         raise distributed.KilledWorker("fit-3f2a", types.SimpleNamespace(address="tcp://127.0.0.1:40000"), 3)
 
     monkeypatch.setattr(brdffit.api, "fit_batch", killed)
+    # no real cluster (tests/test_cluster.py starts those): Dask's event loop, started in a worker that has run
+    # hundreds of tests, once took over its 10 s to start
+    monkeypatch.setattr(distributed, "LocalCluster", lambda **options: contextlib.nullcontext())
+    monkeypatch.setattr(distributed, "Client", lambda cluster: contextlib.nullcontext("a client"))
     status, _, err = run(["fit", files / "ward.csv", "--workers", "1", "-o", tmp_path / "r.json"], capsys)
     one_line_error(
         status, err, "--workers 1: Dask workers died while fitting (attempted to run task 'fit-3f2a' on 4 different"
     )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_local_cluster_that_does_not_start_is_one_line(files, tmp_path, capsys, monkeypatch):
+    """Dask's event loop that does not start within its 10 s (a loaded machine) raises a bare ``AssertionError``:
+    one line, exit 2, nothing written."""
+    distributed = pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
+
+    def not_started(**options):
+        raise AssertionError
+
+    monkeypatch.setattr(distributed, "LocalCluster", not_started)
+    status, _, err = run(["fit", files / "ward.csv", "--workers", "2", "-o", tmp_path / "r.json"], capsys)
+    one_line_error(status, err, "--workers 2: a local Dask cluster did not start (AssertionError); nothing written")
     assert list(tmp_path.iterdir()) == []
 
 
