@@ -5,6 +5,7 @@ of their own and compare them with brdffit's to 1e-12, so they run with it on, a
 ``tests/test_float64.py`` checks in a fresh interpreter that brdffit leaves a user's float32 JAX alone.
 """
 
+import gc
 import os
 import tempfile
 
@@ -21,11 +22,37 @@ if "PYTEST_XDIST_WORKER" in os.environ or "BRDFFIT_CACHE_DIR" not in os.environ:
     os.environ["BRDFFIT_CACHE_DIR"] = tempfile.mkdtemp(prefix="brdffit-test-cache-")
 
 # Within a test worker JAX never writes its persistent cache, even after a command run in-process has pointed it at a
-# folder: four whole runs (2026-11-26/27) lost a worker to a native crash inside XLA's ``executable.serialize()``
-# (``compilation_cache.put_executable_and_time``), each after hundreds of in-process compiles with the cache on, never
-# in a test run alone. The commands the tests start as processes still use the cache above (it is their speed-up);
-# brdffit's own stored programs (``_programs/stored.py``) do not depend on this switch and stay tested.
+# folder: the tests need not serialise every executable they compile. The commands the tests start as processes still
+# use the cache above (it is their speed-up); brdffit's own stored programs (``_programs/stored.py``) do not depend on
+# this switch and stay tested.
 jax.config.update("jax_enable_compilation_cache", False)
+
+#: A worker's memory mappings above which JAX's compiled programs are dropped (``jax.clear_caches``) after a test.
+#: Every executable XLA compiles for the CPU maps its code: a worker that kept them all grew by ~5,000 mappings a minute
+#: and, some 1,500 tests in, reached Linux's default limit (``vm.max_map_count``, 65,530), where LLVM's next mapping
+#: fails and XLA's compile (or its serialisation into the cache) dies with a segmentation fault (five whole runs on
+#: 2026-11-26/27 lost a worker so; clearing the caches there took a process of 1,732 mappings back to 742).
+MAPPINGS_BEFORE_CLEARING = 30_000
+
+
+def memory_mappings() -> int | None:
+    """How many memory mappings this process has (Linux's ``/proc/self/maps``), or None where that is not known."""
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            return sum(1 for _ in maps)
+    except OSError:
+        return None
+
+
+@pytest.fixture(autouse=True)
+def _compiled_programs_dropped_before_the_mappings_run_out():
+    """After a test, JAX's compiled programs are dropped where the worker's mappings exceed
+    :data:`MAPPINGS_BEFORE_CLEARING` (a later test compiles what it needs again)."""
+    yield
+    count = memory_mappings()
+    if count is not None and count > MAPPINGS_BEFORE_CLEARING:
+        jax.clear_caches()
+        gc.collect()
 
 
 @pytest.fixture
