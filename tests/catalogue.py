@@ -17,11 +17,12 @@ def gltf_params(
     clearcoat_roughness=0.0,
     strength=0.0,
     rotation=0.0,
-    sheen_color=0.0,
+    sheen_color=None,
     sheen_roughness=0.0,
 ) -> dict:
-    """The ``gltf`` model's parameters in its order (a result file's), its held ones at their defaults unless given."""
-    return {
+    """The ``gltf`` model's parameters in its order (a result file's), its held ones at their defaults unless given;
+    with a ``sheen_color``, those of ``gltf:sheen=true``."""
+    params = {
         "roughness": roughness,
         "metallic": metallic,
         "ior": ior,
@@ -29,10 +30,11 @@ def gltf_params(
         "clearcoat_roughness": clearcoat_roughness,
         "anisotropy_strength": strength,
         "anisotropy_rotation": rotation,
-        "sheen_roughness": sheen_roughness,
-        "base_color": base_color,
-        "sheen_color": sheen_color if isinstance(sheen_color, list) else [sheen_color] * len(base_color),
     }
+    if sheen_color is None:
+        return params | {"base_color": base_color}
+    sheen_color = sheen_color if isinstance(sheen_color, list) else [sheen_color] * len(base_color)
+    return params | {"sheen_roughness": sheen_roughness, "base_color": base_color, "sheen_color": sheen_color}
 
 
 CASES = [
@@ -123,8 +125,12 @@ CASES = [
     # anisotropy at 0 unless freed (tests/export/test_gltf_model.py frees them)
     ("gltf", {}, gltf_params(0.35, 0.0, clearcoat=0.5, clearcoat_roughness=0.1, base_color=[0.6, 0.2, 0.05])),
     ("gltf", {}, gltf_params(0.3, 0.9, clearcoat=0.8, clearcoat_roughness=0.15, base_color=[0.95, 0.64, 0.54])),
-    # a velvet: a tinted sheen (KHR_materials_sheen, held at 0 unless freed) over a rough red dielectric
-    ("gltf", {}, gltf_params(0.8, 0.0, base_color=[0.5, 0.1, 0.15], sheen_color=[0.5, 0.45, 0.4], sheen_roughness=0.5)),
+    # a velvet: a tinted sheen (KHR_materials_sheen, the option sheen) over a rough red dielectric
+    (
+        "gltf",
+        {"sheen": True},
+        gltf_params(0.8, 0.0, base_color=[0.5, 0.1, 0.15], sheen_color=[0.5, 0.45, 0.4], sheen_roughness=0.5),
+    ),
     (  # Mitsuba's principled (a whole-lobe model): a blue paint under a clear coat; tints, sheen, anisotropy held at 0
         "principled",
         {},
@@ -165,8 +171,7 @@ RECIPROCAL_CASES = [case for case in CASES if reciprocal(case)]
 def case_id(case) -> str:
     model, options, params = case
     name = model + "".join(f"-{key if value is True else value}" for key, value in options.items())
-    sheen = "-sheen" if max(params.get("sheen_color", [0.0])) > 0 else ""
-    return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "") + sheen
+    return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "")
 
 
 def parametrize_cases(cases=CASES):

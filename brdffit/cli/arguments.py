@@ -38,12 +38,12 @@ def spell(argument: Argument) -> str:
 
 
 #: The model options as flags: each model takes some (``brdffit models`` lists them).
-MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "lobes", "int_ior", "basis", "ridge")
+MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "sheen", "lobes", "int_ior", "basis", "ridge")
 
 
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
     """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--anisotropic``,
-    ``--lobes``, ``--int-ior``, ``--basis``, ``--ridge``)."""
+    ``--sheen``, ``--lobes``, ``--int-ior``, ``--basis``, ``--ridge``)."""
     from ..physics.fresnel import FRESNEL
     from ..physics.microfacet import DISTRIBUTIONS, SHADOWING
     from ..physics.models.registry import MODELS
@@ -66,6 +66,11 @@ def add_model_options(command: argparse.ArgumentParser, default: str | None) -> 
         metavar="true|false",
         help="cook-torrance: anisotropic roughness alpha_u, alpha_v and the tangent's azimuth phi_t in place of m"
         " (default false)",
+    )
+    command.add_argument(
+        "--sheen",
+        metavar="true|false",
+        help="gltf: KHR_materials_sheen's sheen, sheen_color (per channel) and sheen_roughness, fitted (default false)",
     )
     command.add_argument("--lobes", type=int, metavar="K", help="lafortune: number of lobes (default 1)")
     command.add_argument(

@@ -383,7 +383,7 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
         return None
     params = result.params
     base_color = [float(value) for value in params["base_color"]]
-    sheen_color = [float(value) for value in params["sheen_color"]]
+    sheen_color = [float(value) for value in params.get("sheen_color", [0.0])]  # none without gltf:sheen=true
     ior = float(params["ior"])
     return GltfMaterial(
         tuple(base_color * 3 if len(base_color) == 1 else base_color),
@@ -395,7 +395,7 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
         anisotropy_strength=float(params["anisotropy_strength"]),
         anisotropy_rotation=float(params["anisotropy_rotation"]),
         sheen_color=tuple(sheen_color * 3 if len(sheen_color) == 1 else sheen_color),
-        sheen_roughness=float(params["sheen_roughness"]),
+        sheen_roughness=float(params.get("sheen_roughness", 0.0)),
     )
 
 

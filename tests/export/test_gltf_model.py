@@ -38,12 +38,11 @@ NOISE = 0.01
 SAME_MINIMUM = 1e-6
 #: The anisotropy freed: neither held at 0.
 FREE_ANISOTROPY = {"anisotropy_strength": None, "anisotropy_rotation": None}
-#: The sheen freed: its colour and roughness, both held at 0 by default.
-FREE_SHEEN = {"sheen_color": None, "sheen_roughness": None}
 
 
 def params_of(material: GltfMaterial) -> dict:
-    """The ``gltf`` model's parameters of ``material`` (its index 1.5 where it has none)."""
+    """The ``gltf`` model's parameters of ``material`` (its index 1.5 where it has none), ``gltf:sheen=true``'s where
+    it has a sheen."""
     return gltf_params(
         material.roughness,
         material.metallic,
@@ -53,7 +52,7 @@ def params_of(material: GltfMaterial) -> dict:
         clearcoat_roughness=material.clearcoat_roughness,
         strength=material.anisotropy_strength,
         rotation=material.anisotropy_rotation,
-        sheen_color=list(material.sheen_color),
+        sheen_color=list(material.sheen_color) if any(material.sheen_color) else None,
         sheen_roughness=material.sheen_roughness,
     )
 
@@ -110,12 +109,7 @@ def test_a_freed_index_is_fitted_and_written_as_khr_materials_ior(rng, tmp_path)
     samples = measured(PLASTIC, rng)
     held = fit(samples, "gltf")
     freed = fit(samples, "gltf", fixed={"ior": None})
-    other_holds = {
-        "anisotropy_strength": 0.0,
-        "anisotropy_rotation": 0.0,
-        "sheen_roughness": 0.0,
-        "sheen_color": [0.0] * 3,
-    }
+    other_holds = {"anisotropy_strength": 0.0, "anisotropy_rotation": 0.0}
     assert held.params["ior"] == 1.5 and held.fixed == {"ior": 1.5} | other_holds
     assert freed.params["ior"] == pytest.approx(1.7, rel=1e-2) and freed.fixed == other_holds
     assert freed.params["metallic"] < 5e-3  # a dielectric, but for the noise
@@ -168,7 +162,7 @@ def test_a_freed_anisotropy_is_recovered_and_exported_with_the_mesh_tangents_it_
     held = fit(samples, "gltf")  # round: the default holds the anisotropy at 0
     freed = fit(samples, "gltf", fixed=FREE_ANISOTROPY)
     assert freed.converged and freed.warnings == []
-    assert freed.fixed == {"ior": 1.5, "sheen_roughness": 0.0, "sheen_color": [0.0] * 3}
+    assert freed.fixed == {"ior": 1.5}
     assert freed.cost < 0.01 * held.cost  # measured: 11,000× lower; the round lobe misses the stretched one
     # measured within 0.05% (strength, roughness, colour) and 0.01° (rotation); the tolerances ten times that and more
     assert freed.params["anisotropy_strength"] == pytest.approx(BRUSHED.anisotropy_strength, rel=0.01)
@@ -211,8 +205,8 @@ def test_a_freed_anisotropy_is_checked_as_an_anisotropic_models():
     checked = np.asarray(_albedo_estimates(anisotropic, brushed, 128)[0])
     assert abs(shortcut[0, 0] / checked[0, 0] - 1.0) > 0.2 and np.all(checked < 1.0)  # a metal of reflectance ≤ 0.92
     in_plane = data_synth.synthesize("gltf", params_of(BRUSHED), *data_synth.in_plane(4, 45))
-    default_holds = frozenset({"ior", "anisotropy_strength", "anisotropy_rotation", "sheen_roughness", "sheen_color"})
-    lines = caveats(model, in_plane, brushed, held=frozenset({"ior", "sheen_roughness", "sheen_color"}))
+    default_holds = frozenset({"ior", "anisotropy_strength", "anisotropy_rotation"})
+    lines = caveats(model, in_plane, brushed, held=frozenset({"ior"}))
     assert any(
         "the data cannot determine its anisotropy (anisotropy_strength, anisotropy_rotation)" in line for line in lines
     ), lines
@@ -220,12 +214,14 @@ def test_a_freed_anisotropy_is_checked_as_an_anisotropic_models():
     assert not any("plane of incidence" in line for line in caveats(model, in_plane, paint, held=default_holds))
 
 
-def test_a_freed_sheen_is_recovered_and_exported_as_khr_materials_sheen(tmp_path):
+def test_a_sheen_is_recovered_and_exported_as_khr_materials_sheen(tmp_path):
     samples = measured_lobes(VELVET)
-    with warnings.catch_warnings():  # held at 0, the base's roughness runs to its end (1) after the grazing light
+    with warnings.catch_warnings():  # without a sheen, the base's roughness runs to its end (1) after the grazing light
         warnings.simplefilter("ignore", FitWarning)
         held = fit(samples, "gltf")
-    freed = fit(samples, "gltf", fixed=FREE_SHEEN)
+    freed = fit(samples, "gltf", sheen=True)
+    assert held.model_options == {"sheen": False} and freed.model_options == {"sheen": True}
+    assert "sheen_color" not in held.params
     assert freed.converged and freed.warnings == []
     assert freed.fixed == {"ior": 1.5, "anisotropy_strength": 0.0, "anisotropy_rotation": 0.0}
     assert freed.cost < 0.01 * held.cost  # measured: 350× lower; a base alone misses the sheen's grazing lobe
@@ -260,16 +256,16 @@ def test_a_sheen_from_one_incidence_near_the_normal_is_named_as_undetermined(the
     """Lit along the normal, an isotropic material is one curve of θo, which a sheen and the base trace alike
     (``caveats._sheen_undetermined``: at 5° the fitted sheen colour is off by up to 60%); one incidence at 45°, an
     in-plane scan included, determines it (measured: within 1%)."""
-    model = get_model("gltf")
+    model = get_model("gltf", sheen=True)
     _, wo = data_synth.in_plane(1, 45)
     light = np.asarray(spherical_to_direction(np.radians(theta_i), 0.0))
-    samples = data_synth.synthesize("gltf", params_of(VELVET), np.tile(light, (len(wo), 1)), wo)
+    samples = data_synth.synthesize("gltf", params_of(VELVET), np.tile(light, (len(wo), 1)), wo, sheen=True)
     velvet = model.dictionary.to_params(params_of(VELVET))
     holds = frozenset({"ior", "anisotropy_strength", "anisotropy_rotation"})
     lines = [line for line in caveats(model, samples, velvet, held=holds) if "sheen" in line]
     expected = "the data cannot tell sheen_roughness and sheen_color from the base"
     assert (len(lines) == 1 and expected in lines[0]) if named else lines == [], lines
-    # held (the default), the sheen is no question the data must answer
+    # held, the sheen is no question the data must answer
     assert not any("sheen" in line for line in caveats(model, samples, velvet, held=holds | {"sheen_color"}))
 
 
@@ -283,11 +279,11 @@ def test_the_exact_export_is_valid_gltf(rng, tmp_path):
     # ranges) but not that KHR_materials_anisotropy uses the mesh's tangents: it reports them as an info, not a
     # warning, UNUSED_MESH_TANGENT ("the material has no normal texture"), which the extension's MUST overrules.
     # A velvet under a coat, its sheen written as KHR_materials_sheen (the validator checks its factors' ranges).
-    for stem, truth, free, extension in (
-        ("brushed", BRUSHED, FREE_ANISOTROPY, "KHR_materials_anisotropy"),
-        ("velvet", VELVET, FREE_SHEEN, "KHR_materials_sheen"),
+    for stem, truth, options, extension in (
+        ("brushed", BRUSHED, {"fixed": FREE_ANISOTROPY}, "KHR_materials_anisotropy"),
+        ("velvet", VELVET, {"sheen": True}, "KHR_materials_sheen"),
     ):
-        fitted = fit(measured_lobes(truth), "gltf", fixed=free)
+        fitted = fit(measured_lobes(truth), "gltf", **options)
         result = replace(fitted, params=fitted.params | {"clearcoat": 0.3})
         for name in (f"{stem}.gltf", f"{stem}.glb"):
             material, _, _ = write_gltf(result, tmp_path / name)

@@ -41,8 +41,8 @@ def assert_recovered(result, truth, rtol):
 
 
 def departed_holds(model, options, params) -> dict:
-    """The model's default holds (``LobeModel.held``) that the truth departs from, freed (a velvet's sheen, which the
-    ``gltf`` model holds at 0): the fit is asked for every parameter the data were made with."""
+    """The model's default holds (``LobeModel.held``) that the truth departs from, freed: the fit is asked for every
+    parameter the data were made with."""
     held = dict(getattr(get_model(model, **options), "held", ()))
     return {name: None for name, value in held.items() if not np.allclose(params[name], value)}
 

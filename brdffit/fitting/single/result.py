@@ -20,7 +20,6 @@ from ..._files import parse_json, read_json_text, write_text_atomic
 from ..._version import __version__
 from ...errors import BrdfInputError
 from ...physics.evaluate import evaluate
-from ...physics.models.model import LobeModel
 from ...physics.models.registry import get_model
 
 
@@ -140,7 +139,6 @@ class FitResult:
         """The fit's residuals (N, C) on ``samples`` (a :class:`~brdffit.Samples` with this result's channels), in
         the units of its loss: ``sqrt(weight)·(T(f) − T(y))``, divided by ``sigma·|T'(y)|`` where the samples have
         sigma (``docs/losses.md``). Their sum of squares over the fitted samples is ``cost``."""
-        from ...physics.models.registry import get_model
         from ..objective.losses import get_loss
         from ..objective.problem import sample_residuals
 
@@ -214,7 +212,7 @@ class FitResult:
                 model=_string(content["model"], "model"),
                 model_options=_object(content.get("model_options", {}), "model_options"),
                 channels=tuple(_string(channel, "channels") for channel in _list(content["channels"], "channels")),
-                params=_with_newer_holds(content, _object(content["params"], "params")),
+                params=_object(content["params"], "params"),
                 loss=fit["loss"],
                 cost=float(fit["cost"]),
                 rmse=float(fit["rmse"]),
@@ -270,22 +268,6 @@ def _string(value: Any, name: str) -> str:
 def save_result(result: FitResult, path: str | os.PathLike) -> None:
     """Write ``result``'s file atomically (a temporary file renamed into place); :func:`load_result` reads it."""
     write_text_atomic(path, result.to_json())
-
-
-def _with_newer_holds(content: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
-    """A renderer's model's ``params`` (a whole-lobe model's) with the parameters it has gained since an older file
-    was written and holds by default (glTF's sheen, held at 0: that file's fit had none) at their held values, one per
-    channel for a per-channel one; anything else as it is (a model or option the registry refuses is said later)."""
-    try:
-        model = get_model(str(content["model"]), **dict(content.get("model_options") or {}))
-    except (BrdfInputError, TypeError):
-        return params
-    if not isinstance(model, LobeModel) or not model.whole:
-        return params
-    n_channels = len(content.get("channels") or ()) or 1
-    missing = {name: value for name, value in model.held if name not in params}
-    per_channel = model.lobe.channel_names
-    return params | {name: [value] * n_channels if name in per_channel else value for name, value in missing.items()}
 
 
 def load_result(path: str | os.PathLike) -> FitResult:

@@ -23,10 +23,16 @@ Parameters: ``roughness``, ``metallic``, ``clearcoat``, ``clearcoat_roughness`` 
 ``clearcoat_roughness``. Held unless freed: ``ior`` at glTF's 1.5 (``--free ior``: ``KHR_materials_ior``, for a
 dielectric whose reflectance at normal incidence is not 4%; the coat's follows it, as in the Sample Viewer), and the
 anisotropy at 0 (``--free anisotropy_strength,anisotropy_rotation``): one gonioreflectometer's few planes
-seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry; and
-the sheen at 0 (``--free sheen_color,sheen_roughness``; ``sheen_color`` in [0, 1] per channel, ``sheen_roughness`` in
-[0, 1]): Estevez & Kulla's "Charlie" lobe ``D_s·V_s`` and its directional albedo ``E`` (``sheen.py``), which a velvet
-or a cloth shows towards grazing angles.
+seldom tell a stretched lobe from a round one, and its rotation is the tangent's, which a mesh must then carry.
+
+The sheen is an option, ``gltf:sheen=true`` (default false: ``sheen_color`` 0, the extension's default, and then no
+sheen parameters at all): it adds ``sheen_color`` (in [0, 1] per channel) and ``sheen_roughness`` (in [0, 1]), both
+fitted, Estevez & Kulla's "Charlie" lobe ``D_s·V_s`` and its directional albedo ``E`` (``sheen.py``), which a velvet
+or a cloth shows towards grazing angles. It is an option, not a held parameter, because its albedo scaling takes
+``max(sheen_color)`` over the channels: each channel then depends on every channel's sheen colour, and the fit takes
+the whole Jacobian (``Lobe.channels_coupled``); without it a glTF fit takes one tangent per parameter for all
+channels, and never evaluates a sheen (measured: a warm fit of the example 3.4 s with the sheen held, under 1 s
+without).
 
 The model says it is isotropic (``LobeModel.isotropic``), as it is with its default holds: the fit's checks take the
 shortcuts an isotropic model allows (the albedo on half the grid; at normal incidence, one azimuth), which keep a
@@ -40,6 +46,7 @@ import math
 from dataclasses import dataclass
 from typing import final
 
+from ...checks import boolean
 from ..domains import AXIS_ANGLE, UNIT_INTERVAL
 from ..fresnel import FRESNEL
 from ..models.grids import BASE_COLOR_STARTS, METALLIC_STARTS, ROUGHNESS_STARTS
@@ -57,38 +64,37 @@ CLEARCOAT_STARTS = ((0.02, 0.1), (0.5, 0.1))
 #: every roughness, metallic and coat start comes with each of three rotations, 60° apart, so that one lies within 30°
 #: of any tangent (a rotation 90° from the truth is a stationary point of the cost, where a fit would stay).
 ANISOTROPY_STARTS = ((0.4, 0.0), (0.4, math.pi / 3), (0.4, -math.pi / 3))
-#: Starting sheens ``(sheen_color, sheen_roughness)``, one beside each base colour of :data:`BASE_COLOR_STARTS` as the
-#: anisotropies are: held (the default) they are all 0 and add no start; freed, every start has a sheen of colour 0.1
-#: (grey) at roughness 0.3, 0.5 or 0.8 (a sheen's roughness moves its lobe, from the horizon towards the normal).
+#: Starting sheens ``(sheen_color, sheen_roughness)`` of ``gltf:sheen=true``, one beside each base colour of
+#: :data:`BASE_COLOR_STARTS` as the anisotropies are: a sheen of colour 0.1 (grey) at roughness 0.3, 0.5 or 0.8 (a
+#: sheen's roughness moves its lobe, from the horizon towards the normal).
 SHEEN_STARTS = ((0.1, 0.3), (0.1, 0.5), (0.1, 0.8))
-#: What the fit holds unless a user frees it: glTF's index, no anisotropy and no sheen (KHR_materials_sheen's defaults).
-HELD = (
-    ("ior", DEFAULT_IOR),
-    ("anisotropy_strength", 0.0),
-    ("anisotropy_rotation", 0.0),
-    ("sheen_roughness", 0.0),
-    ("sheen_color", 0.0),
-)
+#: What the fit holds unless a user frees it: glTF's index and no anisotropy (the extensions' defaults).
+HELD = (("ior", DEFAULT_IOR), ("anisotropy_strength", 0.0), ("anisotropy_rotation", 0.0))
+#: The sheen's parameters (``gltf:sheen=true``): the shared one, then the per-channel one.
+SHEEN_PARAMETERS = (("sheen_roughness", UNIT_INTERVAL), ("sheen_color", UNIT_INTERVAL))
 
 
 @final
 @dataclass(frozen=True)
 class GltfLobe(WholeLobe):
-    """glTF's metallic-roughness BRDF with its clear coat and anisotropy as one lobe, the whole material (module
-    docstring)."""
+    """glTF's metallic-roughness BRDF with its clear coat and anisotropy as one lobe, the whole material, under a sheen
+    where ``sheen`` (module docstring)."""
+
+    sheen: bool = False
 
     @property
     def summary(self) -> str:
+        under = " under a Charlie sheen (albedo scaling) and" if self.sheen else " under"
         return (
-            "Appendix B (height-correlated Smith GGX, Schlick) under a Charlie sheen (albedo scaling) and a clear coat"
-            " (Schlick in N·V); anisotropic GGX along +x turned by anisotropy_rotation"
+            f"Appendix B (height-correlated Smith GGX, Schlick){under} a clear coat (Schlick in N·V); anisotropic GGX"
+            " along +x turned by anisotropy_rotation"
         )
 
     peaks_at_mirror = True
 
     @property
     def parameters(self):
-        return (
+        core = (
             ("roughness", UNIT_INTERVAL),
             ("metallic", UNIT_INTERVAL),
             ("ior", IOR),
@@ -96,36 +102,47 @@ class GltfLobe(WholeLobe):
             ("clearcoat_roughness", UNIT_INTERVAL),
             ("anisotropy_strength", UNIT_INTERVAL),
             ("anisotropy_rotation", AXIS_ANGLE),
-            ("sheen_roughness", UNIT_INTERVAL),
-            ("base_color", UNIT_INTERVAL),  # the per-channel ones last (Lobe.channel_names)
-            ("sheen_color", UNIT_INTERVAL),
         )
+        if not self.sheen:
+            return (*core, ("base_color", UNIT_INTERVAL))
+        return (*core, *SHEEN_PARAMETERS[:1], ("base_color", UNIT_INTERVAL), *SHEEN_PARAMETERS[1:])  # per channel last
 
-    channel_names = ("base_color", "sheen_color")
-    # the sheen's albedo scaling takes max(sheen_color) over the channels: each channel depends on every channel's sheen
-    # colour, so the fit takes the whole Jacobian (measured: a 3,000-pair fit 15-25% slower than with one tangent per
-    # parameter for all channels at once, which would be wrong in the sheen colour's columns)
-    channels_coupled = True
-    meaningful_ends = ("metallic", "clearcoat", "anisotropy_strength", "sheen_color")
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        return ("base_color", "sheen_color") if self.sheen else ("base_color",)
+
+    @property
+    def channels_coupled(self) -> bool:
+        """With a sheen: its albedo scaling takes max(sheen_color) over the channels, so each channel depends on every
+        channel's sheen colour and the fit takes the whole Jacobian (one tangent per parameter for all channels at
+        once would be wrong in the sheen colour's columns)."""
+        return self.sheen
+
+    @property
+    def meaningful_ends(self) -> tuple[str, ...]:
+        return ("metallic", "clearcoat", "anisotropy_strength") + (("sheen_color",) if self.sheen else ())
+
     anisotropy_names = ("anisotropy_strength", "anisotropy_rotation")
 
     @property
     def grid(self):
+        sheens = SHEEN_STARTS if self.sheen else ((None, None),) * len(SHEEN_STARTS)
         return tuple(
             {"roughness": roughness, "metallic": metallic, "ior": DEFAULT_IOR, "base_color": base}
             | {"clearcoat": clearcoat, "clearcoat_roughness": coat_roughness}
             | {"anisotropy_strength": strength, "anisotropy_rotation": rotation}
-            | {"sheen_color": sheen_color, "sheen_roughness": sheen_roughness}
+            | ({"sheen_color": sheen_color, "sheen_roughness": sheen_roughness} if self.sheen else {})
             for roughness in ROUGHNESS_STARTS
             for metallic in METALLIC_STARTS
             for base, (strength, rotation), (sheen_color, sheen_roughness) in zip(
-                BASE_COLOR_STARTS, ANISOTROPY_STARTS, SHEEN_STARTS, strict=True
+                BASE_COLOR_STARTS, ANISOTROPY_STARTS, sheens, strict=True
             )
             for clearcoat, coat_roughness in CLEARCOAT_STARTS
         )
 
     def __call__(self, shape, wi, wo):
         f0 = ior_f0(shape["ior"])  # the dielectric's, and the coat's (the Sample Viewer's getClearCoatInfo)
+        sheen = {"sheen_color": shape["sheen_color"], "sheen_roughness": shape["sheen_roughness"]} if self.sheen else {}
         return material_brdf(
             shape["base_color"],
             shape["metallic"],
@@ -139,17 +156,31 @@ class GltfLobe(WholeLobe):
             coat_reflectance=f0,
             anisotropy_strength=shape["anisotropy_strength"],
             anisotropy_rotation=shape["anisotropy_rotation"],
-            sheen_color=shape["sheen_color"],
-            sheen_roughness=shape["sheen_roughness"],
+            **sheen,
         )
 
 
-def gltf() -> LobeModel:
+def gltf(sheen: bool = False) -> LobeModel:
     """glTF 2.0's metallic-roughness material with a clear coat and anisotropy (module docstring); ``ior`` held at
-    1.5 and the anisotropy at 0 unless freed."""
-    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy, _sheen)"
-    return LobeModel("gltf", summary, GltfLobe(), 1, held=HELD, whole=True, isotropic=True)
+    1.5 and the anisotropy at 0 unless freed; ``sheen`` (True, or ``"true"`` as a spec writes it; default False):
+    KHR_materials_sheen's sheen, ``sheen_color`` and ``sheen_roughness``, fitted."""
+    sheen = boolean("sheen", sheen)
+    summary = "glTF 2.0 metallic-roughness material (KHR_materials_ior, _clearcoat, _anisotropy"
+    summary += ", _sheen)" if sheen else ")"
+    options = (("sheen", sheen),)
+    return LobeModel("gltf", summary, GltfLobe(sheen), 1, options=options, held=HELD, whole=True, isotropic=True)
 
 
-#: glTF's material in the registry: ``brdffit compare`` tries it; its glTF export is exact.
-GLTF = ModelEntry(gltf, compare=("gltf",), exports={"gltf": "brdffit.export.gltf:gltf_of_gltf_fit"})
+#: glTF's material in the registry: ``brdffit compare`` tries it (without a sheen, which few measured materials show
+#: and which couples the channels); its glTF export is exact.
+GLTF = ModelEntry(
+    gltf,
+    compare=("gltf",),
+    choices={
+        "sheen": {
+            "false": "no sheen (KHR_materials_sheen's default)",
+            "true": "KHR_materials_sheen's Charlie sheen over the material, fitted",
+        }
+    },
+    exports={"gltf": "brdffit.export.gltf:gltf_of_gltf_fit"},
+)
