@@ -41,6 +41,28 @@ def test_help_and_version_import_no_jax(argv, status, said):
     assert said in done.stdout + done.stderr
 
 
+def test_python_dash_m_runs_the_command_line_from_any_folder(tmp_path):
+    """``python -m brdffit`` is the ``brdffit`` command (``brdffit/__main__.py``), wherever it is run."""
+    environment = os.environ | {"PYTHONPATH": str(ROOT)}
+    done = subprocess.run(
+        [sys.executable, "-m", "brdffit", "--version"], capture_output=True, text=True, cwd=tmp_path, env=environment
+    )
+    assert done.returncode == 0 and done.stdout.strip() == f"brdffit {brdffit.__version__}", done.stderr
+
+
+def test_the_package_declares_its_licence_and_its_types():
+    """A wheel carries LICENSE (``license-files``) and ``py.typed`` (package data): built once by hand with ``pip
+    wheel .``, its files were ``brdffit/py.typed``, ``brdffit-…dist-info/licenses/LICENSE`` and ``License-Expression:
+    MIT``; here, that the declarations and the files they name are there (a build needs the network)."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert project["project"]["license"] == "MIT" and project["project"]["license-files"] == ["LICENSE"]
+    assert "MIT License" in (ROOT / "LICENSE").read_text()
+    assert project["tool"]["setuptools"]["package-data"]["brdffit"] == ["py.typed"]
+    assert (ROOT / "brdffit" / "py.typed").is_file()
+
+
 LAMBERT_RESULT = (
     '{"model": "lambert", "model_options": {}, "channels": ["r", "g", "b"], "params": {"rho_d": [0.2, 0.3, 0.4]},'
     ' "fit": {"loss": "log", "cost": 0, "rmse": 0, "n_samples": 1, "n_steps": 1, "converged": true}}'
