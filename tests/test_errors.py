@@ -36,7 +36,7 @@ def samples():
         (
             dict(max_step=3),
             "max_step is not an argument of the fit, nor an option of any model"
-            " (anisotropic, basis, distribution, fresnel, int_ior, lobes, ridge, shadowing)",
+            " (anisotropic, basis, distribution, fresnel, int_ior, lobes, ridge, shadowing, sheen)",
         ),
         (
             dict(uncertainty="mcmc", mcmc=MCMC(walkers=4)),
