@@ -278,7 +278,7 @@ def compare(
             bar.set_description(spec_of(model.name, model.model_options))
             result = fit_checked(setup, solving)
             fold_losses, fold_converged = _cross_validated(model, loss_kind, result, samples, problem, split, solving)
-            score = _score(model, result, samples, fold_losses)
+            score = _score(model, result, fold_losses)
             notes = _fold_notes(fold_losses, fold_converged, split, samples)
             scores.append(replace(score, fold_converged=fold_converged, notes=notes))
             bar.update(1)
@@ -411,24 +411,18 @@ def held_out_sum(model: Model, loss: Loss, theta, problem: Problem):
     return cost(partial(residuals, model, loss), theta, problem)
 
 
-def _score(model: Model, result: FitResult, samples: Samples, fold_losses: list[float]) -> ModelScore:
-    """AIC, BIC and the cross-validated loss of one fit (module docstring); ``k`` counts its free parameters."""
-    constraints = constraints_for(model, samples.n_channels, result.fixed, result.bounds, defaults=False)
-    k = model.unconstrained.size(samples.n_channels) if constraints is None else constraints.n_free
-    counted = samples.n_samples if samples.weight is None else int(np.sum(samples.weight > 0))
-    n = counted * samples.n_channels
-    if samples.sigma is None:
-        deviance = n * math.log(max(result.cost, np.finfo(float).tiny) / n)
-    else:
-        deviance = result.cost
+def _score(model: Model, result: FitResult, fold_losses: list[float]) -> ModelScore:
+    """AIC, BIC (the result's own, ``fitting/single/criteria.py``) and the cross-validated loss of one fit (module
+    docstring); ``k`` counts its free parameters."""
+    figures = result.criteria
     held = np.array([value for value in fold_losses if not math.isnan(value)])
     cv_loss = float(np.mean(held)) if held.size else math.nan
     cv_stderr = float(np.std(held, ddof=1) / math.sqrt(held.size)) if held.size > 1 else math.nan
     return ModelScore(
         spec_of(model.name, model.model_options),
-        k,
-        deviance + 2 * k,
-        deviance + k * math.log(n),
+        figures.nvarys,
+        figures.aic,
+        figures.bic,
         cv_loss,
         cv_stderr,
         fold_losses,

@@ -17,6 +17,7 @@ from ..objective.losses import Loss
 from ..solver.compiled import Solved, failure_message
 from .caveats import EDGE, Screened, caveats
 from .constraints import Constraints
+from .criteria import fitted_values
 from .result import FitResult
 
 
@@ -93,6 +94,8 @@ def result_of(
         cost=float(solved.cost),
         rmse=float(solved.rmse),
         n_samples=samples.n_samples,
+        n_values=fitted_values(samples.n_samples, samples.n_channels, samples.weight),
+        sigma=samples.sigma is not None,
         n_steps=int(solved.n_steps),
         converged=converged,
         message="" if converged else failure_message(int(solved.result), max_steps),

@@ -21,6 +21,8 @@ from ..._version import __version__
 from ...errors import BrdfInputError
 from ...physics.evaluate import evaluate
 from ...physics.models.registry import get_model
+from .constraints import constraints_for
+from .criteria import Criteria, criteria
 
 
 @dataclass(frozen=True)
@@ -100,6 +102,10 @@ class FitResult:
     made from arrays), so that they can be read the same way again. ``fixed``
     and ``bounds`` are the parameters the fit held (``fitting/single/constraints.py``):
     name → value (a list per channel for an albedo), and name → ``[lo, hi]``.
+    ``n_values``: the values fitted (samples with a nonzero weight × channels; None in files written before it was
+    recorded: then ``n_samples`` × channels); ``sigma``: whether the residuals were divided by the samples' sigma
+    (False in such files). ``ndata``, ``nvarys``, ``chisqr``, ``redchi``, ``aic`` and ``bic`` are lmfit's figures of
+    the fit, as ``brdffit compare`` counts them (``criteria.py``).
     ``uncertainty`` is the :class:`Uncertainty` when one was asked for
     (``brdffit/uncertainty``); ``draws`` the MCMC draws of the physical
     parameters (S, p), in the order of ``uncertainty.covariance["names"]``,
@@ -123,9 +129,52 @@ class FitResult:
     max_theta: float | None = None
     fixed: dict[str, Any] = field(default_factory=dict)
     bounds: dict[str, Any] = field(default_factory=dict)
+    n_values: int | None = None
+    sigma: bool = False
     uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    # ------------------------------------------------------------------ lmfit's figures
+    @property
+    def criteria(self) -> Criteria:
+        """:class:`~brdffit.fitting.single.criteria.Criteria`: ``ndata``, ``nvarys``, ``chisqr``, ``redchi``, ``aic``
+        and ``bic`` of this fit, by one function with ``brdffit compare``'s."""
+        model = get_model(self.model, **self.model_options)
+        constraints = constraints_for(model, len(self.channels), self.fixed, self.bounds, defaults=False)
+        n_free = model.unconstrained.size(len(self.channels)) if constraints is None else constraints.n_free
+        n_values = self.n_samples * len(self.channels) if self.n_values is None else self.n_values
+        return criteria(self.cost, n_values, n_free, self.sigma)
+
+    @property
+    def ndata(self) -> int:
+        """The values fitted: samples with a nonzero weight × channels (lmfit's ``ndata``)."""
+        return self.criteria.ndata
+
+    @property
+    def nvarys(self) -> int:
+        """The parameters the fit varied: the model's, less those it held (``fixed``; lmfit's ``nvarys``)."""
+        return self.criteria.nvarys
+
+    @property
+    def chisqr(self) -> float:
+        """``Σr²`` of the loss's residuals, the ``cost`` (lmfit's ``chisqr``; a χ² where the samples have sigma)."""
+        return self.cost
+
+    @property
+    def redchi(self) -> float:
+        """``chisqr / (ndata − nvarys)`` (lmfit's ``redchi``), NaN where ``ndata ≤ nvarys``."""
+        return self.criteria.redchi
+
+    @property
+    def aic(self) -> float:
+        """Akaike's information criterion (``criteria.py``; lmfit's ``aic``, ``brdffit compare``'s)."""
+        return self.criteria.aic
+
+    @property
+    def bic(self) -> float:
+        """Schwarz's Bayesian information criterion (``criteria.py``; lmfit's ``bic``, ``brdffit compare``'s)."""
+        return self.criteria.bic
 
     def with_estimate(self, uncertainty: Uncertainty, draws: np.ndarray | None = None) -> "FitResult":
         """This result carrying an ``uncertainty`` estimate (and the MCMC ``draws`` (S, p) it came from)."""
@@ -173,6 +222,8 @@ class FitResult:
                 "max_theta": self.max_theta,
                 "fixed": dict(self.fixed),
                 "bounds": dict(self.bounds),
+                "n_values": self.n_values,
+                "sigma": self.sigma,
             },
         }
         if self.uncertainty is not None:
@@ -226,6 +277,8 @@ class FitResult:
                 max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
                 fixed=_object(fit.get("fixed", {}), "fit.fixed"),
                 bounds=_object(fit.get("bounds", {}), "fit.bounds"),
+                n_values=None if fit.get("n_values") is None else int(fit["n_values"]),
+                sigma=bool(fit.get("sigma", False)),
                 uncertainty=None
                 if content.get("uncertainty") is None
                 else Uncertainty.from_dict(content["uncertainty"], source),
