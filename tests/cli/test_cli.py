@@ -199,8 +199,11 @@ def test_fit_prints_a_table_and_writes_the_result(tmp_path, capsys):
         "max_theta",
         "fixed",
         "bounds",
+        "n_values",
+        "sigma",
     ]
     assert content["fit"]["converged"] is True and content["fit"]["n_samples"] == 10368
+    assert content["fit"]["n_values"] == 10368 * 3 and content["fit"]["sigma"] is False
     assert content["fit"]["quantity"] == "brdf" and content["fit"]["max_theta"] is None
     # The example was made from these parameters with 1% noise (Makefile target `examples`).
     truth = json.loads(EXAMPLE_PARAMS.read_text())
