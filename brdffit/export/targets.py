@@ -38,6 +38,8 @@ def _gltf(result, path: Path, kind: str, samples, bin_centres: bool = False) -> 
     from .gltf import write_gltf
 
     _, approximation, notes = write_gltf(result, path, binary=kind == "glb", samples=samples)
+    if any(note.startswith("exact") for note in notes):  # a gltf fit: its numbers written, nothing fitted
+        return [*notes, f"the written material against the fit: {approximation.line()}"]
     return [f"approximate: the glTF BRDF fitted to it, {approximation.line()}", *notes]
 
 

@@ -7,6 +7,7 @@ import re
 import numpy as np
 import pytest
 from gltf_validator import assert_valid, needs_validator
+from paths import EXAMPLE
 
 import data_synth
 from brdffit import fit, load_samples, save_samples
@@ -183,6 +184,18 @@ def test_gltf_says_how_far_it_lies(results, tmp_path, capsys):
     material = document["materials"][0]
     assert len(material["pbrMetallicRoughness"]["baseColorFactor"]) == 4
     assert material["extras"]["brdffit"]["approximation"]["rmse"] > 0
+
+
+def test_an_exact_gltf_export_never_says_approximate(tmp_path, capsys):
+    """A ``gltf`` fit's export writes its numbers unchanged: "exact", then how far the written material lies from
+    the fit (rounding alone), never "approximate" (it once said both)."""
+    result = tmp_path / "gltf.json"
+    assert run(["fit", EXAMPLE, "--model", "gltf", "-o", result], capsys)[0] == 0
+    status, out, err = run(["export", result, "--to", "gltf", "-o", tmp_path / "gltf.gltf"], capsys)
+    lines = out.splitlines()
+    assert status == 0 and "approximate" not in out, err
+    assert lines[1] == "  exact: the fitted glTF material, its numbers unchanged", out
+    assert lines[2].startswith("  the written material against the fit: rmse "), out
 
 
 @needs_validator
