@@ -37,11 +37,14 @@ DEFAULT_MODE = 0o666 & ~_read_umask()
 
 
 _stopped = threading.Event()  # set by an interrupt: no atomic write of this process completes any more
+_stopped_by: list[type[BaseException]] = [KeyboardInterrupt]  # what check_not_stopped raises: the signal's exception
 
 
-def stop_writing() -> None:
-    """From now on, every atomic write of this process raises ``KeyboardInterrupt`` instead of renaming its file
-    (an interrupted command writes nothing, even if the interrupt itself was swallowed)."""
+def stop_writing(raising: type[BaseException] = KeyboardInterrupt) -> None:
+    """From now on, every atomic write of this process raises ``raising`` (the interrupt's ``KeyboardInterrupt``, a
+    SIGTERM's own exception) instead of renaming its file, and so does every :func:`check_not_stopped` of long work
+    (an interrupted command writes nothing and stops, even if the interrupt itself was swallowed)."""
+    _stopped_by[0] = raising
     _stopped.set()
 
 
@@ -50,15 +53,11 @@ def resume_writing() -> None:
     _stopped.clear()
 
 
-def writes_stopped() -> bool:
-    """Whether :func:`stop_writing` was called (and not undone)."""
-    return _stopped.is_set()
-
-
 def check_not_stopped() -> None:
-    """Raise ``KeyboardInterrupt`` if writes were stopped: called before writing anything, a file or a stream."""
+    """Raise the stop's exception (``KeyboardInterrupt`` unless :func:`stop_writing` said another) if writes were
+    stopped: called before writing anything, a file or a stream, and between the steps of long work (MCMC)."""
     if _stopped.is_set():
-        raise KeyboardInterrupt
+        raise _stopped_by[0]
 
 
 def cannot_write(path: str | os.PathLike, error: OSError) -> BrdfWriteError:

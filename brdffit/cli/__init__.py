@@ -25,7 +25,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from .._files import resume_writing, stop_writing, writes_stopped
+from .._files import check_not_stopped, resume_writing, stop_writing
 from .._version import __version__
 from ..errors import BrdfInputError, BrdfWriteError, FitWarning, InputWarning, Spelled, UncertaintyWarning
 
@@ -74,8 +74,7 @@ def main(argv: list[str] | None = None) -> int:
                 _warn_in_one_line()
                 args.declared_files(args).check()
                 status = args.run(args)
-            if writes_stopped():  # an interrupt that was swallowed (JAX's gc callback): the work went on, unwritten
-                raise KeyboardInterrupt
+            check_not_stopped()  # an interrupt that was swallowed (JAX's gc callback): the work went on, unwritten
             return status
     except (BrdfInputError, BrdfWriteError) as error:
         print(f"brdffit: error: {error.spelled(spell)}", file=sys.stderr)
@@ -103,7 +102,7 @@ def on_interrupt(signum, frame) -> None:
 
 def on_terminate(signum, frame) -> None:
     """SIGTERM: stop every later write, then raise :class:`Terminated` (the temporaries are removed on the way out)."""
-    stop_writing()
+    stop_writing(Terminated)
     raise Terminated
 
 

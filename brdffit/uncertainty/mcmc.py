@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._files import atomic_path
+from .._files import atomic_path, check_not_stopped
 from .._jax import float64
 from ..checks import whole_number
 from ..data.samples import Samples
@@ -220,7 +220,14 @@ def run_chain(density: Density, curvature: Curvature, settings: MCMC, chain_path
     labels = sampled_labels(density.free_labels, density.has_sigma)
     n_dimensions = len(labels)
     rng = np.random.default_rng(settings.seed)
-    log_prob = log_probability_function(density)
+    density_at = log_probability_function(density)
+
+    def log_prob(points):
+        # a stop is seen at every step, also one whose exception Python swallowed (raised inside a gc callback: the
+        # sampler would otherwise run its million steps on)
+        check_not_stopped()
+        return density_at(points)
+
     start = start_ball(density, curvature, settings, n_dimensions, rng, log_prob)
     if chain_path is None:
         return _chain_of(run_sampler(settings, start, log_prob, progress))
