@@ -5,6 +5,7 @@ fit went (``fit``: loss, cost, rmse, counts, convergence) and, when asked for, t
 ``cost`` is the sum of squared residuals ``Σ r²`` (scipy's ``least_squares`` and optimistix report ``½ Σ r²``).
 """
 
+import functools
 import json
 import math
 import os
@@ -136,10 +137,11 @@ class FitResult:
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ lmfit's figures
-    @property
+    @functools.cached_property
     def criteria(self) -> Criteria:
         """:class:`~brdffit.fitting.single.criteria.Criteria`: ``ndata``, ``nvarys``, ``chisqr``, ``redchi``, ``aic``
-        and ``bic`` of this fit, by one function with ``brdffit compare``'s."""
+        and ``bic`` of this fit, by one function with ``brdffit compare``'s; built once per result (it builds the
+        model, which for the data-driven one reads its basis file)."""
         model = get_model(self.model, **self.model_options)
         constraints = constraints_for(model, len(self.channels), self.fixed, self.bounds, defaults=False)
         n_free = model.unconstrained.size(len(self.channels)) if constraints is None else constraints.n_free
