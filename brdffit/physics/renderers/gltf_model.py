@@ -126,16 +126,15 @@ class GltfLobe(WholeLobe):
 
     @property
     def grid(self):
-        sheens = SHEEN_STARTS if self.sheen else ((None, None),) * len(SHEEN_STARTS)
         return tuple(
             {"roughness": roughness, "metallic": metallic, "ior": DEFAULT_IOR, "base_color": base}
             | {"clearcoat": clearcoat, "clearcoat_roughness": coat_roughness}
             | {"anisotropy_strength": strength, "anisotropy_rotation": rotation}
-            | ({"sheen_color": sheen_color, "sheen_roughness": sheen_roughness} if self.sheen else {})
+            | (dict(zip(("sheen_color", "sheen_roughness"), sheen, strict=True)) if self.sheen else {})
             for roughness in ROUGHNESS_STARTS
             for metallic in METALLIC_STARTS
-            for base, (strength, rotation), (sheen_color, sheen_roughness) in zip(
-                BASE_COLOR_STARTS, ANISOTROPY_STARTS, sheens, strict=True
+            for base, (strength, rotation), sheen in zip(
+                BASE_COLOR_STARTS, ANISOTROPY_STARTS, SHEEN_STARTS, strict=True
             )
             for clearcoat, coat_roughness in CLEARCOAT_STARTS
         )
