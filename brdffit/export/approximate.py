@@ -2,9 +2,10 @@
 
 The fitted model is tabulated on a dense hemisphere grid (:func:`fitting_grid`: :func:`dense_grid`, or half of it
 where the fitted BRDF is mirror-symmetric about the plane of incidence, as a light at azimuth 0 makes every isotropic
-BRDF: the other half repeats it, and the optimum is the same); the renderer's model is fitted to those values with the
-fit's own loss, coarse to fine (:func:`refit`: the fit's own start search on a coarse subset of the grid, its optimum
-solved again on the whole); how far the two differ is reported (:class:`Approximation`): the rmse over
+BRDF: the other half repeats it, and the optimum is the same; an anisotropic BRDF, :func:`isotropic`, is tabulated
+with the light at :data:`ANISOTROPIC_TURNS` azimuths, which pin its tangent); the renderer's model is fitted to those
+values with the fit's own loss, coarse to fine (:func:`refit`: the fit's own start search on a coarse subset of the
+grid, its optimum solved again on the whole); how far the two differ is reported (:class:`Approximation`): the rmse over
 :func:`error_grid` (the dense grid and the plane of incidence with each light's mirror direction, where the highlight
 is: the dense grid's azimuths are bins' midpoints, which never sample the mirror direction), in 1/sr, and the worst
 relative difference of their directional albedos ``∫ f cos θo dωo`` (the light a surface reflects, at the incidences
@@ -23,7 +24,7 @@ from ..fitting.options import HOLDING_NOTHING, Holding, Solving
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from ..fitting.single.fit import fit_one, start_vector
 from ..fitting.single.result import FitResult
-from ..physics.geometry import direction_to_spherical, spherical_to_direction
+from ..physics.geometry import direction_to_spherical, in_turned_frame, spherical_to_direction
 from ..physics.models.model import Model
 from ..physics.models.registry import get_model
 
@@ -40,27 +41,48 @@ FIT_GRID = GRID
 #: 12 light zeniths, every third viewer zenith (6°) and every third azimuth (15°); 12 × 15 × 12 = 2,160 pairs where
 #: the BRDF is mirror-symmetric. (Fewer light zeniths, 6, put the search's optimum of glTF's model in another valley.)
 COARSE_GRID = (12, 15, 24)
+#: How many light azimuths an anisotropic BRDF is tabulated at: 0°, 45°, 90° and 135° (:func:`turned`). With the
+#: light at azimuth 0 alone the grid sees an anisotropic lobe from one side only; these four see its tangent from
+#: every side, because every anisotropic lobe brdffit has is the same with both directions turned by 180° (it depends
+#: on the half vector's squared components along its tangent and bitangent). The coarse grid the start search runs on
+#: has two of them, 0° and 90° (half the pairs; on a Ward fit with ``alpha_x`` 0.05 and ``alpha_y`` 0.4 the stand-ins'
+#: refined optima are those of a search on all four, to 5 digits, in a third of the time).
+ANISOTROPIC_TURNS = 4
 
 
-def dense_grid(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarray]:
+def turned(pairs: tuple[np.ndarray, np.ndarray], turns: int) -> tuple[np.ndarray, np.ndarray]:
+    """The direction pairs ``wi``, ``wo`` (N, 3), and copies of them with both directions turned about the normal by
+    ``k · 180°/turns`` for ``k = 1 … turns − 1``, one after another ((turns · N, 3) each): ``turns = 1``, the pairs
+    as they are."""
+    angles = -np.arange(turns) * np.pi / turns  # in_turned_frame turns the frame: a direction turns the other way
+    return tuple(np.concatenate([in_turned_frame(w, angle) for angle in angles]) for w in pairs)
+
+
+def dense_grid(shape: tuple[int, int, int] = GRID, turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Direction pairs ``wi``, ``wo`` (N, 3) on a hemisphere grid: the light at azimuth 0 and ``shape[0]`` zeniths,
-    the viewer at ``shape[1]`` zeniths × ``shape[2]`` azimuths (all bins' midpoints)."""
+    the viewer at ``shape[1]`` zeniths × ``shape[2]`` azimuths (all bins' midpoints); with ``turns`` > 1, the same
+    with the light at ``turns`` azimuths (:func:`turned`)."""
     n_light, n_theta, n_phi = shape
     light = (np.arange(n_light) + 0.5) * (np.pi / 2) / n_light
     view = (np.arange(n_theta) + 0.5) * (np.pi / 2) / n_theta
     azimuth = (np.arange(n_phi) + 0.5) * (2 * np.pi) / n_phi
     theta_i, theta_o, phi_o = (a.ravel() for a in np.meshgrid(light, view, azimuth, indexing="ij"))
-    return spherical_to_direction(theta_i, 0.0 * theta_i), spherical_to_direction(theta_o, phi_o)
+    return turned((spherical_to_direction(theta_i, 0.0 * theta_i), spherical_to_direction(theta_o, phi_o)), turns)
 
 
-def fitting_grid(shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def fitting_grid(
+    shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False, turns: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
     """Direction pairs ``wi``, ``wo`` (N, 3) a renderer's model is fitted on: :func:`dense_grid`'s (``shape[2]``
-    even), or with ``symmetric`` those of its azimuths in (0°, 180°) alone, for a BRDF that is the same at ``φo`` and
-    ``−φo`` (:func:`mirror_symmetric`): the azimuths' midpoints lie in mirror pairs (``φo`` and ``360° − φo``), so
-    the half grid's cost is half the whole one's at every parameter, and its optimum the same."""
-    wi, wo = dense_grid(shape)
+    even; with ``turns`` light azimuths), or with ``symmetric`` (one light azimuth) those of its azimuths in (0°, 180°)
+    alone, for a BRDF that is the same at ``φo`` and ``−φo`` (:func:`mirror_symmetric`): the azimuths' midpoints lie
+    in mirror pairs (``φo`` and ``360° − φo``), so the half grid's cost is half the whole one's at every parameter, and
+    its optimum the same."""
+    wi, wo = dense_grid(shape, turns)
     if not symmetric:
         return wi, wo
+    if turns != 1:
+        raise ValueError("a mirror-symmetric grid has the light at azimuth 0 alone (turns = 1)")
     upper = wo[:, 1] > 0.0
     return wi[upper], wo[upper]
 
@@ -78,24 +100,36 @@ def mirror_symmetric(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> bo
     return bool(np.all(np.abs(values - mirrored) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
 
 
-def plane_of_incidence(shape: tuple[int, int, int] = GRID) -> tuple[np.ndarray, np.ndarray]:
+def isotropic(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> bool:
+    """Whether ``brdf(wi, wo) -> (N, C)`` is the same with both directions turned about the normal (by 50°, an angle
+    no lobe's symmetry hides), within :data:`SYMMETRY_TOLERANCE`: an anisotropic BRDF is not. Checked on the coarse
+    grid (:data:`COARSE_GRID`)."""
+    wi, wo = dense_grid(COARSE_GRID)
+    turn = np.radians(50.0)
+    values, rotated = (
+        np.asarray(brdf(*pair)) for pair in ((wi, wo), (in_turned_frame(wi, turn), in_turned_frame(wo, turn)))
+    )
+    return bool(np.all(np.abs(values - rotated) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
+
+
+def plane_of_incidence(shape: tuple[int, int, int] = GRID, turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Direction pairs ``wi``, ``wo`` (N, 3) in the plane of incidence: the light at azimuth 0 and ``shape[0]``
     zeniths (:func:`dense_grid`'s), the viewer at azimuths 0 and 180° and ``shape[1]`` zeniths, and each light's
     mirror direction: where a glossy lobe peaks, and where a renderer's model may differ most (a Fresnel term at
-    grazing angles)."""
+    grazing angles); with ``turns`` > 1, the same for each of ``turns`` light azimuths (:func:`turned`)."""
     n_light, n_theta, _ = shape
     light = (np.arange(n_light) + 0.5) * (np.pi / 2) / n_light
     view = (np.arange(n_theta) + 0.5) * (np.pi / 2) / n_theta
     theta_i, theta_o, phi_o = (a.ravel() for a in np.meshgrid(light, view, [0.0, np.pi], indexing="ij"))
     theta_i, theta_o = np.concatenate([theta_i, light]), np.concatenate([theta_o, light])
     phi_o = np.concatenate([phi_o, np.full(n_light, np.pi)])
-    return spherical_to_direction(theta_i, 0.0 * theta_i), spherical_to_direction(theta_o, phi_o)
+    return turned((spherical_to_direction(theta_i, 0.0 * theta_i), spherical_to_direction(theta_o, phi_o)), turns)
 
 
-def error_grid() -> tuple[np.ndarray, np.ndarray]:
+def error_grid(turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """The pairs an approximation's error is measured on: :func:`dense_grid` and :func:`plane_of_incidence`
-    (38,880 + 1,092 pairs)."""
-    pairs = dense_grid(), plane_of_incidence()
+    (38,880 + 1,092 pairs), with the light at ``turns`` azimuths (:func:`turned`)."""
+    pairs = dense_grid(turns=turns), plane_of_incidence(turns=turns)
     return tuple(np.concatenate([pair[i] for pair in pairs]) for i in (0, 1))
 
 
@@ -105,8 +139,8 @@ class Approximation:
     a fraction of the fitted BRDF's own rms there (``relative_rmse``: the shape's error, which albedos cannot see,
     e.g. a retro-reflective lobe turned forward), and the worst relative difference of their directional albedos
     (``albedo_error``, a fraction) over the incidences and channels, at ``albedo_incidence`` (degrees) in channel
-    ``albedo_channel``; ``largest``: where on the grid the two differ most (``theta_i``, ``theta_o``, ``phi_o`` in
-    degrees, the light at azimuth 0; the ``channel``; the ``fit``'s and the ``approximation``'s values, 1/sr)."""
+    ``albedo_channel``; ``largest``: where on the grid the two differ most (``theta_i``, ``phi_i``, ``theta_o``,
+    ``phi_o`` in degrees; the ``channel``; the ``fit``'s and the ``approximation``'s values, 1/sr)."""
 
     rmse: float
     albedo_error: float
@@ -138,8 +172,9 @@ class Approximation:
         if not self.largest:
             return "largest difference unknown"
         where = self.largest
+        light = f", φi {where['phi_i']:.0f}°" if where.get("phi_i", 0.0) else ""
         return (
-            f"largest at θi {where['theta_i']:.0f}°, θo {where['theta_o']:.0f}°, φo {where['phi_o']:.0f}°:"
+            f"largest at θi {where['theta_i']:.0f}°{light}, θo {where['theta_o']:.0f}°, φo {where['phi_o']:.0f}°:"
             f" {where['approximation']:.3g} where the fit has {where['fit']:.3g} 1/sr"
         )
 
@@ -159,8 +194,9 @@ class Reference:
     """A fit as its approximations need it, computed once for all the candidate models an export tries: the fitted
     BRDF tabulated on :func:`fitting_grid` (``fine``, :data:`FIT_GRID`) and on the coarse grid its start search runs on
     (``coarse``, :data:`COARSE_GRID`), half of each where it is mirror-symmetric (``symmetric``,
-    :func:`mirror_symmetric`); its values on :func:`error_grid` (``values``, (N, C) 1/sr) and its directional albedos
-    (``albedos``, (incidences, C))."""
+    :func:`mirror_symmetric`), with the light at ``turns`` azimuths (1, or :data:`ANISOTROPIC_TURNS` where it is not
+    :func:`isotropic`, the coarse grid at half of them); its values on :func:`error_grid` (``values``, (N, C) 1/sr)
+    and its directional albedos (``albedos``, (incidences, C))."""
 
     result: FitResult
     symmetric: bool
@@ -168,19 +204,30 @@ class Reference:
     coarse: Samples | None
     values: np.ndarray
     albedos: np.ndarray
+    turns: int = 1
+
+
+def light_turns(result: FitResult) -> int:
+    """How many light azimuths ``result``'s BRDF is tabulated and measured at: 1 where it is :func:`isotropic`, else
+    :data:`ANISOTROPIC_TURNS`."""
+    return 1 if isotropic(result.predict) else ANISOTROPIC_TURNS
 
 
 def reference(result: FitResult) -> Reference:
     """The :class:`Reference` of ``result``."""
-    symmetric = mirror_symmetric(result.predict)
-    fine, coarse = (tabulated(result, shape, symmetric) for shape in (FIT_GRID, COARSE_GRID))
-    wi, wo = error_grid()
-    return Reference(result, symmetric, fine, coarse, np.asarray(result.predict(wi, wo)), _albedos(result.predict))
+    turns = light_turns(result)
+    symmetric = turns == 1 and mirror_symmetric(result.predict)
+    fine = tabulated(result, FIT_GRID, symmetric, turns)
+    coarse = tabulated(result, COARSE_GRID, symmetric, max(1, turns // 2))
+    values = np.asarray(result.predict(*error_grid(turns)))
+    return Reference(result, symmetric, fine, coarse, values, _albedos(result.predict), turns)
 
 
-def tabulated(result: FitResult, shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False) -> Samples:
+def tabulated(
+    result: FitResult, shape: tuple[int, int, int] = FIT_GRID, symmetric: bool = False, turns: int = 1
+) -> Samples:
     """The fitted BRDF of ``result`` on :func:`fitting_grid`, as samples (its channels; values, not measurements)."""
-    wi, wo = fitting_grid(shape, symmetric)
+    wi, wo = fitting_grid(shape, symmetric, turns)
     return Samples.from_arrays(wi, wo, result.predict(wi, wo), channels=result.channels, source="the fitted BRDF")
 
 
@@ -190,7 +237,7 @@ def approximation_error(
     """How far ``brdf(wi, wo) -> (N, C)`` (1/sr) lies from ``result``'s fitted BRDF (:class:`Approximation`);
     ``known``: ``result``'s :class:`Reference`, when it was computed already."""
     known = reference_values(result) if known is None else known
-    wi, wo = error_grid()
+    wi, wo = error_grid(known.turns)
     fitted, approximated = known.values, np.asarray(brdf(wi, wo))
     rmse = float(np.sqrt(np.mean((approximated - fitted) ** 2)))
     relative = rmse / max(float(np.sqrt(np.mean(fitted**2))), 1e-300)
@@ -199,9 +246,10 @@ def approximation_error(
     albedo = np.abs(approximate - original) / np.maximum(original, 1e-12)
     worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)
     pair, channel = np.unravel_index(int(np.argmax(np.abs(approximated - fitted))), fitted.shape)
-    (theta_i, _), (theta_o, phi_o) = (np.degrees(direction_to_spherical(w[pair])) for w in (wi, wo))
+    (theta_i, phi_i), (theta_o, phi_o) = (np.degrees(direction_to_spherical(w[pair])) for w in (wi, wo))
     largest = {
         "theta_i": float(theta_i),
+        "phi_i": float(phi_i) % 360.0 if theta_i > 0.0 else 0.0,
         "theta_o": float(theta_o),
         "phi_o": float(phi_o) % 360.0,
         "channel": str(result.channels[channel]),
@@ -216,14 +264,15 @@ def approximation_error(
 def reference_values(result: FitResult) -> Reference:
     """What :func:`approximation_error` needs of ``result`` alone (no tabulation): its values on :func:`error_grid`
     and its albedos."""
-    wi, wo = error_grid()
-    return Reference(result, False, None, None, np.asarray(result.predict(wi, wo)), _albedos(result.predict))
+    turns = light_turns(result)
+    values = np.asarray(result.predict(*error_grid(turns)))
+    return Reference(result, False, None, None, values, _albedos(result.predict), turns)
 
 
 def grid_rmse(known: Reference, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> float:
     """The rmse (1/sr) of ``brdf(wi, wo) -> (N, C)`` against the fit of ``known`` over :func:`error_grid`: how
     :func:`approximation_error` ranks approximations, without their albedos."""
-    wi, wo = error_grid()
+    wi, wo = error_grid(known.turns)
     return float(np.sqrt(np.mean((np.asarray(brdf(wi, wo)) - known.values) ** 2)))
 
 

@@ -14,6 +14,7 @@ lies from the fitted BRDF is an :class:`~brdffit.export.approximate.Approximatio
 (``gltf_preview.py``).
 """
 
+import dataclasses
 import math
 import os
 from collections.abc import Sequence
@@ -33,7 +34,7 @@ from .._version import __version__
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError
 from ..fitting.objective.losses import get_loss
-from ..fitting.options import MAX_STEPS
+from ..fitting.options import MAX_STEPS, Holding
 from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
 from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least_squares
@@ -41,7 +42,7 @@ from ..physics.geometry import mirror_direction, spherical_to_direction
 from ..physics.models.registry import MODELS
 from ..physics.renderers.gltf import DEFAULT_F0, DEFAULT_IOR, ior_f0, material_brdf
 from ..views.render import display_rgb
-from .approximate import Approximation, approximation_error, reference
+from .approximate import Approximation, Reference, approximation_error, coarse_refit, reference, refined
 from .at_data import data_error
 from .gltf_material import GltfMaterial
 from .gltf_material import gltf_brdf as gltf_brdf  # the BRDF's name where the documentation once gave it
@@ -424,14 +425,50 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
         notes = [*notes, "exact: the fitted glTF material, its numbers unchanged", *_tangent_notes(exact)]
         return exact, approximation, notes, plan
     known = reference(result)
-    fine, coarse = (
-        (samples.wi, samples.wo, samples.values @ _xyz_to_rgb_matrix().T if plan == "xyz" else samples.values)
-        for samples in (known.fine, known.coarse)
-    )
-    material, fit_notes = fit_material(*fine, result.loss, search=coarse)
+    if known.turns > 1:
+        material, fit_notes = _anisotropic_material(known, plan)
+    else:
+        fine, coarse = (
+            (samples.wi, samples.wo, samples.values @ _xyz_to_rgb_matrix().T if plan == "xyz" else samples.values)
+            for samples in (known.fine, known.coarse)
+        )
+        material, fit_notes = fit_material(*fine, result.loss, search=coarse)
     approximation = approximation_error(result, _in_channels(material, plan), known)
     warnings = approximation.warnings("glTF's metallic-roughness BRDF")
     return material, approximation, notes + fit_notes + _retro_reflection_note(result) + warnings, plan
+
+
+#: An anisotropic fit's glTF stand-in has no clear coat, as the isotropic one has none (:func:`fit_material`): a free
+#: coat fitted to a grid (whose azimuths are bins' midpoints) turns into a mirror (roughness 6·10⁻⁴ on a Ward fit),
+#: a spike between the grid's directions that costs the fit nothing and renders as a glint 10¹¹ times too bright.
+NO_COAT = Holding(fixed={"clearcoat": 0.0})
+
+
+def _anisotropic_material(known: Reference, plan: str) -> tuple[GltfMaterial, list[str]]:
+    """glTF's material fitted to an anisotropic fit (``known``, its grids with the light at several azimuths:
+    ``approximate.isotropic``): brdffit's ``gltf`` model (the same BRDF, ``physics/renderers/gltf.py``, with
+    ``KHR_materials_anisotropy``'s strength and rotation and ``KHR_materials_ior``'s index freed, no coat:
+    :data:`NO_COAT`) refitted coarse to fine (``approximate.coarse_refit``, ``approximate.refined``) in linear RGB
+    (``plan``: XYZ converted first), and the notes on it."""
+    if plan == "xyz":
+        to_rgb = _xyz_to_rgb_matrix().T
+        known = dataclasses.replace(
+            known, **{grid: _rgb_samples(getattr(known, grid), to_rgb) for grid in ("fine", "coarse")}
+        )
+    fitted = refined(known, coarse_refit(known, "gltf", NO_COAT), NO_COAT)
+    notes = [
+        "anisotropic: glTF's BRDF with KHR_materials_anisotropy fitted to it (brdffit's gltf model, its tangent found"
+        " with the lobe)"
+    ]
+    material = gltf_of_gltf_fit(fitted)
+    return material, notes + _tangent_notes(material)
+
+
+def _rgb_samples(samples: Samples, to_rgb: np.ndarray) -> Samples:
+    """Tabulated XYZ values as linear sRGB samples (``to_rgb``: :func:`_xyz_to_rgb_matrix`, transposed)."""
+    return Samples.from_arrays(
+        samples.wi, samples.wo, samples.values @ to_rgb, channels=("r", "g", "b"), source=samples.source
+    )
 
 
 def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:

@@ -32,8 +32,8 @@ rational approximation (2007, eq. 27), within 0.5% of the exact ``erf`` form brd
 
 Every other model (Ward, Phong, Lafortune, the V-groove and height-correlated shadowing, Schlick's Fresnel) has no
 Mitsuba counterpart: the export fits Mitsuba's model (GGX and Beckmann ``roughconductor`` with a diffuse term,
-the better of the two; one whose coarse fit lies :data:`CANNOT_WIN` times farther than the other's is not refined)
-to the fitted BRDF (``approximate.py``) and reports how far it lies.
+anisotropic where the fit is, the better of the two; one whose coarse fit lies :data:`CANNOT_WIN` times farther than
+the other's is not refined) to the fitted BRDF (``approximate.py``) and reports how far it lies.
 """
 
 import dataclasses
@@ -63,6 +63,9 @@ STAND_INS = (
     {"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"},
     {"fresnel": "conductor", "distribution": "beckmann", "shadowing": "smith"},
 )
+#: The stand-ins of an anisotropic BRDF (``approximate.isotropic``): the same, anisotropic (``alpha_u``, ``alpha_v``
+#: and the tangent's azimuth ``phi_t``, which the export's note says where to put).
+ANISOTROPIC_STAND_INS = tuple(options | {"anisotropic": True} for options in STAND_INS)
 
 
 @dataclass(frozen=True)
@@ -191,13 +194,14 @@ CANNOT_WIN = 1.25
 
 
 def _best_stand_in(known: "Reference") -> "tuple[FitResult, Approximation]":
-    """The stand-in of :data:`STAND_INS` that lies nearest the fit of ``known`` (``approximate.Reference``), within
-    Mitsuba's range, and how far it lies: each fitted on the coarse grid (``approximate.coarse_refit``; refitted
-    within the range where it ends beyond it), and those that can win (:data:`CANNOT_WIN`) refined on the fine one."""
+    """The stand-in of :data:`STAND_INS` (:data:`ANISOTROPIC_STAND_INS` for an anisotropic fit, whose grids have the
+    light at several azimuths) that lies nearest the fit of ``known`` (``approximate.Reference``), within Mitsuba's
+    range, and how far it lies: each fitted on the coarse grid (``approximate.coarse_refit``; refitted within the range
+    where it ends beyond it), and those that can win (:data:`CANNOT_WIN`) refined on the fine one."""
     from .approximate import approximation_error, coarse_refit, grid_rmse, refined
 
     coarse = []
-    for options in STAND_INS:
+    for options in STAND_INS if known.turns == 1 else ANISOTROPIC_STAND_INS:
         fitted, holding = coarse_refit(known, "cook-torrance", **options), Holding()
         if not _in_range(fitted):
             holding = _range_holding(fitted)
