@@ -32,6 +32,7 @@ sys.path.insert(0, str(ROOT))
 
 import data_synth  # noqa: E402
 from brdffit import Samples, compare, fit  # noqa: E402
+from brdffit.export.at_data import DARK  # noqa: E402
 from brdffit.export.mitsuba import mitsuba_bsdf  # noqa: E402
 from data_synth.library import mitsuba_brdf  # noqa: E402
 
@@ -111,8 +112,10 @@ def material_samples(name: str) -> Samples:
 
 
 def median_error(values: np.ndarray, data: np.ndarray) -> float:
-    positive = data > 0
-    return float(np.median(np.abs(values[positive] / data[positive] - 1.0)))
+    """The median relative error over the values the export's own figure counts (``export/at_data.py``: at least
+    its ``DARK``, 10⁻⁴ 1/sr)."""
+    counted = data >= DARK
+    return float(np.median(np.abs(values[counted] / data[counted] - 1.0)))
 
 
 def exported_row(name: str, how: str, result, samples: Samples) -> dict:

@@ -12,10 +12,11 @@ the data's direction pairs by its consumer, or by the nearest thing to it brdffi
 * glTF: the glTF metallic-roughness BRDF of the Khronos specification's appendix (``gltf_material.py``);
 * MERL: the written table, read back and interpolated as brdffit reads MERL data (``datadriven/tabulation.py``).
 
-Compared over every (pair, channel) whose data value is positive: the median and 90th percentile of
-``|export − data| / data``, the median of ``export / data`` (1 when the export is as bright as the data: 0.4
-means it renders 0.4 times as bright), and the rms of ``export − data`` as a fraction of the data's rms. The fit's
-own median error and rms, on the same values, stand beside them: what the export adds is the difference.
+Compared over every (pair, channel) whose data value is at least :data:`DARK` (where none is, every positive one):
+the median and 90th percentile of ``|export − data| / data``, the median of ``export / data`` (1 when the export is as
+bright as the data: 0.4 means it renders 0.4 times as bright); and over all of them, the rms of ``export − data`` as
+a fraction of the data's rms. The fit's own median error and rms, on the same values, stand beside them: what the
+export adds is the difference.
 """
 
 import os
@@ -28,6 +29,7 @@ import numpy as np
 from ..data.load import load_samples
 from ..data.samples import Samples
 from ..errors import BrdfInputError
+from ..fitting.objective.losses import RELATIVE_FLOOR
 from ..fitting.single.result import FitResult
 
 #: Data with more direction pairs than this are compared on a random subset of this many (seed
@@ -35,14 +37,21 @@ from ..fitting.single.result import FitResult
 #: ``1.25 σ/sqrt(n)``), and Mitsuba evaluates pair by pair (3 µs each).
 MAX_PAIRS = 200_000
 SUBSET_SEED = 0
+#: Data values below this (1/sr) are left out of the relative errors: the relative loss's floor
+#: (``fitting/objective/losses.RELATIVE_FLOOR``), below which a relative error says nothing a renderer shows. A
+#: narrow Beckmann lobe's tails fall to 10⁻²⁰ and below (Mitsuba's copper at alpha 0.15: 56% of the values under
+#: 10⁻⁶), where a fit's diffuse albedo of 10⁻⁴, well within the noise of the lobe, is many times the data: a median
+#: error of 82% for a fit 0.9% off where the data are above the floor.
+DARK = RELATIVE_FLOOR
 
 
 @dataclass(frozen=True)
 class DataError:
     """How far an export lies from the data at the data's directions (module docstring): ``median_error`` and
-    ``p90_error`` of ``|export − data|/data``, ``brightness`` (the median ``export/data``), ``relative_rmse`` (rms of
-    ``export − data`` over the data's rms), over ``n_values`` (pair, channel) values of ``n_pairs`` pairs of the data
-    ``source``; ``evaluated_by`` names what evaluated the export; ``fit_median_error`` and ``fit_relative_rmse``: the
+    ``p90_error`` of ``|export − data|/data``, ``brightness`` (the median ``export/data``), over ``n_values`` (pair,
+    channel) values of ``n_pairs`` pairs of the data ``source`` (those at least :data:`DARK`), and ``relative_rmse``
+    (rms of ``export − data`` over the data's rms, over all of them; ``n_dark`` values below :data:`DARK` left out of
+    the rest); ``evaluated_by`` names what evaluated the export; ``fit_median_error`` and ``fit_relative_rmse``: the
     same of the fit itself."""
 
     source: str
@@ -55,6 +64,7 @@ class DataError:
     evaluated_by: str
     fit_median_error: float
     fit_relative_rmse: float
+    n_dark: int = 0
 
     def to_dict(self) -> dict:
         return {
@@ -68,6 +78,7 @@ class DataError:
             "evaluated_by": self.evaluated_by,
             "fit_median_error": self.fit_median_error,
             "fit_relative_rmse": self.fit_relative_rmse,
+            "n_dark": self.n_dark,
         }
 
     def line(self) -> str:
@@ -76,10 +87,15 @@ class DataError:
         median error 0.95%, rmse 2.9%``."""
         return (
             f"at the data's {self.n_pairs:,} directions ({Path(self.source).name}), evaluated by {self.evaluated_by}:"
-            f" median error {self.median_error:.2%} (90th percentile {self.p90_error:.2%}), export/data"
-            f" {self.brightness:.3f} (median), rmse {self.relative_rmse:.1%} of the data's rms; the fit itself:"
-            f" median error {self.fit_median_error:.2%}, rmse {self.fit_relative_rmse:.1%}"
+            f" median error {self.median_error:.2%} (90th percentile {self.p90_error:.2%}{self._dark_text()}),"
+            f" export/data {self.brightness:.3f} (median), rmse {self.relative_rmse:.1%} of the data's rms;"
+            f" the fit itself: median error {self.fit_median_error:.2%}, rmse {self.fit_relative_rmse:.1%}"
         )
+
+    def _dark_text(self) -> str:
+        if not self.n_dark:
+            return ""
+        return f"; {self.n_dark:,} of {self.n_dark + self.n_values:,} values below {DARK:g} 1/sr left out"
 
 
 def data_for(result: FitResult, samples: "Samples | str | os.PathLike", subset: bool = True) -> Samples:
@@ -108,7 +124,9 @@ def data_error(
     """How far ``brdf(wi, wo) -> (N, C)`` (the export of ``result`` as ``evaluated_by`` evaluates it) lies from
     ``samples`` (:func:`data_for`'s), beside how far ``result`` itself does."""
     data = np.asarray(samples.values, dtype=float)
-    positive = data > 0  # data_for's data have some
+    positive = data >= DARK
+    if not np.any(positive):
+        positive = data > 0  # data_for's data have some
     rms = float(np.sqrt(np.mean(data**2)))
 
     def compared(values):
@@ -123,6 +141,7 @@ def data_error(
         source=str(samples.source),
         n_pairs=len(data),
         n_values=int(positive.sum()),
+        n_dark=int(positive.size - positive.sum()),
         median_error=float(np.median(error)),
         p90_error=float(np.percentile(error, 90)),
         brightness=float(np.median(ratio)),

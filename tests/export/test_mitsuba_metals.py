@@ -78,3 +78,24 @@ def test_mitsubas_metals_are_fitted_and_exported_back(metal, distribution):
     measured = samples.values > 0
     relative = np.abs(at_data - samples.values)[measured] / samples.values[measured]
     assert np.median(relative) <= 0.015, np.median(relative)
+
+
+@pytest.mark.heavy
+def test_compare_on_mitsubas_beckmann_copper_names_a_model_whose_export_meets_the_promise():
+    """``compare`` with its default candidates on Mitsuba's copper (Beckmann, the default roughconductor, alpha 0.15) on
+    the renderers benchmark's hemisphere (2,592 pairs, 1% noise): its pick, exported to Mitsuba and evaluated by
+    Mitsuba at the data's directions, lies within 1.5% of the data at the median (over the values the export's figure
+    counts: at least 10⁻⁴ 1/sr; measured 0.72%). Before Beckmann + Smith was a default candidate it picked Ward-Dür,
+    3.1% off."""
+    from brdffit import compare
+
+    wi, wo = data_synth.hemisphere_grid(6, 18, 24)
+    bsdf = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "alpha": 0.15, "material": "Cu"})
+    clean = mitsuba_brdf(bsdf, wi, wo)
+    noisy = clean * (1.0 + 0.01 * np.random.default_rng(1).standard_normal(clean.shape))
+    samples = Samples.from_arrays(wi, wo, noisy, channels=("r", "g", "b"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the candidates' caveats
+        best = compare(samples, seed=0).best.result
+    exported = mitsuba_bsdf(best).compared_with(best, samples)
+    assert exported.at_data.median_error <= 0.015, (best.model, best.model_options, exported.at_data.line())

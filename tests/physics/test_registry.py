@@ -54,7 +54,7 @@ def test_compare_tries_what_the_entries_say():
         "ward-duer",
         "cook-torrance:fresnel=schlick",
         "cook-torrance:fresnel=dielectric",
-        "cook-torrance:fresnel=conductor",
+        "cook-torrance:fresnel=conductor,shadowing=smith",
         "cook-torrance:fresnel=none",
         "cook-torrance:fresnel=conductor,distribution=ggx,shadowing=smith",
         "cook-torrance:fresnel=dielectric,distribution=ggx,shadowing=smith",

@@ -225,13 +225,14 @@ def cook_torrance(
 #: Fresnel term: each exports to Mitsuba exactly.
 RENDERER_OPTIONS = ("distribution=ggx", "shadowing=smith")
 
-#: Cook-Torrance in the registry: compared with each Fresnel term, and as the renderers' microfacet model
-#: (:data:`RENDERER_OPTIONS`); exact in Mitsuba with Smith shadowing and a conductor, dielectric or no Fresnel term
-#: (``brdffit/export/mitsuba.py``).
+#: Cook-Torrance in the registry: compared with each Fresnel term (the conductor with Smith shadowing: Mitsuba's
+#: default ``roughconductor``, Beckmann and Smith, which a measured metal is most often rendered with), and as the
+#: renderers' microfacet model (:data:`RENDERER_OPTIONS`); exact in Mitsuba with Smith shadowing and a conductor,
+#: dielectric or no Fresnel term (``brdffit/export/mitsuba.py``).
 COOK_TORRANCE = ModelEntry(
     cook_torrance,
     compare=(
-        *(f"cook-torrance:fresnel={kind}" for kind in FRESNEL),
+        *(f"cook-torrance:fresnel={kind}" + (",shadowing=smith" if kind == "conductor" else "") for kind in FRESNEL),
         *(f"cook-torrance:fresnel={kind},{','.join(RENDERER_OPTIONS)}" for kind in ("conductor", "dielectric")),
         # A brushed metal: Mitsuba's anisotropic roughconductor, which no isotropic candidate follows (a brushed
         # silver's best isotropic fit lies 25 times off at the median pair; this one 0.8%).
