@@ -413,6 +413,14 @@ def fit_file(path: str):
     return Comparison.from_dict(content, path).best.result
 
 
+def fit_of(args: argparse.Namespace):
+    """The fit of ``args.result`` (:func:`fit_file`), read once per command: the check of its files before the work
+    (:func:`fit_file_files`, the basis its model names) and the work itself share it."""
+    if getattr(args, "read_fit", None) is None:
+        args.read_fit = fit_file(args.result)
+    return args.read_fit
+
+
 def fit_file_files(args: argparse.Namespace, output: str):
     """What ``export`` and ``render`` read (RESULT, the basis its model names, ``--samples``) and write (``output``:
     ``-o`` or its default name), as :class:`~brdffit.cli.files.Files`."""
@@ -421,7 +429,7 @@ def fit_file_files(args: argparse.Namespace, output: str):
     return Files.of(
         inputs={
             "RESULT.json": args.result,
-            "the result's basis": model_files(fit_file(args.result).model_options),
+            "the result's basis": model_files(fit_of(args).model_options),
             "--samples": args.samples,
         },
         outputs={"-o": output},

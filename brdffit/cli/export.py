@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import BIN_CENTRES_HELP, fit_file, fit_file_files, output_file
+from .arguments import BIN_CENTRES_HELP, fit_file_files, fit_of, output_file
 from .files import Files
 
 
@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     kind = export_format(args.to, args.format, args.output)
     if args.bin_centres and args.to != "merl":
         raise BrdfInputError(f"--bin-centres applies to --to merl, not to --to {args.to}")
-    result = fit_file(args.result)
+    result = fit_of(args)
     path = output_file(_output(args), "-o")
     enable_compilation_cache()
     lines = export(result, args.to, path, kind, args.samples, bin_centres=args.bin_centres)

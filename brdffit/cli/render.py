@@ -5,7 +5,7 @@ import argparse
 from pathlib import Path
 
 from . import EXIT_OK
-from .arguments import fit_file, fit_file_files, output_file
+from .arguments import fit_file_files, fit_of, output_file
 from .files import Files
 
 
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     if _is_bsdf_file(args.result):
         return _run_bsdf_file(args, output, exposure)
-    result = fit_file(args.result)
+    result = fit_of(args)
     path = output_file(output, "-o")
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     from .._programs.cache import enable_compilation_cache
