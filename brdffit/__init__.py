@@ -7,6 +7,7 @@ The public API::
     result = brdffit.fit(samples, model="ward", loss="log")
     result.params, result.to_json(), result.predict(wi, wo)
     values = brdffit.evaluate("cook-torrance", params, wi, wo, fresnel="schlick")
+    wi, wo = brdffit.directions_from_angles(theta_i, phi_i, theta_o, phi_o)  # degrees, as files hold them
     results = brdffit.fit_batch([samples_a, samples_b], model="ward")
     comparison = brdffit.compare(samples, ["ward", "lafortune:lobes=2"])  # ranked by cross-validated loss
     result = brdffit.fit(samples, uncertainty="laplace")        # or "mcmc", mcmc=brdffit.MCMC(steps=5000)
@@ -15,6 +16,8 @@ The public API::
     brdffit.corner_plot(sampled, "corner.png")
     brdffit.plots.slices([result, other], samples, path="slices.png")  # also polar, residuals, sphere
     brdffit.report(samples, path="report.html")                 # compare, fit, plot: one HTML file
+    brdffit.export(result, "mitsuba", "oak.xml", samples=samples)  # or "gltf", "merl": the lines to read
+    brdffit.render(result, "oak.png", samples=samples)          # Mitsuba's sphere of the export (the render extra)
     brdffit.save_basis(brdffit.build_basis(merl_files), "basis.npz")  # a data-driven basis (docs/data-driven.md)
     brdffit.write_directions(brdffit.choose_directions("basis.npz", 20).angles, "directions.csv")
     result = brdffit.fit("sparse.csv", model="pca", basis="basis.npz")
@@ -45,6 +48,8 @@ _EXPORTS = {
     "get_model": ".physics.models.registry",
     "register_model": ".physics.models.registry",
     "evaluate": ".physics.evaluate",
+    "directions_from_angles": ".physics.geometry",
+    "angles_from_directions": ".physics.geometry",
     "Samples": ".data.samples",
     "load_samples": ".data.load",
     "save_samples": ".data.load",
@@ -65,6 +70,7 @@ _EXPORTS = {
     "sample_posterior": ".uncertainty.mcmc",
     "corner_plot": ".views.corner",
     "report": ".views.report",
+    "render": ".export.mitsuba_render:render_sphere",
     "enable_compilation_cache": "._programs.cache",
     "build_basis": ".datadriven.build",
     "load_basis": ".datadriven.basis",
@@ -75,6 +81,7 @@ _EXPORTS = {
 }
 
 if TYPE_CHECKING:
+    from . import export as export
     from ._programs.cache import enable_compilation_cache as enable_compilation_cache
     from .api import fit as fit
     from .api import fit_batch as fit_batch
@@ -92,6 +99,7 @@ if TYPE_CHECKING:
     from .errors import FitWarning as FitWarning
     from .errors import InputWarning as InputWarning
     from .errors import UncertaintyWarning as UncertaintyWarning
+    from .export.mitsuba_render import render_sphere as render  # noqa: F401 (brdffit.render; __all__ is built below)
     from .fitting.comparison.compare import Comparison as Comparison
     from .fitting.comparison.compare import compare as compare
     from .fitting.comparison.compare import load_comparison as load_comparison
@@ -102,6 +110,8 @@ if TYPE_CHECKING:
     from .fitting.single.result import load_result as load_result
     from .fitting.single.result import save_result as save_result
     from .physics.evaluate import evaluate as evaluate
+    from .physics.geometry import angles_from_directions as angles_from_directions
+    from .physics.geometry import directions_from_angles as directions_from_angles
     from .physics.models.lobe import Lobe as Lobe
     from .physics.models.lobe import MappedLobe as MappedLobe
     from .physics.models.model import LobeModel as LobeModel
@@ -119,8 +129,8 @@ if TYPE_CHECKING:
     from .views.report import report as report
 
 
-#: Modules of the public API, also imported on first use.
-_MODULES = {"plots": ".views.plots"}
+#: Modules of the public API, also imported on first use (``export`` is also a function: ``export/__init__.py``).
+_MODULES = {"plots": ".views.plots", "export": ".export"}
 
 
 def __getattr__(name: str):
@@ -129,7 +139,8 @@ def __getattr__(name: str):
         globals()[name] = module
         return module
     if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
+        module, _, attribute = _EXPORTS[name].partition(":")
+        value = getattr(importlib.import_module(module, __name__), attribute or name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'brdffit' has no attribute {name!r}")

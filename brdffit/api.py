@@ -6,7 +6,6 @@ API lives in its layer and is re-exported by name in ``brdffit/__init__.py``.
 """
 
 import os
-import warnings
 from collections.abc import Sequence
 from functools import partial
 from typing import Any
@@ -14,7 +13,7 @@ from typing import Any
 from ._jax import float64
 from .data.load import as_samples, check_read_options
 from .data.samples import Samples
-from .errors import FitWarning
+from .errors import FitWarning, warn
 from .fitting.many.cluster import fit_here, fit_on_cluster
 from .fitting.objective.losses import get_loss
 from .fitting.options import Holding, Solving, holding_of, solving_of
@@ -165,4 +164,4 @@ def _check_walkers(settings: MCMC, setup) -> None:
 def warn_about(result: FitResult) -> None:
     """Each of the result's caveats as a :class:`~brdffit.FitWarning` (they are also ``result.warnings``)."""
     for caveat in result.warnings:
-        warnings.warn(FitWarning(caveat), stacklevel=3)
+        warn(FitWarning(caveat))

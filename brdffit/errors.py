@@ -14,6 +14,9 @@ result's ``fit.warnings``) and :class:`UncertaintyWarning` (an estimate that nee
 an undetermined parameter, a short chain; also the result's ``uncertainty.warnings``).
 """
 
+import os
+import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -76,3 +79,28 @@ def not_a_choice(name: str, value, choices, verb: str = "is not allowed") -> Brd
 
 class UncertaintyWarning(Spelled, UserWarning):
     """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""
+
+
+#: brdffit's own folder: frames of its files are skipped when a warning names where it was raised (:func:`warn`).
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def warn(warning: Warning) -> None:
+    """Issue ``warning`` at the line of the code that called brdffit (the first frame outside this package), so that the
+    message, and a filter by module, name the user's line rather than brdffit's own (Python 3.12's
+    ``skip_file_prefixes``, for 3.11 as well)."""
+    frame, level = sys._getframe(1), 2
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(warning, stacklevel=level)
+
+
+def needs(module: str, extra: str, what: str):
+    """The optional ``module``, imported, or a one-line error naming what needs it and the extra that installs it:
+    ``the figures need matplotlib, which is not installed: pip install 'brdffit[plots]'``."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise BrdfInputError(f"{what} need {module}, which is not installed: pip install 'brdffit[{extra}]'") from None

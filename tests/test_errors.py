@@ -84,3 +84,28 @@ def test_no_library_error_is_written_with_a_flag():
                 if "--" in text:
                     found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {text[:60]}")
     assert not found, found
+
+
+def test_a_warning_names_the_callers_line_not_brdffits(tmp_path):
+    """A warning raised deep inside brdffit (the CSV reader, two calls down) is attributed to the line that called
+    brdffit, as ``warnings.warn``'s stacklevel means it: the user's file and line, which a filter by module matches."""
+    import warnings
+
+    from brdffit import InputWarning
+
+    path = tmp_path / "radians.csv"
+    path.write_text("theta_i,phi_i,theta_o,phi_o,value\n0.5,0,0.5,3.1,0.2\n0.7,0,0.2,1.0,0.3\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        line = _line_here() + 1
+        load_samples(path)
+    said = [warning for warning in caught if issubclass(warning.category, InputWarning)]
+    assert said and all((warning.filename, warning.lineno) == (__file__, line) for warning in said), [
+        (warning.filename, warning.lineno) for warning in said
+    ]
+
+
+def _line_here() -> int:
+    import inspect
+
+    return inspect.currentframe().f_back.f_lineno

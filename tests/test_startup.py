@@ -128,8 +128,13 @@ def test_the_lazy_names_and_the_type_checkers_imports_agree():
     the same names, from the same modules."""
     tree = ast.parse((ROOT / "brdffit" / "__init__.py").read_text())
     block = next(node for node in tree.body if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test))
-    imported = {alias.asname: "." + node.module for node in block.body for alias in node.names}
-    modules = {name: path.rpartition(".")[0] for name, path in brdffit._MODULES.items()}  # from .views import plots
+    imported = {
+        alias.asname: "." + (node.module or "") + ("" if alias.name == alias.asname else f":{alias.name}")
+        for node in block.body
+        for alias in node.names
+    }
+    # from .views import plots; from . import export
+    modules = {name: path.rpartition(".")[0] or "." for name, path in brdffit._MODULES.items()}
     assert imported == brdffit._EXPORTS | modules
 
 
@@ -192,3 +197,17 @@ def test_command_line_fills_and_reuses_the_cache(tmp_path):
         if run == 0:
             first = entries
     assert entries == first, "the second run compiles nothing new"
+
+
+def test_export_and_render_are_functions_at_the_top(tmp_path):
+    """``brdffit.export(result, to, path)`` writes as ``brdffit export`` does (the package ``brdffit.export`` is also
+    that function, so its modules still import as before); ``brdffit.render`` is the sphere's render."""
+    import brdffit.export.mitsuba
+
+    result = brdffit.FitResult("lambert", {}, ("r", "g", "b"), {"rho_d": [0.2, 0.3, 0.4]}, "log", 0.0, 0.0, 0, 0, True)
+    lines = brdffit.export(result, "mitsuba", tmp_path / "grey.xml")
+    assert lines == ["exact"] and 'type="diffuse"' in (tmp_path / "grey.xml").read_text()
+    assert callable(brdffit.export) and callable(brdffit.export.mitsuba.mitsuba_bsdf)
+    from brdffit.export.mitsuba_render import render_sphere
+
+    assert brdffit.render is render_sphere

@@ -12,10 +12,9 @@ and the fits compile as if the cache were off. brdffit makes its folders with mo
 import os
 import stat
 import sys
-import warnings
 from pathlib import Path
 
-from ..errors import InputWarning
+from ..errors import InputWarning, warn
 
 #: The environment variable that moves the cache; set it to an empty string to turn the cache off.
 CACHE_VARIABLE = "BRDFFIT_CACHE_DIR"
@@ -51,9 +50,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None) -> Path | No
         return None
     distrust = untrusted(folder) or untrusted(folder / "programs")
     if distrust is not None:
-        warnings.warn(
-            InputWarning(f"the compilation cache {distrust}: not used (its programs would run as yours)"), stacklevel=2
-        )
+        warn(InputWarning(f"the compilation cache {distrust}: not used (its programs would run as yours)"))
         return None
     _enabled = folder
     if "jax" not in sys.modules:

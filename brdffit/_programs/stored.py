@@ -34,7 +34,6 @@ import secrets
 import sys
 import tempfile
 import threading
-import warnings
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
@@ -43,7 +42,7 @@ import numpy as np
 
 from .._files import atomic_path
 from .._jax import jax
-from ..errors import InputWarning
+from ..errors import InputWarning, warn
 from .keys import key_of
 
 #: A stored program's file: its HMAC (hex) on one line, one line of JSON (the named tuples its trees hold), and the
@@ -119,9 +118,7 @@ def discard(identity: list, args: Sequence, static_argnums: Sequence[int], error
         _loaded.pop(signature, None)
         path.unlink(missing_ok=True)
     reason = (str(error).strip().splitlines() or [type(error).__name__])[0]
-    warnings.warn(
-        InputWarning(f"the stored program {path} failed ({reason}); it is compiled again and replaced"), stacklevel=3
-    )
+    warn(InputWarning(f"the stored program {path} failed ({reason}); it is compiled again and replaced"))
 
 
 def dynamic_arguments(args: Sequence, static_argnums: Sequence[int]) -> tuple:
@@ -202,12 +199,11 @@ def _load_or_export(folder: Path, signature: str, jitted, args: Sequence, static
     except FileNotFoundError:
         pass
     except Exception as error:  # planted, flipped bytes, cut short by a crash: never run; exported again
-        warnings.warn(
+        warn(
             InputWarning(
                 f"the stored program {path} is not used ({error}); it is compiled again and replaced"
                 " (the compilation cache is untrusted input: only the programs it signed run)"
-            ),
-            stacklevel=2,
+            )
         )
     count_trace()
     try:

@@ -11,7 +11,7 @@ import re
 import warnings
 from pathlib import Path
 
-from ..errors import BrdfInputError, InputWarning
+from ..errors import BrdfInputError, InputWarning, warn
 from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
@@ -163,12 +163,11 @@ def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> 
     else:
         for path, fit in fits:
             if fit.quantity is not None and fit.quantity != (args.quantity or "brdf"):
-                warnings.warn(
+                warn(
                     InputWarning(
                         f"{path} was fitted to samples read as {fit.quantity}; {samples_path} is read as"
                         f" {args.quantity or 'brdf'}"
-                    ),
-                    stacklevel=2,
+                    )
                 )
     limits = {fit.max_theta for _, fit in fits}
     return limits.pop() if len(limits) == 1 else None

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .._files import write_text_atomic
-from ..errors import Argument, BrdfInputError, InputWarning
+from ..errors import Argument, BrdfInputError, InputWarning, warn
 from ..physics.geometry import direction_to_spherical
 from .cells import TableChecks, named
 from .samples import Provenance, Samples
@@ -58,7 +58,7 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
     header_line, header = _header(path, source)
     delimiter = "," if "," in header else None
     names = [name.strip() for name in header.split(delimiter)]
-    layout = _Layout.from_header(names, source, header_line)
+    layout = _Layout.from_header(names, f"{source}: header (line {header_line})")
     line_of = functools.cache(functools.partial(_line_of_row, path, header_line))
     checks = TableChecks(lambda row: f"{source}: row {row + 1} (line {line_of(row)})")
     table = _fast_table(path, header_line, delimiter, len(names))
@@ -66,6 +66,39 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
         table = _table_by_cells(path, header_line, delimiter, names, checks)
     else:
         checks.finite(table, named(names))
+    return _samples_of_table(table, layout, checks, source, angles)
+
+
+def read_data_frame(frame, angles: str = "degrees") -> Samples:
+    """A pandas ``DataFrame`` whose columns are a samples file's (``docs/formats.md``), read as that file would be:
+    the same columns, checks and messages, which name the DataFrame's row by its index label. pandas itself is not
+    imported: the frame is read through its ``columns``, ``index`` and ``to_numpy``."""
+    source = "DataFrame"
+    names = [str(name).strip() for name in frame.columns]
+    layout = _Layout.from_header(names, f"{source}: columns")
+    labels = list(frame.index)
+    try:
+        table = frame.to_numpy(dtype=np.float64)
+    except (TypeError, ValueError):
+        raise _not_a_number(frame, names, labels, source) from None
+    checks = TableChecks(lambda row: f"{source}: row {labels[row]!r}")
+    checks.finite(table, named(names))
+    return _samples_of_table(table, layout, checks, source, angles)
+
+
+def _not_a_number(frame, names: list[str], labels: list, source: str) -> BrdfInputError:
+    """The error naming a DataFrame's first cell that is not a number, by row label and column."""
+    for column, name in enumerate(names):
+        for row, cell in enumerate(frame.iloc[:, column].to_numpy()):
+            try:
+                float(cell)
+            except (TypeError, ValueError):
+                return BrdfInputError(f"{source}: row {labels[row]!r}, column {name!r}: {cell!r} is not a number")
+    return BrdfInputError(f"{source}: its cells are not all numbers")
+
+
+def _samples_of_table(table: np.ndarray, layout: "_Layout", checks: TableChecks, source: str, angles: str) -> Samples:
+    """The samples of a parsed table of float64 cells (rows × the header's columns) laid out as ``layout`` says."""
     if not len(table):
         raise BrdfInputError(f"{source}: empty table (a header row but no data rows)")
     rows = len(table)
@@ -77,13 +110,12 @@ def read_csv(path: str | os.PathLike, angles: str = "degrees") -> Samples:
             theta, angles_table[:, [1, 3]], angles, ("theta_i", "theta_o"), ("phi_i", "phi_o")
         )
         if angles == "degrees" and 0 < np.max(theta) <= math.pi / 2:
-            warnings.warn(
+            warn(
                 InputWarning(
                     f"{source}: every zenith angle is within [0, π/2] = [0, 1.571] degrees: radians read as degrees?"
                     " If so, give ",
                     Argument("angles", "radians"),
-                ),
-                stacklevel=2,
+                )
             )
     else:
         geometry = table[:, layout.geometry]
@@ -198,8 +230,8 @@ class _Layout:
     weight: int | None
 
     @classmethod
-    def from_header(cls, names: list[str], source: str, line: int) -> "_Layout":
-        where = f"{source}: header (line {line})"
+    def from_header(cls, names: list[str], where: str) -> "_Layout":
+        """The layout of the columns ``names``; ``where`` begins each message (``oak.csv: header (line 1)``)."""
         lower = [name.lower() for name in names]
         for index, name in enumerate(lower):
             if not name:

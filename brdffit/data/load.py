@@ -18,21 +18,24 @@ channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 
 import inspect
 import os
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..checks import choice
-from ..errors import Argument, BrdfInputError, InputWarning
+from ..errors import Argument, BrdfInputError, InputWarning, warn
 from . import spectral
 from .alta import read_alta, write_alta
 from .astm import read_astm, write_astm
-from .csv import ANGLE_UNITS, read_csv, write_csv
+from .csv import ANGLE_UNITS, read_csv, read_data_frame, write_csv
 from .merl import read_merl
 from .quantities import canonical, to_brdf
 from .samples import Samples
 from .spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
+
+if TYPE_CHECKING:
+    import pandas
 
 
 @dataclass(frozen=True)
@@ -79,7 +82,7 @@ def format_of_output(path: Path) -> str | None:
 
 
 def load_samples(
-    path: str | os.PathLike,
+    path: "str | os.PathLike | pandas.DataFrame",
     *,
     format: str | None = None,
     angles: str = "degrees",
@@ -92,7 +95,8 @@ def load_samples(
     seed: int = 0,
     bin_centres: bool = False,
 ) -> Samples:
-    """Read a measurement file into :class:`Samples` holding BRDF values in 1/sr.
+    """Read a measurement file (or a pandas ``DataFrame`` with a samples CSV's columns, ``docs/formats.md``) into
+    :class:`Samples` holding BRDF values in 1/sr.
 
     ``format``: one of :data:`FORMATS` (default: from the file's suffix and first lines).
     ``angles``: ``"degrees"`` (default) or ``"radians"`` for a CSV file's angle columns.
@@ -108,6 +112,13 @@ def load_samples(
     """
     choice("angles", angles, ANGLE_UNITS)
     given = None if quantity is None else canonical(quantity)
+    if _is_data_frame(path):
+        if format not in (None, "csv"):
+            raise BrdfInputError(
+                Argument("format", repr(format)), " does not apply to a DataFrame (read as a CSV's table)"
+            )
+        samples = read_data_frame(path, angles)
+        return _as_quantity(samples, given, None, spectral_to, illuminant, observer)
     path = Path(path)
     kind = detect_format(path, format)
     if kind != "csv" and angles != "degrees":
@@ -127,12 +138,19 @@ def load_samples(
     samples = FORMATS[kind].read(path, **reader_options.get(kind, {}))
     header = samples.provenance.header_quantity
     if given is not None and header is not None and given != header:
-        warnings.warn(
+        warn(
             InputWarning(
                 f"{path}: the values are read as ", Argument("quantity", given), f", not as the header says ({header})"
-            ),
-            stacklevel=2,
+            )
         )
+    return _as_quantity(samples, given, header, spectral_to, illuminant, observer)
+
+
+def _as_quantity(
+    samples: Samples, given: str | None, header: str | None, spectral_to: str, illuminant: str, observer: str
+) -> Samples:
+    """Samples as read, their values made BRDFs from the quantity ``given`` (else the ``header``'s, else ``brdf``) and
+    their channels converted as ``spectral_to`` asks (:func:`load_samples`)."""
     quantity = given or header or "brdf"
     samples = replace(
         to_brdf(samples, quantity),
@@ -141,9 +159,17 @@ def load_samples(
     return spectral.spectral_to(samples, spectral_to, illuminant=illuminant, observer=observer)
 
 
+def _is_data_frame(value) -> bool:
+    """Whether ``value`` is a pandas ``DataFrame`` (by its type's module and name: pandas is not imported)."""
+    kind = type(value)
+    return kind.__name__ == "DataFrame" and kind.__module__.split(".")[0] == "pandas"
+
+
 def as_samples(samples: "Samples | str | os.PathLike", **read_options) -> Samples:
-    """Samples as they are, or the samples a file holds (read by :func:`load_samples` with ``read_options``)."""
-    return load_samples(samples, **read_options) if isinstance(samples, str | os.PathLike) else samples
+    """Samples as they are, or the samples a file (or a pandas ``DataFrame``) holds (read by :func:`load_samples` with
+    ``read_options``)."""
+    readable = isinstance(samples, str | os.PathLike) or _is_data_frame(samples)
+    return load_samples(samples, **read_options) if readable else samples
 
 
 def check_read_options(read_options: dict) -> None:

@@ -62,6 +62,22 @@ class Samples:
             f"{' with ' + ' and '.join(extras) if extras else ''} from {self.source})"
         )
 
+    def _repr_html_(self) -> str:
+        """What a notebook shows for bare samples: the counts, the angles' and the values' ranges, per channel."""
+        import html
+
+        theta_i, theta_o = self.theta_i, self.theta_o
+        rows = "".join(
+            f"<tr><td>{html.escape(str(name))}</td><td>{column.min():.4g}</td><td>{np.median(column):.4g}</td>"
+            f"<td>{column.max():.4g}</td></tr>"
+            for name, column in zip(self.channels, self.values.T, strict=True)
+        )
+        return (
+            f"<div><b>{html.escape(repr(self))}</b><br>θi {theta_i.min():.1f}–{theta_i.max():.1f}°, θo"
+            f" {theta_o.min():.1f}–{theta_o.max():.1f}°<table><tr><th>channel</th><th>min (1/sr)</th><th>median</th>"
+            f"<th>max</th></tr>{rows}</table></div>"
+        )
+
     @classmethod
     def from_arrays(
         cls,

@@ -168,3 +168,29 @@ def normalised(vectors: np.ndarray, message: Callable[[int, float], str]) -> np.
     if bad is not None:
         raise BrdfInputError(message(bad[0], float(length[bad[0]])))
     return vectors / length[:, None]
+
+
+def directions_from_angles(theta_i, phi_i, theta_o, phi_o, *, degrees: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``wi``, ``wo`` (N, 3) of light and viewer from their zeniths and azimuths: a samples file's
+    ``theta_i, phi_i, theta_o, phi_o`` columns (degrees, or radians with ``degrees=False``), as ``load_samples``
+    reads them (:func:`spherical_to_direction`). Each may be a number or an array; they broadcast. A zenith outside
+    [0, 90°] (below the horizon) or an angle that is not finite is a one-line error."""
+    names = ("theta_i", "phi_i", "theta_o", "phi_o")
+    angles = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_i, phi_i, theta_o, phi_o)))
+    unit, right = ("degrees", 90.0) if degrees else ("radians", np.pi / 2)
+    for name, values in zip(names, angles, strict=True):
+        zenith = name.startswith("theta")
+        bad = np.flatnonzero(~np.isfinite(values) | (((values < 0) | (values > right)) if zenith else False))
+        if bad.size:
+            allowed = f" and within [0, {right:g}] {unit} (above the horizon)" if zenith else ""
+            raise BrdfInputError(f"{name} = {values.ravel()[bad[0]]:g} (at {bad[0]}) must be finite{allowed}")
+    radians = [np.radians(a) if degrees else a for a in angles]
+    return spherical_to_direction(radians[0], radians[1]), spherical_to_direction(radians[2], radians[3])
+
+
+def angles_from_directions(wi, wo, *, degrees: bool = True) -> tuple[np.ndarray, ...]:
+    """Zeniths and azimuths ``theta_i, phi_i, theta_o, phi_o`` of unit vectors ``wi``, ``wo`` (N, 3): the samples
+    file's columns, in degrees (or radians with ``degrees=False``), azimuths in (−180°, 180°], as brdffit's writers
+    compute them (:func:`direction_to_spherical`)."""
+    angles = [angle for w in (wi, wo) for angle in direction_to_spherical(np.asarray(w, dtype=np.float64))]
+    return tuple(np.degrees(angle) if degrees else angle for angle in angles)

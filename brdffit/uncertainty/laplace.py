@@ -28,7 +28,6 @@ the determined ones alone). Correlations of |ρ| ≥ :data:`DEGENERATE_CORRELATI
 degenerate pair.
 """
 
-import warnings
 from statistics import NormalDist
 from typing import NamedTuple
 
@@ -39,6 +38,7 @@ import numpy as np
 from .._jax import float64
 from .._programs import built_once, jit
 from ..data.samples import Samples
+from ..errors import warn
 from ..fitting.objective.losses import Loss
 from ..fitting.objective.problem import Problem, chunks, residuals_at
 from ..fitting.single.result import FitResult, Uncertainty
@@ -147,7 +147,7 @@ def laplace_uncertainty(result: FitResult, samples: Samples) -> FitResult:
     with float64():
         estimate, found = laplace_estimate(result, density_of(result, samples))
     for finding in found:
-        warnings.warn(finding.warning(), stacklevel=2)
+        warn(finding.warning())
     return result.with_estimate(estimate)
 
 

@@ -16,7 +16,6 @@ of at least 50 τ; a shorter one gets a warning.
 """
 
 import os
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -27,7 +26,7 @@ from .._files import atomic_path, check_not_stopped
 from .._jax import float64
 from ..checks import whole_number
 from ..data.samples import Samples
-from ..errors import Argument, BrdfInputError
+from ..errors import Argument, BrdfInputError, warn
 from ..fitting.single.result import FitResult, Uncertainty
 from . import findings as codes
 from .density import LOG_NOISE, Density, counted_values, density_of, log_probability_function, physical_draws
@@ -119,7 +118,9 @@ def check_chain_path(path) -> Path:
         try:
             import h5py  # noqa: F401
         except ImportError:
-            raise BrdfInputError(where, ": HDF5 needs h5py (pip install h5py), or use .npz") from None
+            raise BrdfInputError(
+                where, ": HDF5 needs h5py, which is not installed: pip install 'brdffit[hdf5]', or use .npz"
+            ) from None
     return path
 
 
@@ -148,7 +149,7 @@ def sample_posterior(
         _check_walker_count(settings, len(sampled_labels(density.free_labels, density.has_sigma)))
         laid_out, found, draws = sample_and_estimate(result, density, settings, chain_path, progress)
     for finding in found:
-        warnings.warn(finding.warning(), stacklevel=2)
+        warn(finding.warning())
     return result.with_estimate(laid_out, draws)
 
 

@@ -6,7 +6,6 @@ no window, nothing left open when a program draws hundreds of them.
 
 import os
 import re
-import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -15,7 +14,7 @@ import numpy as np
 from .._files import atomic_path
 from ..data.load import as_samples
 from ..data.samples import Samples
-from ..errors import Argument, BrdfInputError, InputWarning
+from ..errors import Argument, BrdfInputError, InputWarning, warn
 from ..fitting.single.result import FitResult
 from ..physics.models.specs import spec_of
 
@@ -111,12 +110,11 @@ def checked_samples(samples, results: Sequence[FitResult] = ()) -> Samples:
     read_as = samples.provenance.quantity if samples.provenance else None  # None: made from arrays, as a fit records
     for result in results:
         if None not in (result.quantity, read_as) and result.quantity != read_as:
-            warnings.warn(
+            warn(
                 InputWarning(
                     f"{label(result)} was fitted to samples read as {result.quantity}; {samples.source} is read as"
                     f" {read_as}: the figure compares BRDFs made from different quantities"
-                ),
-                stacklevel=3,
+                )
             )
     return samples
 

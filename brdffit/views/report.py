@@ -29,7 +29,8 @@ from ..data.summary import describe
 from ..errors import Argument, BrdfInputError, UncertaintyWarning
 from ..fitting.comparison.compare import Comparison, compare
 from ..fitting.options import Holding, Solving
-from ..fitting.single.result import FitResult, parameter_cells, uncertainty_line
+from ..fitting.single.result import FitResult
+from ..fitting.single.table import parameter_cells, uncertainty_line
 from ..physics.models.model import Model
 from ..uncertainty.mcmc import MCMC
 from ..uncertainty.methods import check_options, with_uncertainty

@@ -180,3 +180,32 @@ def test_several_inputs_need_a_folder(small, tmp_path, capsys):
     status, _, err = run(["fit", path, path, "-o", tmp_path / "x.json"], capsys)
     assert status == 2 and "looks like a file; with several samples files give a folder (OUTDIR/)" in err
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_pandas_data_frame_with_the_csvs_columns_is_read_as_the_csv_is():
+    """``load_samples(DataFrame)``: the columns of a samples CSV (angles and values here; sigma and weight alike), read
+    to the same directions and values as the file with the same table; bad cells name the frame's row by its index
+    label; ``fit`` takes the frame as it takes a path."""
+    pandas = pytest.importorskip("pandas", reason="pandas is not installed (the test extra has it)")
+    from brdffit import fit
+
+    table = np.loadtxt(EXAMPLE, delimiter=",", skiprows=1)
+    frame = pandas.DataFrame(table, columns=["theta_i", "phi_i", "theta_o", "phi_o", "r", "g", "b"])
+    from_frame, from_file = load_samples(frame), load_samples(EXAMPLE)
+    for name in ("wi", "wo", "values"):
+        np.testing.assert_array_equal(getattr(from_frame, name), getattr(from_file, name))
+    assert from_frame.channels == from_file.channels and from_frame.source == "DataFrame"
+    assert fit(frame.iloc[::20], "lambert").params["rho_d"] == pytest.approx(
+        fit(from_file.select(np.arange(0, len(table), 20)), "lambert").params["rho_d"], rel=1e-12
+    )
+    bad = frame.iloc[:5].copy()
+    bad.index = ["a", "b", "c", "d", "e"]
+    bad.loc["c", "theta_o"] = 95.0
+    with pytest.raises(BrdfInputError, match=r"^DataFrame: row 'c'.*theta_o.*95"):
+        load_samples(bad)
+    with pytest.raises(BrdfInputError, match=r"^DataFrame: columns: .*value"):
+        load_samples(frame[["theta_i", "phi_i", "theta_o", "phi_o"]])
+    words = frame.iloc[:3].astype(object)
+    words.loc[1, "r"] = "bright"
+    with pytest.raises(BrdfInputError, match=r"^DataFrame: row 1, column 'r': 'bright' is not a number$"):
+        load_samples(words)

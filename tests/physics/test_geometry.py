@@ -91,3 +91,29 @@ def test_half_difference_angles_round_trip_and_known_pairs(rng):
     np.testing.assert_allclose(to_half_difference(light, light)[2], 0.0, atol=1e-7)
     swapped = to_half_difference(wo, wi)[3]
     np.testing.assert_allclose(np.angle(np.exp(1j * (swapped - phi_d - np.pi))), 0.0, atol=1e-12)
+
+
+def test_public_angles_and_directions_round_trip_as_the_samples_file_holds_them(tmp_path):
+    """``brdffit.directions_from_angles`` gives the directions ``load_samples`` reads from the same angles in a CSV
+    file (to 1e-15: float64 rounding of sin and cos), and ``angles_from_directions`` gives them back (to 1e-12 degrees:
+    arctan2 of rounded components); a zenith below the horizon is one line naming it."""
+    import brdffit
+
+    angles = np.array([[10.0, 0.0, 30.0, 180.0], [45.0, 20.0, 60.0, -90.0], [0.0, 0.0, 89.5, 45.0]])
+    path = tmp_path / "angles.csv"
+    path.write_text(
+        "theta_i,phi_i,theta_o,phi_o,value\n" + "".join(",".join(map(str, row)) + ",0.1\n" for row in angles)
+    )
+    samples = brdffit.load_samples(path)
+    wi, wo = brdffit.directions_from_angles(*angles.T)
+    np.testing.assert_allclose(wi, samples.wi, atol=1e-15)
+    np.testing.assert_allclose(wo, samples.wo, atol=1e-15)
+    back = np.stack(brdffit.angles_from_directions(wi, wo), axis=1)
+    np.testing.assert_allclose(back[1:], angles[1:], atol=1e-12)
+    np.testing.assert_allclose(back[0, [0, 2, 3]], angles[0, [0, 2, 3]], atol=1e-12)  # φ of the normal is 0 anyway
+    radians = brdffit.directions_from_angles(*np.radians(angles.T), degrees=False)
+    np.testing.assert_allclose(radians[1], wo, atol=1e-15)
+    with pytest.raises(
+        brdffit.BrdfInputError, match=r"^theta_o = 95 \(at 0\) must be finite and within \[0, 90\] degrees"
+    ):
+        brdffit.directions_from_angles(10.0, 0.0, 95.0, 0.0)

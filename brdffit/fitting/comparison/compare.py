@@ -227,6 +227,13 @@ class Comparison:
     def __str__(self) -> str:
         return self.table()
 
+    def _repr_html_(self) -> str:
+        """What a notebook shows for a bare comparison: the ranking as printed, in a ``<pre>`` block (its columns
+        line up)."""
+        import html
+
+        return f"<pre>{html.escape(self.table())}</pre>"
+
 
 @float64
 def compare(
