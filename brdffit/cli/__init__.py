@@ -23,7 +23,7 @@ import sys
 import threading
 import warnings
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 
 from .._files import check_not_stopped, resume_writing, stop_writing
 from .._version import __version__
@@ -45,6 +45,63 @@ COMMANDS = {
     "info": "what a samples file holds: count, channels, angular coverage (or what a basis file holds)",
     "basis": "learn a data-driven basis from a library of MERL tables, and choose the directions to measure",
 }
+
+
+#: Two or three examples of each command, which its ``--help`` ends with (each is parsed by a test).
+EXAMPLES = {
+    "fit": (
+        "brdffit fit examples/ward-pickled-oak.csv --model ward -o oak.json",
+        "brdffit fit data.csv --model cook-torrance --fresnel conductor --shadowing smith --uncertainty laplace",
+        "brdffit fit a.csv b.csv c.csv --model lafortune --lobes 2 -o fits/",
+    ),
+    "compare": (
+        "brdffit compare examples/ward-pickled-oak.csv -o oak.compare.json",
+        "brdffit compare data.csv --models ward,cook-torrance:conductor,lafortune:2 --folds 10",
+    ),
+    "plot": (
+        "brdffit plot oak.json examples/ward-pickled-oak.csv -o figures/",
+        "brdffit plot oak.json other.json data.csv --kind slices -o slices.png",
+    ),
+    "report": (
+        "brdffit report examples/ward-pickled-oak.csv -o oak.html",
+        "brdffit report data.csv --models ward,lafortune:2 --uncertainty mcmc -o data.html",
+    ),
+    "export": (
+        "brdffit export oak.json --to mitsuba --samples examples/ward-pickled-oak.csv",
+        "brdffit export oak.compare.json --to gltf -o oak.glb",
+        "brdffit export oak.json --to merl -o oak.binary",
+    ),
+    "render": (
+        "brdffit render oak.json -o oak.png",
+        "brdffit render oak.json --samples examples/ward-pickled-oak.csv -o beside.png",
+        "brdffit render oak.xml -o oak.exr",
+    ),
+    "synth": (
+        "brdffit synth --model ward --params oak.json --noise 0.01 --seed 1 -o noisy.csv",
+        "brdffit synth --model lambert --params '{\"rho_d\": [0.5]}' --geometry in-plane -o grey.csv",
+    ),
+    "models": ("brdffit models", "brdffit models | grep -A3 '^cook-torrance'"),
+    "convert": (
+        "brdffit convert tape.dat tape.csv",
+        "brdffit convert oak.json oak.binary",
+        "brdffit convert spectra.csv rgb.csv --spectral-to rgb",
+    ),
+    "info": ("brdffit info examples/ward-pickled-oak.csv", "brdffit info examples/retro-gray-tape.dat"),
+    "basis": (
+        "brdffit basis build merl/ -o basis.npz --components 16",
+        "brdffit basis directions basis.npz -n 20 -o directions.csv",
+    ),
+}
+
+
+QUIET_HELP = (
+    "print nothing but warnings and errors (the exit status says how it went; a product sent to standard output"
+    " with -o - is still written there); no progress bars"
+)
+
+
+def _epilog(command: str) -> str:
+    return "examples:\n" + "\n".join(f"  {example}" for example in EXAMPLES[command])
 
 
 class UsageError(Exception):
@@ -70,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with _signals_stop_writing():
             args = build_parser(_command_in(argv)).parse_args(argv)
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _quiet(args.quiet):
                 _warn_in_one_line()
                 args.declared_files(args).check()
                 status = args.run(args)
@@ -92,6 +149,24 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_TERMINATED
     finally:
         resume_writing()  # the stop is for this command only (``main`` is also called from Python)
+
+
+@contextmanager
+def _quiet(quiet: bool) -> Iterator[None]:
+    """``-q``: what a command prints on standard output (tables, ``wrote …`` lines) goes to the null device, while a
+    product written there (``-o -``, ``files.write_to_standard_output``) still reaches it; warnings and errors stay on
+    standard error, and the commands show no progress bars (they read ``args.quiet``)."""
+    if not quiet:
+        yield
+        return
+    from .files import PRODUCT_STREAM
+
+    token = PRODUCT_STREAM.set(sys.stdout)
+    try:
+        with open(os.devnull, "w") as null, redirect_stdout(null):
+            yield
+    finally:
+        PRODUCT_STREAM.reset(token)
 
 
 def on_interrupt(signum, frame) -> None:
@@ -169,9 +244,20 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         allow_abbrev=False,
     )
     parser.add_argument("--version", action="version", version=f"brdffit {__version__}")
+    parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     commands = parser.add_subparsers(title="commands", metavar="COMMAND", required=True)
     for name, summary in COMMANDS.items():
-        subparser = commands.add_parser(name, help=summary, description=summary, allow_abbrev=False)
+        subparser = commands.add_parser(
+            name,
+            help=summary,
+            description=summary,
+            epilog=_epilog(name),
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+            allow_abbrev=False,
+        )
+        # Given after the command as well; unset there, the top level's value stands (argparse: a subparser's default
+        # would overwrite it).
+        subparser.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
         if name == command:
             module = importlib.import_module(f".{name}", __name__)
             module.configure(subparser)

@@ -99,7 +99,7 @@ def _build(args: argparse.Namespace) -> int:
         raise BrdfInputError("-o -: a basis is a binary file; give a file name (basis.npz)")
     output = output_file(args.output, "-o")
     started = time.perf_counter()
-    with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=None, leave=False) as bar:
+    with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=True if args.quiet else None, leave=False) as bar:
         basis = build_basis(files, components=args.components, mapping=args.mapping, progress=bar.update)
     save_basis(basis, output)
     print(f"wrote {output}: {describe_basis(basis)} ({time.perf_counter() - started:.1f} s)")
@@ -114,7 +114,7 @@ def _directions(args: argparse.Namespace) -> int:
     basis = load_basis(args.basis)
     from tqdm.auto import tqdm
 
-    with tqdm(total=args.n, unit="pair", disable=None, leave=False) as bar:
+    with tqdm(total=args.n, unit="pair", disable=True if args.quiet else None, leave=False) as bar:
         options = dict(max_theta=args.max_theta, candidates=args.candidates, seed=args.seed, progress=bar.update)
         chosen = choose_directions(basis, args.n, **options)
     write_directions(chosen.angles, output)

@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     enable_compilation_cache()
     arguments = comparison_arguments(args)
     output = None if args.output in (None, "-") else output_file(args.output, "-o")
-    comparison = compare(load(args.samples, args), **arguments, progress=None)
+    comparison = compare(load(args.samples, args), **arguments, progress=False if args.quiet else None)
     stream = sys.stderr if args.output == "-" else sys.stdout
     print(comparison.table(), file=stream)
     if args.output == "-":

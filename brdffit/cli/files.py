@@ -16,6 +16,7 @@ path.
 import os
 import sys
 from collections.abc import Iterable, Mapping
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 
 from ..errors import BrdfInputError, BrdfWriteError
@@ -77,14 +78,20 @@ def _pairs(declared: Mapping[str, PathOrNone | Iterable[PathOrNone]]) -> tuple[t
     return tuple(pairs)
 
 
+#: Where a product sent to standard output goes: the stream of the command's standard output when ``-q`` sends its
+#: printing to the null device (``cli._quiet``); None: ``sys.stdout``.
+PRODUCT_STREAM: ContextVar = ContextVar("PRODUCT_STREAM", default=None)
+
+
 def write_to_standard_output(text: str) -> None:
     """A command's product written to standard output (``-o -``) and flushed. A reader that went away before it
     (``brdffit fit … -o - | true``) is a write error, exit status 2: the product is lost, where a table printed
     into a closed pipe is not (``run``). Standard output then points at the null device, so that the final flush
     cannot fail again (Python's documentation, "Note on SIGPIPE")."""
+    stream = PRODUCT_STREAM.get() or sys.stdout
     try:
-        sys.stdout.write(text)
-        sys.stdout.flush()
+        stream.write(text)
+        stream.flush()
     except BrokenPipeError:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         raise BrdfWriteError(

@@ -72,6 +72,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
         " for several samples files (default: SAMPLES-stem.MODEL[.OPTION-VALUE].json in the current folder)",
     )
     parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print a JSON list, one object per samples file (its result file, model, cost, rmse, steps, converged,"
+        " warnings; error for one not written), instead of the table or the summary",
+    )
+    parser.add_argument(
         "--threads",
         type=int,
         metavar="N",
@@ -135,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
     start = _start(args.start)
     held = holding_arguments(args)
     _check_holding(model, held)
+    if args.json and outputs is None:
+        raise BrdfInputError("--json prints to standard output, where -o - sends the result: give one of them")
     for option, value in (("--workers", args.workers), ("--threads", args.threads)):
         if value is not None and value < 1:
             raise BrdfInputError(f"{option} must be 1 or more, got {value}")
@@ -188,30 +196,45 @@ def _fit(args: argparse.Namespace, model, samples: list, start, mcmc, held: dict
         mcmc=mcmc,
         **held,
     )
+    progress = False if args.quiet else None  # None: a bar where standard error is a terminal
     if client is not None:
         return api.fit_batch(
-            samples, model, args.loss, client=client, read_options=read_options(args), threads=args.threads, **options
+            samples,
+            model,
+            args.loss,
+            client=client,
+            read_options=read_options(args),
+            threads=args.threads,
+            progress=progress,
+            **options,
         )
     if len(samples) == 1:
-        progress = sys.stderr.isatty()
+        progress = sys.stderr.isatty() and not args.quiet
         return [api.fit(samples[0], model, args.loss, chain=args.chain, progress=progress, **options)]
-    return api.fit_batch(samples, model, args.loss, threads=args.threads, **options)
+    return api.fit_batch(samples, model, args.loss, threads=args.threads, progress=progress, **options)
 
 
 def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None, problems: list[str | None]) -> None:
     """The table (one input) or a line per input, then a warning line for each thing a user must know, and an error
     line for each input whose fit is not finite (``problems``: none written).
 
-    On standard output, unless the result file went there (``-o -``): then on standard error.
+    On standard output, unless the result file went there (``-o -``): then on standard error. ``-q``: the warnings
+    and errors alone.
     """
     stream = sys.stderr if outputs is None else sys.stdout
-    if len(results) == 1:
+    written = [None if problem else output for output, problem in zip(outputs or [None], problems, strict=True)]
+    if args.quiet:  # no table nor summary, wherever it would go (-q -o -: the result alone on standard output)
+        pass
+    elif args.json:
+        from ..fitting.single.result import json_text
+
+        print(json_text(summary_rows(args.samples, results, written, problems)), file=stream)
+    elif len(results) == 1:
         print(results[0].table(source=args.samples[0]), file=stream)
         written = [*(outputs or []), args.chain, args.corner]
         if any(written):
             print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
     else:
-        written = [None if problem else output for output, problem in zip(outputs, problems, strict=True)]
         print(summary(args.samples, results, written), file=stream)
     for path, result, problem in zip(args.samples, results, problems, strict=True):
         if problem is not None:
@@ -252,6 +275,11 @@ def _uncertainty_settings(args: argparse.Namespace):
     settings = mcmc_settings(args, also=("chain",))
     if args.corner and not method:
         raise BrdfInputError(Argument("corner"), " needs ", Argument("uncertainty", "mcmc"), " (or laplace)")
+    if args.corner:  # before the work: the plot's libraries
+        from ..errors import needs
+
+        needs("matplotlib", "plots", "corner plots")
+        needs("corner", "plots", "corner plots")
     if (args.chain or args.corner) and len(args.samples) > 1:
         raise BrdfInputError(f"--chain and --corner take one samples file; got {len(args.samples)}")
     if args.chain:
@@ -309,6 +337,27 @@ def default_name(path: str, model) -> str:
 
     options = "".join(f".{key}-{shown_value(key, value)}" for key, value in chosen_options(model).items())
     return f"{Path(path).stem}.{model.name}{options}.json"
+
+
+def summary_rows(inputs: list[str], results, outputs, problems: list[str | None]) -> list[dict]:
+    """What :func:`summary` says of each fit, as plain data (``--json``): ``samples``, ``result`` (the file written;
+    None: not written), ``model``, ``model_options``, ``cost``, ``rmse``, ``n_steps``, ``converged``, ``warnings`` and
+    ``error`` (why nothing was written; None)."""
+    return [
+        {
+            "samples": path,
+            "result": None if output is None else str(output),
+            "model": result.model,
+            "model_options": dict(result.model_options),
+            "cost": result.cost if problem is None else None,
+            "rmse": result.rmse if problem is None else None,
+            "n_steps": result.n_steps,
+            "converged": result.converged,
+            "warnings": list(result.warnings),
+            "error": problem,
+        }
+        for path, result, output, problem in zip(inputs, results, outputs, problems, strict=True)
+    ]
 
 
 def summary(inputs: list[str], results, outputs) -> str:

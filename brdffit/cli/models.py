@@ -1,6 +1,7 @@
 """``brdffit models``: each model with its formula, options, parameters and their domains."""
 
 import argparse
+import json
 
 from . import EXIT_OK
 from .arguments import flag
@@ -8,7 +9,11 @@ from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """No arguments."""
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the models as one JSON list (name, summary, options, parameters) instead of lines",
+    )
 
 
 def files(args: argparse.Namespace) -> Files:
@@ -17,53 +22,91 @@ def files(args: argparse.Namespace) -> Files:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..physics.models.registry import MODELS, recorded_options
+    from ..fitting.single.result import json_text
+    from ..physics.models.registry import MODELS
 
-    for name, entry in MODELS.items():
-        options = [option for option in entry.option_defaults if option not in recorded_options()]
-        if entry.listing:  # a model that needs a file to be built: described by its entry
-            summary, *details = entry.listing
-            print(f"{name}\n  {summary}")
-            if options:
-                print(f"  options: {', '.join(flag(option) for option in options)}")
-            for line in details:
-                print(f"  {line}")
-            continue
-        model = entry()
-        summary = model.summary + (f": {model.lobe.summary}" if model.lobe else "")
-        print(f"{name}\n  {summary}")
-        if options:
-            print(f"  options: {', '.join(flag(option) for option in options)}")
-        shaping = [option for option in entry.choices if _changes_parameters(entry, option)]
-        for option, values in entry.choices.items():
-            if option not in shaping:
+    listings = [listing(name, entry) for name, entry in MODELS.items()]
+    if args.json:
+        print(json_text(listings))
+        return EXIT_OK
+    for one in listings:
+        print(f"{one['name']}\n  {one['summary']}")
+        if one["options"]:
+            print(f"  options: {', '.join(flag(option) for option in one['options'])}")
+        for line in one["details"]:
+            print(f"  {line}")
+        for option, values in one["choices"].items():
+            if option not in one["parameters_by_option"]:
                 listed = ", ".join(f"{value} ({what})" for value, what in values.items())
                 print(f"  {flag(option)}: {listed}")
-        for option in shaping:
-            for value, what in entry.choices[option].items():
-                lines = describe_parameters(entry(**{option: value}))
-                print(f"  {flag(option)} {value}: {'; '.join(lines)} ({what})")
-        if not shaping:
-            print("  parameters: " + "; ".join(describe_parameters(model)))
+        for option, by_value in one["parameters_by_option"].items():
+            for value, parameters in by_value.items():
+                lines = "; ".join(_parameter_text(parameter) for parameter in parameters)
+                print(f"  {flag(option)} {value}: {lines} ({one['choices'][option][value]})")
+        if one["parameters"] is not None and not one["parameters_by_option"]:
+            print("  parameters: " + "; ".join(_parameter_text(parameter) for parameter in one["parameters"]))
     return EXIT_OK
+
+
+def listing(name: str, entry) -> dict:
+    """A model as ``brdffit models`` lists it, as plain data: ``name``, ``summary``, ``options`` (the options a user
+    gives), ``choices`` (each option's values and what they mean), ``details`` (lines of a model described by its
+    entry: one built from a file), ``parameters`` (of the default model: ``name``, ``per_channel``, ``domain``,
+    ``held``; None where it needs a file), and ``parameters_by_option`` (for an option whose values change the
+    parameters: each value's)."""
+    from ..physics.models.registry import recorded_options
+
+    options = [option for option in entry.option_defaults if option not in recorded_options()]
+    if entry.listing:  # a model that needs a file to be built: described by its entry
+        summary, *details = entry.listing
+        return {
+            "name": name,
+            "summary": summary,
+            "options": options,
+            "choices": {},
+            "details": list(details),
+            "parameters": None,
+            "parameters_by_option": {},
+        }
+    model = entry()
+    shaping = [option for option in entry.choices if _changes_parameters(entry, option)]
+    return {
+        "name": name,
+        "summary": model.summary + (f": {model.lobe.summary}" if model.lobe else ""),
+        "options": options,
+        "choices": {option: dict(values) for option, values in entry.choices.items()},
+        "details": [],
+        "parameters": parameters_of(model),
+        "parameters_by_option": {
+            option: {value: parameters_of(entry(**{option: value})) for value in entry.choices[option]}
+            for option in shaping
+        },
+    }
+
+
+def _parameter_text(parameter: dict) -> str:
+    held = "" if parameter["held"] is None else f" (held at {parameter['held']:g} unless freed)"
+    return f"{parameter['name']}: {'[C] ' if parameter['per_channel'] else ''}{parameter['domain']}{held}"
 
 
 def _changes_parameters(entry, option: str) -> bool:
     """Whether the values of ``option`` give models of different parameters (Cook-Torrance's Fresnel term)."""
-    return len({tuple(describe_parameters(entry(**{option: value}))) for value in entry.choices[option]}) > 1
+    return len({json.dumps(parameters_of(entry(**{option: value}))) for value in entry.choices[option]}) > 1
 
 
-def describe_parameters(model) -> list[str]:
-    """One line per parameter: its name, shape ([C] for one value per channel) and domain."""
+def parameters_of(model) -> list[dict]:
+    """Each parameter of ``model``: its ``name``, whether it has one value per channel (``per_channel``), its
+    ``domain`` (as text) and the value it is ``held`` at unless freed (None: fitted)."""
     held = dict(getattr(model, "held", ()))
-    held_text = lambda name: f" (held at {held[name]:g} unless freed)" if name in held else ""
-    lines = [] if model.whole else [f"{model.diffuse_name}: [C] {model.diffuse.albedo_domain.text}"]
+
+    def one(name: str, per_channel: bool, domain: str) -> dict:
+        return {"name": name, "per_channel": per_channel, "domain": domain, "held": held.get(name)}
+
+    parameters = [] if model.whole else [one(model.diffuse_name, True, model.diffuse.albedo_domain.text)]
     if model.n_lobes:
         if not model.whole:
-            albedo = model.lobe.albedo_domain.text
-            lines.append(f"{model.specular_name}: [C] {albedo}{held_text(model.specular_name)}")
-        per_channel = lambda name: "[C] " if name in model.lobe.channel_names else ""
-        lines += [
-            f"{name}: {per_channel(name)}{domain.text}{held_text(name)}" for name, domain in model.lobe.parameters
+            parameters.append(one(model.specular_name, True, model.lobe.albedo_domain.text))
+        parameters += [
+            one(name, name in model.lobe.channel_names, domain.text) for name, domain in model.lobe.parameters
         ]
-    return lines
+    return parameters

@@ -44,6 +44,13 @@ def run(args: argparse.Namespace) -> int:
     output = _output(args)
     path = output_file(output, "-o")
     check_report_path(output, argument="output")
-    report(load(args.samples, args), **arguments, uncertainty=args.uncertainty, mcmc=mcmc, path=path, progress=None)
+    report(
+        load(args.samples, args),
+        **arguments,
+        uncertainty=args.uncertainty,
+        mcmc=mcmc,
+        path=path,
+        progress=False if args.quiet else None,
+    )
     print(f"wrote {output}")
     return EXIT_OK

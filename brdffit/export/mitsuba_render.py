@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._files import atomic_path
-from ..errors import Argument, BrdfInputError
+from ..errors import Argument, BrdfInputError, needs
 from ..fitting.single.result import FitResult
 from .at_data import data_for
 from .mitsuba import MitsubaExport, mitsuba_bsdf
@@ -60,10 +60,7 @@ def render_sphere(
     fit's sphere and the data's (module docstring), and the export says how far it lies from them
     (:attr:`MitsubaExport.at_data`)."""
     exposure = checked_exposure(exposure)
-    if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
-        raise BrdfInputError(
-            Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
-        )
+    check_image_path(path)
     if samples is not None and Path(path).suffix.lower() != ".png":
         raise BrdfInputError(
             Argument.given("path", str(path)), ": the render beside the data is a .png (an .exr holds one image)"
@@ -87,6 +84,17 @@ def render_sphere(
 XML_SUFFIX = ".xml"
 
 
+def check_image_path(path: str | os.PathLike) -> None:
+    """A one-line error, before any work, for an image whose suffix names no format written (:data:`IMAGE_SUFFIXES`)
+    or a PNG where matplotlib, which draws and writes it, is not installed."""
+    if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
+        raise BrdfInputError(
+            Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
+        )
+    if Path(path).suffix.lower() == ".png":
+        needs("matplotlib", "render", "PNG images")
+
+
 def render_bsdf_file(
     bsdf_file: str | os.PathLike,
     path: str | os.PathLike,
@@ -101,10 +109,7 @@ def render_bsdf_file(
     OpenEXR for ``.exr``; atomically). Returns the lines of the file's leading comments (brdffit's export writes
     what it made and how far it lies there). One-line errors for a file Mitsuba cannot load or that is not a BSDF."""
     exposure = checked_exposure(exposure)
-    if Path(path).suffix.lower() not in IMAGE_SUFFIXES:
-        raise BrdfInputError(
-            Argument.given("path", str(path)), f": the image must end in {' or '.join(IMAGE_SUFFIXES)}"
-        )
+    check_image_path(path)
     mi = mitsuba()
     try:
         text = Path(bsdf_file).read_text(encoding="utf-8")

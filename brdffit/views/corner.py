@@ -6,8 +6,9 @@ import os
 import numpy as np
 
 from .._jax import float64
-from ..errors import Argument, BrdfInputError
-from ..fitting.single.result import FitResult, value_with_error
+from ..errors import Argument, BrdfInputError, needs
+from ..fitting.single.result import FitResult
+from ..fitting.single.table import value_with_error
 from .figures import check_figure_path, save_figure
 
 #: Draws taken from the Laplace Gaussian when a result has no MCMC draws.
@@ -34,7 +35,8 @@ def corner_plot(result: FitResult, path: str | os.PathLike | None = None, *, tru
         raise BrdfInputError(
             "a corner plot needs an uncertainty estimate; fit with ", Argument("uncertainty", "mcmc"), " (or laplace)"
         )
-    import corner
+    needs("matplotlib", "plots", "corner plots")
+    corner = needs("corner", "plots", "corner plots")
 
     names = result.uncertainty["covariance"]["names"]
     optimum = _flat_parameters(result)

@@ -12,11 +12,15 @@
 :data:`KINDS` names the first four as ``brdffit plot --kind`` takes them.
 """
 
-from .corner import corner_plot as corner
-from .polar import polar
-from .residuals import residuals
-from .slices import slices
-from .sphere import sphere
+from ..errors import needs
+
+needs("matplotlib", "plots", "brdffit's figures")  # before the figure modules, which import it: one line if absent
+
+from .corner import corner_plot as corner  # noqa: E402
+from .polar import polar  # noqa: E402
+from .residuals import residuals  # noqa: E402
+from .slices import slices  # noqa: E402
+from .sphere import sphere  # noqa: E402
 
 #: The figures ``brdffit plot --kind`` draws from result files and samples, in the order ``--kind all`` writes them.
 KINDS = {"slices": slices, "polar": polar, "residuals": residuals, "sphere": sphere}

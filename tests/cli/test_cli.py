@@ -11,7 +11,7 @@ import pytest
 from paths import EXAMPLE, EXAMPLE_PARAMS, ROOT
 
 from brdffit import load_result, load_samples
-from brdffit.cli import main
+from brdffit.cli import COMMANDS, main
 
 GEOMETRY = "theta_i,phi_i,theta_o,phi_o"
 
@@ -375,3 +375,66 @@ def test_console_script_and_checkout_shim(tmp_path):
         )
         assert done.returncode == 2 and done.stderr == f"brdffit: error: {tmp_path / 'absent.csv'}: no such file\n"
         assert done.stdout == ""
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_every_commands_help_ends_with_examples_that_parse(command, capsys):
+    """``brdffit COMMAND --help`` ends with two or three examples, and each is a command line the parser accepts (its
+    files need not exist: parsing checks the flags and their values' forms)."""
+    import shlex
+
+    from brdffit.cli import EXAMPLES, build_parser
+
+    assert main([command, "--help"]) == 0
+    shown = capsys.readouterr().out.rstrip().splitlines()
+    examples = EXAMPLES[command]
+    assert 2 <= len(examples) <= 3 and shown[-len(examples) - 1 :] == ["examples:", *(f"  {e}" for e in examples)]
+    for example in examples:
+        words = shlex.split(example.split(" | ")[0])
+        assert words[:2] == ["brdffit", command]
+        build_parser(command).parse_args(words[1:])  # a usage error raises
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_quiet_prints_nothing_but_keeps_the_product_and_the_warnings(where, tmp_path, capsys):
+    """``-q`` (before or after the command): no table, no ``wrote`` line; the file is written; with ``-o -`` the
+    result alone reaches standard output; warnings still reach standard error."""
+    quiet = ["-q", "fit"] if where == "before" else ["fit", "-q"]
+    output = tmp_path / "oak.json"
+    assert main([*quiet, EXAMPLE, "--model", "lambert", "-o", output]) == 0
+    out, _ = capsys.readouterr()
+    assert out == "" and load_result(output).model == "lambert"
+    assert main([*quiet, EXAMPLE, "--model", "cook-torrance", "--fresnel", "conductor", "-o", "-"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["model"] == "cook-torrance"
+    assert "brdffit: warning:" in err and "cost" not in err  # the caveats, not the table
+
+
+def test_info_models_and_batch_fits_print_json_for_scripts(tmp_path, capsys):
+    """``--json``: ``info`` gives the numbers its lines show, ``models`` every model with its parameters, and a batch
+    of fits one object per samples file with the result file it wrote; ``--json`` with ``-o -`` is refused (both
+    would go to standard output)."""
+    from brdffit import MODELS
+
+    assert main(["info", EXAMPLE, "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert main(["info", EXAMPLE]) == 0
+    text = capsys.readouterr().out
+    assert info["n_samples"] == 10368 and info["channels"] == ["r", "g", "b"]
+    assert f"{info['n_samples']} samples × 3 channel(s)" in text and f"{info['light_directions']} distinct" in text
+    assert f"median {info['values']['g']['median']:.4g}" in text and info["quantity"]["read_as"] == "brdf"
+    assert main(["models", "--json"]) == 0
+    models = {one["name"]: one for one in json.loads(capsys.readouterr().out)}
+    assert list(models) == list(MODELS)
+    assert [p["name"] for p in models["ward"]["parameters"]] == ["rho_d", "rho_s", "alpha"]
+    conductor = models["cook-torrance"]["parameters_by_option"]["fresnel"]["conductor"]
+    assert {p["name"]: p["held"] for p in conductor}["ks"] == 1.0
+    copies = [tmp_path / name for name in ("a.csv", "b.csv")]
+    for copy in copies:
+        copy.write_bytes(Path(EXAMPLE).read_bytes())
+    assert main(["fit", *copies, "--model", "lambert", "-o", f"{tmp_path / 'fits'}/", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [row["samples"] for row in rows] == [str(copy) for copy in copies]
+    assert all(load_result(row["result"]).cost == row["cost"] and row["error"] is None for row in rows)
+    assert main(["fit", EXAMPLE, "--model", "lambert", "-o", "-", "--json"]) == 2
+    assert "--json prints to standard output, where -o - sends the result" in capsys.readouterr().err
