@@ -28,6 +28,7 @@ from contextlib import contextmanager, redirect_stdout
 from .._files import check_not_stopped, resume_writing, stop_writing
 from .._version import __version__
 from ..errors import BrdfInputError, BrdfWriteError, FitWarning, InputWarning, Spelled, UncertaintyWarning
+from .files import check_one_standard_input, is_standard, standard_streams
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
@@ -127,7 +128,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with _signals_stop_writing():
             args = build_parser(_command_in(argv)).parse_args(argv)
-            with warnings.catch_warnings(), _quiet(args.quiet):
+            product = is_standard(getattr(args, "output", None))  # -o -, convert's OUT -: a product on stdout
+            check_one_standard_input(args)
+            with warnings.catch_warnings(), standard_streams(product), _quiet(args.quiet):
                 _warn_in_one_line()
                 args.declared_files(args).check()
                 status = args.run(args)
@@ -161,7 +164,7 @@ def _quiet(quiet: bool) -> Iterator[None]:
         return
     from .files import PRODUCT_STREAM
 
-    token = PRODUCT_STREAM.set(sys.stdout)
+    token = PRODUCT_STREAM.set(PRODUCT_STREAM.get() or sys.stdout)
     try:
         with open(os.devnull, "w") as null, redirect_stdout(null):
             yield

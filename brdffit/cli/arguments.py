@@ -321,10 +321,14 @@ def add_loading_options(command: argparse.ArgumentParser) -> None:
 
 
 def load(path: str, args: argparse.Namespace):
-    """``path`` read with the loading options of ``args``."""
-    from ..data.load import load_samples
+    """``path`` (``-``: standard input, ``files.py``) read with the loading options of ``args``."""
+    import dataclasses
 
-    return load_samples(path, **read_options(args))
+    from ..data.load import load_samples
+    from .files import input_path, is_standard
+
+    samples = load_samples(input_path(path), **read_options(args))
+    return dataclasses.replace(samples, source="-") if is_standard(path) else samples
 
 
 def read_options(args: argparse.Namespace) -> dict:
@@ -345,12 +349,14 @@ def read_options(args: argparse.Namespace) -> dict:
 
 def json_argument(value: str, option: str) -> Any:
     """Inline JSON (starting with ``{``) or the content of the JSON file ``value``."""
+    from .files import input_path
+
     if value.lstrip().startswith("{"):
         text, where = value, f"{option} (inline JSON)"
     else:
         where = f"{option} {value}"
         try:
-            text = read_json_text(value)
+            text = read_json_text(input_path(value))
         except FileNotFoundError:
             raise BrdfInputError(f"{where}: no such file") from None
         except (OSError, ValueError) as error:  # ValueError: too large, and UnicodeDecodeError
@@ -372,14 +378,19 @@ def model_files(model_options: dict[str, Any]) -> list[str]:
     return [str(basis)] if basis else []
 
 
-def output_file(value: str | os.PathLike, option: str) -> Path:
-    """The file ``option`` writes, checked before any work; returns the path to write to.
+def output_file(value: str | os.PathLike, option: str, standard_suffix: str = "") -> Path:
+    """The file ``option`` writes, checked before any work; returns the path to write to (for ``-``, standard output:
+    a temporary file named with ``standard_suffix``, copied there when the command is done, ``files.py``).
 
     A symbolic link is followed: the file it points to is replaced (atomically) and the link kept. The
     target must not be a folder, a device or anything else that is not a regular file, and its folder must
     exist and be writable. That it is no input and no other output is checked for every command at once
     (``files.py``).
     """
+    from .files import is_standard, output_path
+
+    if is_standard(value):
+        return output_path(value, standard_suffix)
     path = Path(value)
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
     where = f"{option} {value}"
@@ -404,8 +415,9 @@ def fit_file(path: str):
     """The fit a file holds (a :class:`~brdffit.FitResult`): a result file's, or a comparison file's best, what
     ``export`` and ``render`` take; JAX is imported only for a comparison."""
     from ..fitting.single.result import FitResult, is_comparison, read_json_object
+    from .files import input_path
 
-    content = read_json_object(path, "brdffit result or comparison file")
+    content = read_json_object(input_path(path), "brdffit result or comparison file")
     if not is_comparison(content):
         return FitResult.from_dict(content, path)
     from ..fitting.comparison.compare import Comparison

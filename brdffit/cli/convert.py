@@ -28,10 +28,10 @@ def run(args: argparse.Namespace) -> int:
     from ..data.load import FORMATS, format_of_output
 
     output = Path(args.output)
-    kind = format_of_output(output)
+    kind = "csv" if args.output == "-" else format_of_output(output)  # -: a samples CSV on standard output
     if kind is None:
         raise BrdfInputError(f"{output}: unknown output format; give one of: {_suffixes(FORMATS)}")
-    output = output_file(output, "OUT")
+    output = output_file(args.output, "OUT", ".csv")
     if FORMATS[kind].write is None:
         return _tabulate(args, output)
     if Path(args.input).suffix.lower() == ".json":
@@ -43,7 +43,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     FORMATS[kind].write(samples, output)
-    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {output} ({kind})")
+    shown = "-" if args.output == "-" else output
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {shown} ({kind})")
     return EXIT_OK
 
 

@@ -5,7 +5,6 @@ the error is printed and stored in the file (``brdffit/export``).
 """
 
 import argparse
-from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
@@ -53,9 +52,10 @@ def files(args: argparse.Namespace) -> Files:
 def _output(args: argparse.Namespace) -> str:
     """The file: ``-o``, by default RESULT's stem with the suffix of the target's format, here."""
     from ..export.targets import TARGETS, export_format
+    from .files import stem
 
     kind = export_format(args.to, args.format, args.output)
-    return args.output or Path(args.result).stem + TARGETS[args.to].formats[kind]
+    return args.output or stem(args.result) + TARGETS[args.to].formats[kind]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,11 +65,14 @@ def run(args: argparse.Namespace) -> int:
     kind = export_format(args.to, args.format, args.output)
     if args.bin_centres and args.to != "merl":
         raise BrdfInputError(f"--bin-centres applies to --to merl, not to --to {args.to}")
+    from .files import input_path
+
     result = fit_of(args)
-    path = output_file(_output(args), "-o")
+    path = output_file(_output(args), "-o", TARGETS[args.to].formats[kind])
     enable_compilation_cache()
-    lines = export(result, args.to, path, kind, args.samples, bin_centres=args.bin_centres)
-    print(f"wrote {path}: {TARGETS[args.to].description} of {args.result}")
+    samples = None if args.samples is None else input_path(args.samples)
+    lines = export(result, args.to, path, kind, samples, bin_centres=args.bin_centres)
+    print(f"wrote {args.output if args.output == '-' else path}: {TARGETS[args.to].description} of {args.result}")
     for line in lines:
         print(f"  {line}")
     return EXIT_OK

@@ -336,7 +336,9 @@ def default_name(path: str, model) -> str:
     from ..physics.models.specs import shown_value
 
     options = "".join(f".{key}-{shown_value(key, value)}" for key, value in chosen_options(model).items())
-    return f"{Path(path).stem}.{model.name}{options}.json"
+    from .files import stem
+
+    return f"{stem(path)}.{model.name}{options}.json"
 
 
 def summary_rows(inputs: list[str], results, outputs, problems: list[str | None]) -> list[dict]:

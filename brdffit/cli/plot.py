@@ -16,6 +16,7 @@ from ..views.figures import as_list, label
 from . import EXIT_OK
 from .arguments import add_loading_options, load, output_file
 from .files import Files
+from .files import stem as stem_of
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -88,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
 
     incidences = _incidences(args.incidences)
     kinds, fits, figures, outputs = _figures(args)
-    if _names_a_folder(args.output) is False:  # -o FILE: a suffix matplotlib writes
+    if _names_a_folder(args.output) is False and args.output != "-":  # -o FILE: a suffix matplotlib writes
         check_figure_path(args.output, argument="output")
     results = [fit for _, fit in fits]
     samples_path = args.files[-1]
@@ -124,9 +125,10 @@ def _results(path: str) -> list:
     from ..fitting.comparison.compare import Comparison
     from ..fitting.single.result import FitResult, is_comparison, read_json_object
     from ..physics.models.registry import get_model
+    from .files import input_path
 
     try:
-        content = read_json_object(path, "brdffit result or comparison file")
+        content = read_json_object(input_path(path), "brdffit result or comparison file")
     except BrdfInputError as error:
         raise BrdfInputError(f"{error}; give the result files first and the samples file last") from None
     fits = (
@@ -145,9 +147,10 @@ def _results(path: str) -> list:
 def _not_a_result(path: str) -> None:
     """Refuse a result or comparison file where the samples file belongs (the last file)."""
     from .._files import parse_json, read_json_text
+    from .files import input_path
 
     try:
-        content = parse_json(read_json_text(path))
+        content = parse_json(read_json_text(input_path(path)))
     except (OSError, ValueError):  # ValueError: JSON's, too large, and UnicodeDecodeError
         return  # not JSON: the samples reader says what is wrong with it
     if isinstance(content, dict) and ("params" in content or "models" in content):
@@ -208,7 +211,7 @@ def output_paths(figures, results, output: str | None, samples_path: str) -> lis
     """Where each figure goes, checked before any work: ``-o FILE`` for one figure, a folder (``-o OUTDIR/``, or
     the current folder) for several, named ``SAMPLES-stem.KIND[.SPEC].png``. (A file's suffix is checked by
     ``run``, after the check that it is no input.)"""
-    stem = Path(samples_path).stem
+    stem = stem_of(samples_path)
     several_results = len(results) > 1
 
     def name(kind: str, index: int | None) -> str:
@@ -223,7 +226,7 @@ def output_paths(figures, results, output: str | None, samples_path: str) -> lis
     if len(figures) > 1 and output is not None and not as_folder:
         raise BrdfInputError(f"-o {output}: {len(figures)} figures need a folder; give OUTDIR/")
     if output is not None and not as_folder:
-        path = output_file(output, "-o")
+        path = output_file(output, "-o", ".png")  # -: one figure, a PNG on standard output
         return [path]
     folder = Path(output) if output else Path(".")
     if not folder.exists():  # created after every check, as fit's -o OUTDIR/

@@ -53,7 +53,9 @@ def _is_bsdf_file(path: str) -> bool:
 
 def _output(args: argparse.Namespace) -> str:
     """The image: ``-o``, by default RESULT's stem + ``.mitsuba.png``, here."""
-    return args.output or f"{Path(args.result).stem}.mitsuba.png"
+    from .files import stem
+
+    return args.output or f"{stem(args.result)}.mitsuba.png"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,18 +67,21 @@ def run(args: argparse.Namespace) -> int:
     whole_number("spp", args.spp, 1)
     exposure = EXPOSURE if args.exposure is None else checked_exposure(args.exposure)
     output = _output(args)
-    if Path(output).suffix.lower() not in IMAGE_SUFFIXES:
+    if output != "-" and Path(output).suffix.lower() not in IMAGE_SUFFIXES:  # -: a PNG on standard output
         raise BrdfInputError(Argument("output", output), ": the image must end in .png or .exr")
     if _is_bsdf_file(args.result):
         return _run_bsdf_file(args, output, exposure)
+    from .files import input_path
+
     result = fit_of(args)
-    path = output_file(output, "-o")
+    path = output_file(output, "-o", ".png")
     mitsuba()  # before the export's fit: say at once when Mitsuba is missing
     from .._programs.cache import enable_compilation_cache
 
     enable_compilation_cache()  # the export's programs, compiled once per machine (as export's)
-    exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=args.samples)
-    print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}")
+    samples = None if args.samples is None else input_path(args.samples)
+    exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=samples)
+    print(f"wrote {output if output == '-' else path}: Mitsuba 3 rendered a sphere of {args.result}")
     for line in exported.comment_lines()[1:]:
         print(f"  {line}")
     return EXIT_OK
@@ -94,10 +99,10 @@ def _run_bsdf_file(args: argparse.Namespace, output: str, exposure) -> int:
         )
     if not Path(args.result).is_file():
         raise BrdfInputError(f"{args.result}: no such file")
-    path = output_file(output, "-o")
+    path = output_file(output, "-o", ".png")
     mitsuba()
     lines = render_bsdf_file(args.result, path, size=args.size, spp=args.spp, exposure=exposure)
-    print(f"wrote {path}: Mitsuba 3 rendered a sphere of {args.result}, as the file is")
+    print(f"wrote {output if output == '-' else path}: Mitsuba 3 rendered a sphere of {args.result}, as the file is")
     for line in lines[1:]:  # the first says what made it; the rest how far it lies
         print(f"  {line}")
     return EXIT_OK

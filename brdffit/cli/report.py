@@ -1,7 +1,6 @@
 """``brdffit report``: compare models on one samples file and write one self-contained HTML page about it."""
 
 import argparse
-from pathlib import Path
 
 from . import EXIT_OK
 from .arguments import add_comparison_options, add_mcmc_options, comparison_arguments, load, mcmc_settings, output_file
@@ -29,7 +28,9 @@ def files(args: argparse.Namespace) -> Files:
 
 def _output(args: argparse.Namespace) -> str:
     """The page: ``-o``, by default ``SAMPLES-stem.report.html`` here."""
-    return args.output or f"{Path(args.samples).stem}.report.html"
+    from .files import stem
+
+    return args.output or f"{stem(args.samples)}.report.html"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,8 +43,8 @@ def run(args: argparse.Namespace) -> int:
     check_options(args.uncertainty)
     mcmc = mcmc_settings(args)
     output = _output(args)
-    path = output_file(output, "-o")
-    check_report_path(output, argument="output")
+    path = output_file(output, "-o", ".html")
+    check_report_path(path if output == "-" else output, argument="output")
     report(
         load(args.samples, args),
         **arguments,
@@ -52,5 +53,5 @@ def run(args: argparse.Namespace) -> int:
         path=path,
         progress=False if args.quiet else None,
     )
-    print(f"wrote {output}")
+    print(f"wrote {output}")  # on standard error when the page went to standard output (-o -)
     return EXIT_OK

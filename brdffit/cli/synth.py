@@ -87,8 +87,10 @@ def run(args: argparse.Namespace) -> int:
         if given or args.geometry is not None:
             what = "geometry" if args.geometry is not None else next(iter(given)).replace("_", "-")
             raise BrdfInputError(f"--{what} does not apply to --directions (the file gives the pairs)")
-        output = output_file(args.output, "-o")
-        wi, wo = read_directions(args.directions)
+        output = output_file(args.output, "-o", ".csv")
+        from .files import input_path
+
+        wi, wo = read_directions(input_path(args.directions))
     else:
         geometry = "hemisphere" if args.geometry is None else args.geometry
         if geometry not in GEOMETRIES:
@@ -100,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
                 raise BrdfInputError(f"--{name.replace('_', '-')} does not apply to --geometry {geometry}")
         if "seed" in accepted:
             given["seed"] = args.seed
-        output = output_file(args.output, "-o")
+        output = output_file(args.output, "-o", ".csv")
         wi, wo = make_geometry(**given)
     samples = synthesize(
         model.name,
@@ -115,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
         **model.model_options,
     )
     save_samples(samples, output)
-    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) of {model.name} to {output}")
+    shown = "-" if args.output == "-" else output
+    print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) of {model.name} to {shown}")
     return EXIT_OK
 
 
