@@ -5,8 +5,10 @@ of their own and compare them with brdffit's to 1e-12, so they run with it on, a
 ``tests/test_float64.py`` checks in a fresh interpreter that brdffit leaves a user's float32 JAX alone.
 """
 
+import atexit
 import gc
 import os
+import shutil
 import tempfile
 
 import jax
@@ -17,9 +19,10 @@ jax.config.update("jax_enable_x64", True)
 
 # The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own, one for each
 # pytest-xdist worker (the controller's, which the workers inherit, was shared by both: two processes writing one
-# cache's entries at once).
+# cache's entries at once), removed when the process ends (every run left three behind: 485 in /tmp by 2026-11-27).
 if "PYTEST_XDIST_WORKER" in os.environ or "BRDFFIT_CACHE_DIR" not in os.environ:
     os.environ["BRDFFIT_CACHE_DIR"] = tempfile.mkdtemp(prefix="brdffit-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["BRDFFIT_CACHE_DIR"], ignore_errors=True)
 
 # Within a test worker JAX never writes its persistent cache, even after a command run in-process has pointed it at a
 # folder: the tests need not serialise every executable they compile. The commands the tests start as processes still

@@ -109,7 +109,7 @@ def write_to_standard_output(text: str) -> None:
         stream.write(text)
         stream.flush()
     except BrokenPipeError:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _silenced(stream)
         raise BrdfWriteError(
             "-o -: standard output was closed before the result was written (its reader went away); nothing was written"
         ) from None
@@ -227,9 +227,20 @@ def _copy_to_standard_output(path: Path) -> None:
             target.write(path.read_bytes())
         stream.flush()
     except BrokenPipeError:
+        _silenced(stream)
         raise BrdfWriteError(
-            "-o -: standard output was closed before the output was written (its reader went away)"
+            "-o -: standard output was closed before the output was written (its reader went away); nothing was written"
         ) from None
+
+
+def _silenced(stream) -> None:
+    """Standard output, whose reader went away, pointed at the null device, so that the final flush cannot fail again
+    (Python's documentation, "Note on SIGPIPE"): the product's own stream, not ``sys.stdout``, which may be standard
+    error meanwhile (a command's lines go there while a product goes to standard output)."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
+    except (OSError, ValueError):  # a stream without a descriptor (a test's capture): nothing to point elsewhere
+        pass
 
 
 def _renamed(error: Spelled, streams: _Streams) -> Spelled:

@@ -32,13 +32,11 @@ def stdin(monkeypatch):
     return give
 
 
-def _litter() -> set[str]:
-    return {path.name for path in Path(tempfile.gettempdir()).glob("brdffit-streams-*")}
-
-
 def test_samples_and_results_come_from_standard_input(stdin, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    before = _litter()
+    temporary = tmp_path.parent / f"{tmp_path.name}-temporary"  # this test's own: another test's may come and go
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     stdin(Path(EXAMPLE).read_bytes())
     assert main(["info", "-"]) == 0
     assert capsys.readouterr().out.startswith("-: csv, 10368 samples × 3 channel(s)")
@@ -55,7 +53,7 @@ def test_samples_and_results_come_from_standard_input(stdin, tmp_path, monkeypat
     stdin('{"rho_d": [0.4]}')
     assert main(["synth", "--model", "lambert", "--params", "-", "--geometry", "in-plane", "-o", "grey.csv"]) == 0
     assert (tmp_path / "grey.csv").read_text().startswith("theta_i,phi_i,theta_o,phi_o,value")
-    assert _litter() == before
+    assert list(temporary.iterdir()) == []  # every temporary copy removed
 
 
 def test_products_go_to_standard_output_and_the_rest_to_standard_error(stdin, tmp_path, monkeypatch, capsys):
