@@ -126,6 +126,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else [str(argument) for argument in argv]
     resume_writing()
     try:
+        if argv[:1] == ["--print-completion"]:
+            return _print_completion(argv[1:])
         with _signals_stop_writing():
             args = build_parser(_command_in(argv)).parse_args(argv)
             product = is_standard(getattr(args, "output", None))  # -o -, convert's OUT -: a product on stdout
@@ -239,8 +241,9 @@ def _warn_in_one_line() -> None:
     warnings.simplefilter("ignore", UncertaintyWarning)
 
 
-def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser, with the arguments of ``command`` (None: every command named, none configured)."""
+def build_parser(command: str | None = None, every: bool = False) -> argparse.ArgumentParser:
+    """The parser, with the arguments of ``command`` (None: every command named, none configured; ``every``: every
+    command configured, as shell completion needs it)."""
     parser = _Parser(
         prog="brdffit",
         description="Fit analytic BRDF models to measured reflectance samples.",
@@ -248,6 +251,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"brdffit {__version__}")
     parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
+    parser.add_argument(
+        "--print-completion",
+        metavar="SHELL",
+        help="print the shell completion script of every command, for bash, zsh or tcsh (brdffit --print-completion"
+        " bash > ~/.local/share/bash-completion/completions/brdffit)",
+    )
     commands = parser.add_subparsers(title="commands", metavar="COMMAND", required=True)
     for name, summary in COMMANDS.items():
         subparser = commands.add_parser(
@@ -261,11 +270,36 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         # Given after the command as well; unset there, the top level's value stands (argparse: a subparser's default
         # would overwrite it).
         subparser.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
-        if name == command:
+        if name == command or every:
             module = importlib.import_module(f".{name}", __name__)
             module.configure(subparser)
             subparser.set_defaults(run=module.run, declared_files=module.files)
     return parser
+
+
+#: The shells ``--print-completion`` writes a script for (shtab's).
+COMPLETION_SHELLS = ("bash", "zsh", "tcsh")
+
+
+def _print_completion(words: list[str]) -> int:
+    """``brdffit --print-completion SHELL``: shtab's completion script of every command and option, completing file
+    names where an argument names a file (``arguments.FILE_METAVARS``)."""
+    import shtab
+
+    from .arguments import FILE_METAVARS
+
+    if len(words) != 1 or words[0] not in COMPLETION_SHELLS:
+        raise UsageError(f"--print-completion takes one shell: {', '.join(COMPLETION_SHELLS)}")
+    parser = build_parser(every=True)
+    parsers = [parser]
+    while parsers:
+        for action in parsers.pop()._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                parsers += action.choices.values()
+            elif action.metavar in FILE_METAVARS:
+                action.complete = shtab.FILE
+    print(shtab.complete(parser, shell=words[0]))
+    return EXIT_OK
 
 
 def _command_in(argv: list[str]) -> str | None:

@@ -26,6 +26,10 @@ FLAGS = {
     "output": "-o",
 }
 
+#: The metavars of arguments that name a file (shell completion completes file names there;
+#: ``tests/cli/test_collisions.py`` checks each such argument is declared among its command's files).
+FILE_METAVARS = frozenset({"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN", "OUT", "BASIS", "LIB"})
+
 
 def flag(name: str) -> str:
     """The command line's flag for the library argument ``name``."""

@@ -438,3 +438,32 @@ def test_info_models_and_batch_fits_print_json_for_scripts(tmp_path, capsys):
     assert all(load_result(row["result"]).cost == row["cost"] and row["error"] is None for row in rows)
     assert main(["fit", EXAMPLE, "--model", "lambert", "-o", "-", "--json"]) == 2
     assert "--json prints to standard output, where -o - sends the result" in capsys.readouterr().err
+
+
+def test_shell_completion_completes_commands_options_and_file_names(tmp_path, capsys):
+    """``--print-completion bash`` prints shtab's script for every command; bash, sourcing it, completes a command, an
+    option and a file name where an argument names a file (what a user's shell does on Tab)."""
+    import shutil
+
+    assert main(["--print-completion", "bash"]) == 0
+    script = tmp_path / "brdffit.bash"
+    script.write_text(capsys.readouterr().out)
+    (tmp_path / "oak.csv").write_text("")
+    if shutil.which("bash") is None:
+        pytest.skip("bash is not installed")
+
+    def complete(*words: str) -> list[str]:
+        line = " ".join(["brdffit", *words])
+        code = (
+            f"source {script}; COMP_WORDS=(brdffit {' '.join(words)}); COMP_CWORD={len(words)};"
+            f" COMP_LINE='{line}'; COMP_POINT={len(line)}; _shtab_brdffit; echo ${{COMPREPLY[@]}}"
+        )
+        done = subprocess.run(["bash", "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.split()
+
+    assert complete("ex") == ["export"]
+    assert complete("export", "--t") == ["--to"]
+    assert complete("fit", "oa") == ["oak.csv"]
+    assert main(["--print-completion", "fish"]) == 2
+    assert "--print-completion takes one shell: bash, zsh, tcsh" in capsys.readouterr().err

@@ -11,9 +11,8 @@ from paths import EXAMPLE, EXAMPLE_PARAMS
 
 from brdffit import fit
 from brdffit.cli import COMMANDS, build_parser, main
+from brdffit.cli.arguments import FILE_METAVARS
 
-#: Metavars of arguments that name a file: each such argument must be declared by its command's ``files``.
-FILE_METAVARS = {"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN", "OUT", "BASIS", "LIB"}
 #: Metavars of every other argument (a number, a name, a list of names or values, an address).
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
