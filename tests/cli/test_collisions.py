@@ -17,7 +17,7 @@ from brdffit.cli.arguments import FILE_METAVARS
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
     "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL", "NAME[,…]", "true|false",
-    "ETA",
+    "ETA", "SHELL",
 }  # fmt: skip
 
 
