@@ -79,3 +79,14 @@ def test_a_program_says_whether_it_is_compiled(monkeypatch):
     assert doubled.is_compiled(np.ones(3)) and not doubled.is_compiled(np.ones(4))
     doubled.precompile(jax.ShapeDtypeStruct((4,), np.float64))
     assert doubled.is_compiled(np.ones(4))
+
+
+def test_compiler_options_the_running_xla_does_not_know_are_left_out():
+    """A private XLA flag a jaxlib does not know (jax 0.8 refuses one of brdffit's) is dropped, not fatal: the others
+    are kept, and a program compiles with what is left."""
+    from brdffit._programs.jit import CPU_COMPILER_OPTIONS, known_options
+
+    options = CPU_COMPILER_OPTIONS | {"xla_cpu_no_such_option_anywhere": True}
+    kept = known_options(options)
+    assert kept == CPU_COMPILER_OPTIONS  # this jaxlib (constraints.txt) knows brdffit's three
+    jax.jit(lambda x: 2.0 * x, compiler_options=kept).lower(1.0).compile()

@@ -43,8 +43,29 @@ def built_once(builder: Callable) -> Callable:
 
 @functools.cache
 def compiler_options() -> dict | None:
-    """:data:`CPU_COMPILER_OPTIONS` when JAX's default backend is the CPU, else None (XLA's defaults)."""
-    return CPU_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
+    """:data:`CPU_COMPILER_OPTIONS` that the running XLA knows (:func:`known_options`) when JAX's default backend is
+    the CPU, else None (XLA's defaults)."""
+    return known_options(CPU_COMPILER_OPTIONS) if jax.default_backend() == "cpu" else None
+
+
+def known_options(options: dict) -> dict:
+    """``options`` less those the running XLA does not know: they are private flags, which XLA adds, renames and
+    removes between releases (jax 0.8's refuses ``xla_cpu_experimental_ynn_fusion_type``: "No such compile option").
+    Found by compiling a one-operation program with them (~20 ms, once per process), each on its own where all
+    together are refused; an option that is not known only costs its speed-up."""
+
+    def accepted(chosen: dict) -> bool:
+        try:
+            jax.jit(lambda x: x + 1.0).lower(1.0).compile(compiler_options=chosen)
+        except Exception as error:  # jax.errors.JaxRuntimeError (XlaRuntimeError in older jaxlibs)
+            if "compile option" not in str(error):
+                raise
+            return False
+        return True
+
+    if accepted(options):
+        return dict(options)
+    return {name: value for name, value in options.items() if accepted({name: value})}
 
 
 def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arguments):
