@@ -219,9 +219,11 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
     line for each input whose fit is not finite (``problems``: none written).
 
     On standard output, unless the result file went there (``-o -``): then on standard error. ``-q``: the warnings
-    and errors alone.
+    and errors alone. A fit's caveats are in its table; they are said again on standard error only where the table
+    did not reach the same screen (standard output a file or a pipe): on a terminal each was printed twice.
     """
     stream = sys.stderr if outputs is None else sys.stdout
+    caveats_seen = False
     written = [None if problem else output for output, problem in zip(outputs or [None], problems, strict=True)]
     if args.quiet:  # no table nor summary, wherever it would go (-q -o -: the result alone on standard output)
         pass
@@ -231,6 +233,7 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
         print(json_text(summary_rows(args.samples, results, written, problems)), file=stream)
     elif len(results) == 1:
         print(results[0].table(source=args.samples[0]), file=stream)
+        caveats_seen = stream is sys.stderr or (sys.stdout.isatty() and sys.stderr.isatty())
         written = [*(outputs or []), args.chain, args.corner]
         if any(written):
             print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
@@ -240,7 +243,8 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
         if problem is not None:
             print(f"brdffit: error: {path}: {problem}; not written", file=sys.stderr)
             continue
-        for message in [*result.warnings, *(result.uncertainty["warnings"] if result.uncertainty else [])]:
+        caveats = [] if caveats_seen else result.warnings
+        for message in [*caveats, *(result.uncertainty["warnings"] if result.uncertainty else [])]:
             print(f"brdffit: warning: {path}: {message}", file=sys.stderr)
         if not result.converged:
             print(

@@ -467,3 +467,22 @@ def test_shell_completion_completes_commands_options_and_file_names(tmp_path, ca
     assert complete("fit", "oa") == ["oak.csv"]
     assert main(["--print-completion", "fish"]) == 2
     assert "--print-completion takes one shell: bash, zsh, tcsh" in capsys.readouterr().err
+
+
+def test_a_fits_caveats_are_said_once_where_the_table_is_seen(tmp_path, monkeypatch, capsys):
+    """The table lists a fit's caveats; the ``brdffit: warning:`` lines repeat them on standard error only where the
+    table went elsewhere (standard output a file or a pipe). On a terminal, and with ``-o -`` (the table on standard
+    error), each caveat is printed once."""
+    argv = ["fit", EXAMPLE, "--model", "cook-torrance", "--fresnel", "conductor", "-o"]
+    assert main([*argv, "-"]) == 0
+    err = capsys.readouterr().err
+    caveat = "k[r] = 1e-12 lies on an end of its domain"
+    assert err.count(caveat) == 1 and f"  warning: {caveat}" in err
+    assert main([*argv, tmp_path / "a.json"]) == 0  # standard output captured, as a pipe: standard error says them too
+    out, err = capsys.readouterr()
+    assert out.count(caveat) == 1 and err.count(caveat) == 1
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main([*argv, tmp_path / "b.json"]) == 0  # a terminal: the table is seen, its caveats not said again
+    out, err = capsys.readouterr()
+    assert out.count(caveat) == 1 and caveat not in err
