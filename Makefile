@@ -73,6 +73,7 @@ format: $(STAMP)
 # Regenerates docs/reference.md, the API reference, from the code (a test fails while it is out of date).
 docs: $(STAMP)
 	$(BIN)/python docs/reference.py
+	$(BIN)/mkdocs build --strict
 
 # Regenerates the shipped example from its parameters (Ngan et al. 2005's Ward fit of pickled-oak-260).
 examples: $(STAMP)

@@ -1,7 +1,9 @@
-"""Write docs/reference.md, the API reference, from the code: every public name's signature and docstring.
+"""Write docs/reference.md, the API reference, from the code: every public name's signature and docstring; and
+docs/api.md, the docs site's page of the same names, which mkdocstrings fills from the docstrings when the site is
+built (``mkdocs.yml``).
 
 Run ``python docs/reference.py`` (``make docs``) after changing a public signature or docstring;
-``tests/test_docs.py`` fails while the page and the code disagree, so the reference cannot drift.
+``tests/test_docs.py`` fails while the pages and the code disagree, so the reference cannot drift.
 """
 
 import inspect
@@ -11,6 +13,12 @@ from pathlib import Path
 import brdffit
 
 PAGE = Path(__file__).with_name("reference.md")
+SITE_PAGE = Path(__file__).with_name("api.md")
+SITE_HEADER = """# API reference
+
+Every name `import brdffit` offers, from its docstring (the same as [reference.md](reference.md), which reads on its
+own without the site).
+"""
 HEADER = """# API reference
 
 Generated from the code by `docs/reference.py` (`make docs`): every name `import brdffit` offers, with its signature
@@ -44,12 +52,22 @@ def entry(name: str) -> str:
     return f"## `brdffit.{name}`\n\n`{type(value).__name__}`: {shown}"
 
 
+def public_names() -> list[str]:
+    return sorted((name for name in brdffit.__all__ if name != "__version__"), key=str.lower)
+
+
 def reference() -> str:
-    names = sorted((name for name in brdffit.__all__ if name != "__version__"), key=str.lower)
-    return HEADER + "\n" + "\n\n".join(entry(name) for name in names) + "\n"
+    return HEADER + "\n" + "\n\n".join(entry(name) for name in public_names()) + "\n"
+
+
+def site_page() -> str:
+    """The site's page: a mkdocstrings block for each public name (a module's members are listed under it)."""
+    return SITE_HEADER + "\n" + "\n\n".join(f"::: brdffit.{name}" for name in public_names()) + "\n"
 
 
 if __name__ == "__main__":
+    pages = {PAGE: reference(), SITE_PAGE: site_page()}
     if "--check" in sys.argv:
-        sys.exit(0 if PAGE.read_text() == reference() else 1)
-    PAGE.write_text(reference())
+        sys.exit(0 if all(page.read_text() == text for page, text in pages.items()) else 1)
+    for page, text in pages.items():
+        page.write_text(text)

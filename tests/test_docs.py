@@ -24,7 +24,26 @@ def test_adding_a_model_defines_registers_and_fits_a_model_that_is_not_built_in(
 def test_the_api_reference_is_the_codes():
     """``docs/reference.md`` is written from the code (``docs/reference.py``): it cannot drift from the signatures."""
     run = subprocess.run([sys.executable, "docs/reference.py", "--check"], cwd=ROOT, capture_output=True, text=True)
-    assert run.returncode == 0, "docs/reference.md is out of date: run `make docs` (python docs/reference.py)"
+    assert run.returncode == 0, "docs/reference.md or api.md is out of date: run `make docs` (python docs/reference.py)"
+
+
+def test_the_docs_site_builds_strictly(tmp_path):
+    """``make docs``'s site (``mkdocs.yml``: the pages, the API from the docstrings by mkdocstrings, the files outside
+    ``docs/`` they link to) builds with ``--strict``: a broken link, a page left out of the navigation or a reference
+    mkdocstrings cannot resolve fails it. The API page lists every public name (``docs/reference.py``)."""
+    pytest.importorskip("mkdocs", reason="mkdocs is not installed (pip install 'brdffit[docs]'; the test extra has it)")
+    site = tmp_path / "site"
+    run = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(site)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    api = (site / "api" / "index.html").read_text()
+    assert ":::" not in api and all(f'id="brdffit.{name}"' in api for name in ("fit", "compare", "FitResult", "export"))
+    assert (site / "repository" / "benchmarks" / "results" / "exports" / "index.html").exists()  # linked from export.md
 
 
 def documented_calls(page: str) -> list[tuple[str, str]]:
