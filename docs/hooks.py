@@ -1,7 +1,9 @@
-"""The docs site's one hook (``mkdocs.yml``): pages link to files outside ``docs/`` (the README, the benchmarks'
+"""The docs site's hooks (``mkdocs.yml``). Pages link to files outside ``docs/`` (the README, the benchmarks'
 results, the examples), as they must for the repository to read well on its own. The site holds each such file under
 ``repository/`` (a Markdown file as a page, anything else as it is), follows their links in turn, and points every
 relative link of every page at where its target lies in the site, so that ``mkdocs build --strict`` finds each one.
+And the docstrings' Sphinx roles (``:class:`~brdffit.Samples```), which mkdocstrings leaves as text, show as the code
+they name.
 """
 
 import posixpath
@@ -62,3 +64,14 @@ def on_page_markdown(markdown, page, config, files):
         return match.group(1) + relative
 
     return LINK.sub(pointed, markdown)
+
+
+#: A Sphinx role as the docstrings write it (``:class:`~brdffit.Samples```), once rendered: the role's name before
+#: the code, and a ``~`` (Sphinx's "last part only") inside it.
+ROLE = re.compile(r":(?:class|func|meth|data|attr|mod|exc|obj):<code>~?(?:[\w.]+\.)?([^<]*)</code>")
+
+
+def on_page_content(html, page, config, files):
+    """The docstrings' Sphinx roles shown as the code they name (``Samples``, not ``:class:~brdffit.Samples``):
+    mkdocstrings renders the docstrings' Markdown, where a role is plain text."""
+    return ROLE.sub(lambda match: f"<code>{match.group(1)}</code>", html)
