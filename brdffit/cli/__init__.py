@@ -23,12 +23,12 @@ import sys
 import threading
 import warnings
 from collections.abc import Iterator
-from contextlib import contextmanager, redirect_stdout
+from contextlib import contextmanager
 
 from .._files import check_not_stopped, resume_writing, stop_writing
 from .._version import __version__
 from ..errors import BrdfInputError, BrdfWriteError, FitWarning, InputWarning, Spelled, UncertaintyWarning
-from .files import check_one_standard_input, is_standard, standard_streams
+from .files import check_one_standard_input, is_standard, printing_to, standard_streams
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
@@ -164,14 +164,8 @@ def _quiet(quiet: bool) -> Iterator[None]:
     if not quiet:
         yield
         return
-    from .files import PRODUCT_STREAM
-
-    token = PRODUCT_STREAM.set(PRODUCT_STREAM.get() or sys.stdout)
-    try:
-        with open(os.devnull, "w") as null, redirect_stdout(null):
-            yield
-    finally:
-        PRODUCT_STREAM.reset(token)
+    with open(os.devnull, "w") as null, printing_to(null):
+        yield
 
 
 def on_interrupt(signum, frame) -> None:

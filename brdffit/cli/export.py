@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     result = fit_of(args)
     path = output_file(_output(args), "-o", TARGETS[args.to].formats[kind])
     enable_compilation_cache()
-    samples = None if args.samples is None else input_path(args.samples)
+    samples = input_path(args.samples)  # None: not given
     lines = export(result, args.to, path, kind, samples, bin_centres=args.bin_centres)
     print(f"wrote {args.output if args.output == '-' else path}: {TARGETS[args.to].description} of {args.result}")
     for line in lines:

@@ -94,19 +94,38 @@ def _pairs(declared: Mapping[str, PathOrNone | Iterable[PathOrNone]]) -> tuple[t
     return tuple(pairs)
 
 
-#: Where a product sent to standard output goes: the stream of the command's standard output when ``-q`` sends its
-#: printing to the null device (``cli._quiet``); None: ``sys.stdout``.
+#: Where a product sent to standard output goes: the command's standard output while what it prints goes elsewhere
+#: (:func:`printing_to`); None: ``sys.stdout``.
 PRODUCT_STREAM: ContextVar = ContextVar("PRODUCT_STREAM", default=None)
 
 
-def write_to_standard_output(text: str) -> None:
-    """A command's product written to standard output (``-o -``) and flushed. A reader that went away before it
-    (``brdffit fit … -o - | true``) is a write error, exit status 2: the product is lost, where a table printed
-    into a closed pipe is not (``run``). Standard output then points at the null device, so that the final flush
-    cannot fail again (Python's documentation, "Note on SIGPIPE")."""
+@contextmanager
+def printing_to(stream) -> Iterator[None]:
+    """What the command prints (``sys.stdout``) goes to ``stream`` meanwhile, while its product still reaches the
+    command's standard output (:data:`PRODUCT_STREAM`): standard error while a product goes to standard output
+    (:func:`standard_streams`), the null device for ``-q``."""
+    token = PRODUCT_STREAM.set(PRODUCT_STREAM.get() or sys.stdout)
+    try:
+        with redirect_stdout(stream):
+            yield
+    finally:
+        PRODUCT_STREAM.reset(token)
+
+
+def write_to_standard_output(product: str | bytes) -> None:
+    """A command's product written to standard output (``-o -``) and flushed: text, or bytes as they are (a PNG, a
+    MERL table). A reader that went away before it (``brdffit fit … -o - | true``) is a write error, exit status 2:
+    the product is lost, where a table printed into a closed pipe is not (``run``). Standard output then points at
+    the null device, so that the final flush cannot fail again (:func:`_silenced`)."""
     stream = PRODUCT_STREAM.get() or sys.stdout
     try:
-        stream.write(text)
+        if isinstance(product, str):
+            stream.write(product)
+        elif getattr(stream, "buffer", None) is None:  # a text stream alone (a test's capture)
+            stream.write(product.decode("utf-8"))
+        else:
+            stream.flush()
+            stream.buffer.write(product)
         stream.flush()
     except BrokenPipeError:
         _silenced(stream)
@@ -149,14 +168,11 @@ def standard_streams(product: bool) -> Iterator[None]:
         if not product:
             yield
         else:
-            product_token = PRODUCT_STREAM.set(PRODUCT_STREAM.get() or sys.stdout)
-            try:
-                with redirect_stdout(sys.stderr):
-                    yield
+            with printing_to(sys.stderr):
+                yield
                 for path in streams.outputs:
-                    _copy_to_standard_output(path)
-            finally:
-                PRODUCT_STREAM.reset(product_token)
+                    if path.exists():  # else the command wrote nothing there (a fit that is not finite: said already)
+                        write_to_standard_output(path.read_bytes())
     except (BrdfInputError, BrdfWriteError) as error:  # a message that names a temporary file names "-"
         raise _renamed(error, streams) from None
     finally:
@@ -184,9 +200,9 @@ def is_standard(value) -> bool:
     return isinstance(value, str) and value == STANDARD
 
 
-def input_path(value: str) -> str:
-    """The file to read for the input ``value``: itself, or for ``-`` the copy of standard input (read at the first
-    call; a command reads one input from it)."""
+def input_path(value: str | None) -> str | None:
+    """The file to read for the input ``value``: itself (None too), or for ``-`` the copy of standard input (read at
+    the first call; a command reads one input from it)."""
     streams = _current.get()
     if not is_standard(value) or streams is None:
         return value
@@ -211,26 +227,6 @@ def output_path(value, suffix: str = "") -> Path:
 def stem(value: str) -> str:
     """The stem a default output name is made from: ``stdin`` for ``-``."""
     return "stdin" if is_standard(value) else Path(value).stem
-
-
-def _copy_to_standard_output(path: Path) -> None:
-    """The bytes of ``path`` (an output the command wrote) on standard output (the product's stream), flushed."""
-    if not path.exists():  # the command wrote nothing there (a fit that is not finite: said already)
-        return
-    stream = PRODUCT_STREAM.get() or sys.stdout
-    try:
-        target = getattr(stream, "buffer", None)
-        if target is None:
-            stream.write(path.read_bytes().decode("utf-8"))
-        else:
-            stream.flush()
-            target.write(path.read_bytes())
-        stream.flush()
-    except BrokenPipeError:
-        _silenced(stream)
-        raise BrdfWriteError(
-            "-o -: standard output was closed before the output was written (its reader went away); nothing was written"
-        ) from None
 
 
 def _silenced(stream) -> None:

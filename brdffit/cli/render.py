@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
 
     enable_compilation_cache()  # the export's programs, compiled once per machine (as export's)
-    samples = None if args.samples is None else input_path(args.samples)
+    samples = input_path(args.samples)  # None: not given
     exported = render_sphere(result, path, size=args.size, spp=args.spp, exposure=exposure, samples=samples)
     print(f"wrote {output if output == '-' else path}: Mitsuba 3 rendered a sphere of {args.result}")
     for line in exported.comment_lines()[1:]:
