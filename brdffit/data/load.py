@@ -112,20 +112,21 @@ def load_samples(
     """
     choice("angles", angles, ANGLE_UNITS)
     given = None if quantity is None else canonical(quantity)
-    if _is_data_frame(path):
-        if format not in (None, "csv"):
-            raise BrdfInputError(
-                Argument("format", repr(format)), " does not apply to a DataFrame (read as a CSV's table)"
-            )
-        samples = read_data_frame(path, angles)
-        return _as_quantity(samples, given, None, spectral_to, illuminant, observer)
-    path = Path(path)
-    kind = detect_format(path, format)
+    frame = _is_data_frame(path)
+    if frame and format not in (None, "csv"):
+        raise BrdfInputError(Argument("format", repr(format)), " does not apply to a DataFrame (read as a CSV's table)")
+    where = "the DataFrame" if frame else Path(path)
+    kind = "csv" if frame else detect_format(where, format)
     if kind != "csv" and angles != "degrees":
-        raise BrdfInputError(Argument("angles"), f" applies to CSV files; {path} is {kind} (its angle units are fixed)")
+        raise BrdfInputError(
+            Argument("angles"), f" applies to CSV files; {where} is {kind} (its angle units are fixed)"
+        )
     for name, given_here in (("subsample", subsample is not None), ("bin_centres", bool(bin_centres))):
         if kind != "merl" and given_here:
-            raise BrdfInputError(Argument(name), f" applies to MERL files; {path} is {kind}")
+            raise BrdfInputError(Argument(name), f" applies to MERL files; {where} is {kind}")
+    if frame:  # a CSV's table, without a file or its header
+        return _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer)
+    path = where
     reader_options = {
         "csv": {"angles": angles},
         "merl": {

@@ -205,6 +205,8 @@ def test_a_pandas_data_frame_with_the_csvs_columns_is_read_as_the_csv_is():
         load_samples(bad)
     with pytest.raises(BrdfInputError, match=r"^DataFrame: columns: .*value"):
         load_samples(frame[["theta_i", "phi_i", "theta_o", "phi_o"]])
+    with pytest.raises(BrdfInputError, match=r"^subsample applies to MERL files; the DataFrame is csv$"):
+        load_samples(frame, subsample=5)  # as for a CSV file: an option it cannot take is refused, not ignored
     words = frame.iloc[:3].astype(object)
     words.loc[1, "r"] = "bright"
     with pytest.raises(BrdfInputError, match=r"^DataFrame: row 1, column 'r': 'bright' is not a number$"):
