@@ -78,38 +78,39 @@ def fitting_grid(
     alone, for a BRDF that is the same at ``φo`` and ``−φo`` (:func:`mirror_symmetric`): the azimuths' midpoints lie
     in mirror pairs (``φo`` and ``360° − φo``), so the half grid's cost is half the whole one's at every parameter, and
     its optimum the same."""
+    if symmetric and turns != 1:
+        raise ValueError("a mirror-symmetric grid has the light at azimuth 0 alone (turns = 1)")
     wi, wo = dense_grid(shape, turns)
     if not symmetric:
         return wi, wo
-    if turns != 1:
-        raise ValueError("a mirror-symmetric grid has the light at azimuth 0 alone (turns = 1)")
     upper = wo[:, 1] > 0.0
     return wi[upper], wo[upper]
 
 
-#: A BRDF whose values at ``φo`` and ``−φo`` agree within this (relative) is mirror-symmetric: float64 rounding.
+#: A BRDF whose values at two symmetric pairs agree within this (relative) has the symmetry: float64 rounding.
 SYMMETRY_TOLERANCE = 1e-9
 
 
 def mirror_symmetric(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> bool:
     """Whether ``brdf(wi, wo) -> (N, C)`` is the same with the viewer mirrored about the plane of incidence (``wo_y →
     −wo_y``, the light at azimuth 0): every isotropic BRDF, and an anisotropic one whose axes lie along and across
-    that plane. Checked on the coarse grid (:data:`COARSE_GRID`)."""
-    wi, wo = dense_grid(COARSE_GRID)
-    values, mirrored = (np.asarray(brdf(wi, w)) for w in (wo, wo * np.array([1.0, -1.0, 1.0])))
-    return bool(np.all(np.abs(values - mirrored) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
+    that plane (:func:`_unchanged`)."""
+    return _unchanged(brdf, lambda wi, wo: (wi, wo * np.array([1.0, -1.0, 1.0])))
 
 
 def isotropic(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> bool:
     """Whether ``brdf(wi, wo) -> (N, C)`` is the same with both directions turned about the normal (by 50°, an angle
-    no lobe's symmetry hides), within :data:`SYMMETRY_TOLERANCE`: an anisotropic BRDF is not. Checked on the coarse
-    grid (:data:`COARSE_GRID`)."""
-    wi, wo = dense_grid(COARSE_GRID)
+    no lobe's symmetry hides): an anisotropic BRDF is not (:func:`_unchanged`)."""
     turn = np.radians(50.0)
-    values, rotated = (
-        np.asarray(brdf(*pair)) for pair in ((wi, wo), (in_turned_frame(wi, turn), in_turned_frame(wo, turn)))
-    )
-    return bool(np.all(np.abs(values - rotated) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
+    return _unchanged(brdf, lambda wi, wo: (in_turned_frame(wi, turn), in_turned_frame(wo, turn)))
+
+
+def _unchanged(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], change: Callable) -> bool:
+    """Whether ``brdf`` has the same values, within :data:`SYMMETRY_TOLERANCE`, at the coarse grid's pairs
+    (:data:`COARSE_GRID`) and at those pairs changed by ``change(wi, wo) -> (wi, wo)``."""
+    wi, wo = dense_grid(COARSE_GRID)
+    values, changed = (np.asarray(brdf(*pair)) for pair in ((wi, wo), change(wi, wo)))
+    return bool(np.all(np.abs(values - changed) <= SYMMETRY_TOLERANCE * np.maximum(np.abs(values), 1e-300)))
 
 
 def plane_of_incidence(shape: tuple[int, int, int] = GRID, turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
