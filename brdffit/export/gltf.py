@@ -425,13 +425,11 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
         notes = [*notes, "exact: the fitted glTF material, its numbers unchanged", *_tangent_notes(exact)]
         return exact, approximation, notes, plan
     known = reference(result)
+    rgb = _in_rgb(known) if plan == "xyz" else known
     if known.turns > 1:
-        material, fit_notes = _anisotropic_material(known, plan)
+        material, fit_notes = _anisotropic_material(rgb)
     else:
-        fine, coarse = (
-            (samples.wi, samples.wo, samples.values @ _xyz_to_rgb_matrix().T if plan == "xyz" else samples.values)
-            for samples in (known.fine, known.coarse)
-        )
+        fine, coarse = ((samples.wi, samples.wo, samples.values) for samples in (rgb.fine, rgb.coarse))
         material, fit_notes = fit_material(*fine, result.loss, search=coarse)
     approximation = approximation_error(result, _in_channels(material, plan), known)
     warnings = approximation.warnings("glTF's metallic-roughness BRDF")
@@ -444,17 +442,12 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
 NO_COAT = Holding(fixed={"clearcoat": 0.0})
 
 
-def _anisotropic_material(known: Reference, plan: str) -> tuple[GltfMaterial, list[str]]:
+def _anisotropic_material(known: Reference) -> tuple[GltfMaterial, list[str]]:
     """glTF's material fitted to an anisotropic fit (``known``, its grids with the light at several azimuths:
-    ``approximate.isotropic``): brdffit's ``gltf`` model (the same BRDF, ``physics/renderers/gltf.py``, with
-    ``KHR_materials_anisotropy``'s strength and rotation and ``KHR_materials_ior``'s index freed, no coat:
-    :data:`NO_COAT`) refitted coarse to fine (``approximate.coarse_refit``, ``approximate.refined``) in linear RGB
-    (``plan``: XYZ converted first), and the notes on it."""
-    if plan == "xyz":
-        to_rgb = _xyz_to_rgb_matrix().T
-        known = dataclasses.replace(
-            known, **{grid: _rgb_samples(getattr(known, grid), to_rgb) for grid in ("fine", "coarse")}
-        )
+    ``approximate.isotropic``; in linear RGB or grey, :func:`_in_rgb`): brdffit's ``gltf`` model (the same BRDF,
+    ``physics/renderers/gltf.py``, with ``KHR_materials_anisotropy``'s strength and rotation and ``KHR_materials_ior``'s
+    index freed, no coat: :data:`NO_COAT`) refitted coarse to fine (``approximate.coarse_refit``,
+    ``approximate.refined``), and the notes on it."""
     fitted = refined(known, coarse_refit(known, "gltf", NO_COAT), NO_COAT)
     notes = [
         "anisotropic: glTF's BRDF with KHR_materials_anisotropy fitted to it (brdffit's gltf model, its tangent found"
@@ -464,11 +457,17 @@ def _anisotropic_material(known: Reference, plan: str) -> tuple[GltfMaterial, li
     return material, notes + _tangent_notes(material)
 
 
-def _rgb_samples(samples: Samples, to_rgb: np.ndarray) -> Samples:
-    """Tabulated XYZ values as linear sRGB samples (``to_rgb``: :func:`_xyz_to_rgb_matrix`, transposed)."""
-    return Samples.from_arrays(
-        samples.wi, samples.wo, samples.values @ to_rgb, channels=("r", "g", "b"), source=samples.source
-    )
+def _in_rgb(known: Reference) -> Reference:
+    """``known`` (a fit in CIE XYZ) with its tabulated grids in linear sRGB (:func:`_xyz_to_rgb_matrix`), which glTF's
+    material is fitted in; its error is still measured in XYZ (:func:`_in_channels`)."""
+    to_rgb = _xyz_to_rgb_matrix().T
+
+    def converted(samples: Samples) -> Samples:
+        return Samples.from_arrays(
+            samples.wi, samples.wo, samples.values @ to_rgb, channels=("r", "g", "b"), source=samples.source
+        )
+
+    return dataclasses.replace(known, fine=converted(known.fine), coarse=converted(known.coarse))
 
 
 def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:
