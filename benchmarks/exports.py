@@ -49,7 +49,23 @@ FITS = {
         "--shadowing",
         "smith",
     ],
+    "ward-aniso": ["--model", "ward-aniso"],  # fitted to the brushed samples (BRUSHED)
 }
+#: The brushed material's samples: ``brdffit synth`` options (seeded), fitted as ``FITS["ward-aniso"]``.
+BRUSHED = [
+    "--model",
+    "ward-aniso",
+    "--params",
+    '{"rho_d": [0.2, 0.15, 0.1], "rho_s": [0.3, 0.3, 0.3], "alpha_x": 0.05, "alpha_y": 0.4}',
+    "--geometry",
+    "random",
+    "--n-samples",
+    "5000",
+    "--noise",
+    "0.01",
+    "--seed",
+    "1",
+]
 #: The render's size and samples per pixel (``brdffit render``'s defaults).
 RENDER = ["--size", "256", "--spp", "64"]
 
@@ -161,8 +177,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-exports-") as folder:
         folder = Path(folder)
         cache = Path(tempfile.mkdtemp(prefix="cache-fits-", dir=folder))
+        brushed = folder / "brushed.csv"
+        brdffit(ROOT, "synth", *BRUSHED, "-o", str(brushed), cache=cache)
         for name, options in FITS.items():
-            brdffit(ROOT, "fit", str(EXAMPLE), *options, "-o", str(folder / f"{name}.json"), cache=cache)
+            data = brushed if name == "ward-aniso" else EXAMPLE
+            brdffit(ROOT, "fit", str(data), *options, "-o", str(folder / f"{name}.json"), cache=cache)
             print(f"  fitted {name}", flush=True)
         results = {
             "date": datetime.date.today().isoformat(),

@@ -21,12 +21,15 @@ import collections
 import hashlib
 import threading
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .quantities import stored_factor
 from .samples import Samples
+
+if TYPE_CHECKING:  # scipy.spatial takes 0.3 s to import: every fit imports this module, few look pairs up
+    from scipy.spatial import cKDTree
 
 #: Below this many pairs the check says nothing.
 MIN_PAIRS = 20
@@ -203,7 +206,7 @@ def _canonical(first: np.ndarray, second: np.ndarray) -> np.ndarray:
     return np.column_stack([first_x, np.zeros(len(first)), first[:, 2], second_x, second_y, second[:, 2]])
 
 
-def tolerance(points: np.ndarray, tree: cKDTree | None = None) -> float:
+def tolerance(points: np.ndarray, tree: "cKDTree | None" = None) -> float:
     """The distance (radians, :func:`_points`) within which a partner is taken for the swapped point:
     :data:`SPACING_FRACTION` of the median distance from a sample to its nearest distinct neighbour (at most
     :data:`SPACING_SAMPLE` samples asked, a seeded choice), within [:data:`MIN_TOLERANCE`, :data:`MAX_TOLERANCE`].
@@ -212,6 +215,8 @@ def tolerance(points: np.ndarray, tree: cKDTree | None = None) -> float:
     the cap keeps a dense file's pairs close enough that a sharp lobe (a retro peak a few degrees wide) does not
     change between a pair's two samples."""
     if tree is None:
+        from scipy.spatial import cKDTree
+
         tree = cKDTree(points)
     asked = points
     if len(points) > SPACING_SAMPLE:
@@ -233,6 +238,8 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     every sample's point, its nearest taken within :func:`tolerance`. Not asked: a sample whose cosines differ by
     less than :data:`INFORMATIVE`, or that lies within twice the tolerance of its own swapped point (``wi`` near
     ``wo``: it would pair with itself or its neighbour); their ratios say nothing of a cosine factor."""
+    from scipy.spatial import cKDTree
+
     points, partners = _points(samples, general)
     tree = cKDTree(points, balanced_tree=False, compact_nodes=False)  # ~2× faster to build, as fast to query
     within = tolerance(points, tree)

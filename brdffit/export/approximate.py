@@ -281,6 +281,11 @@ def grid_rmse(known: Reference, brdf: Callable[[np.ndarray, np.ndarray], np.ndar
 #: float32 solve and its float64 refinement that a search from the grid's starts took cost a program more, and ended
 #: at the same optimum to 8 digits on the oak example's Ward fit).
 REFIT_SOLVING = Solving()
+#: How a renderer's model is solved on the coarse grid: to find the valley its optimum lies in, at most 64 steps. Its
+#: stand-ins' coarse solves creep along a flat valley and had not converged after 1,024 steps; refined from 32, 64, 256
+#: or 1,024 steps they ended at the same optimum (costs equal to 9 digits on the oak example's Ward fit; the
+#: anisotropic stand-ins of a ``ward-aniso`` fit to 6), and the coarse steps were most of an export's time.
+COARSE_SOLVING = Solving(max_steps=64)
 
 
 def refit(
@@ -301,11 +306,13 @@ def coarse_refit(
     known: Reference, model: Model | str, holding: Holding = HOLDING_NOTHING, **model_options
 ) -> FitResult:
     """``model`` fitted to the BRDF of ``known`` (a :class:`Reference`) on its coarse grid with the fit's loss and
-    every start a fit searches: where the optimum lies, found on 2,160 pairs. Every parameter the renderer's model has
+    every start a fit searches, at most :data:`COARSE_SOLVING`'s steps, without caveats (the samples are a model's
+    values): where the optimum lies, found on 2,160 pairs. Every parameter the renderer's model has
     is free (a conductor's ``ks`` too, which a fit holds at 1 by default: the renderer's ``specular_reflectance``
     takes any value) but what ``holding`` holds (a renderer's range: ``{"ks": (0, 1)}``)."""
     model = get_model(model, **model_options)
-    return fit_one(known.coarse, model, known.result.loss, holding=_freed(model, holding))
+    holding = _freed(model, holding)
+    return fit_one(known.coarse, model, known.result.loss, solving=COARSE_SOLVING, holding=holding, caveats=False)
 
 
 def refined(known: Reference, coarse: FitResult, holding: Holding = HOLDING_NOTHING) -> FitResult:
@@ -318,8 +325,8 @@ def refined(known: Reference, coarse: FitResult, holding: Holding = HOLDING_NOTH
     try:
         start_vector(model, coarse.params, len(coarse.channels))
     except BrdfInputError:  # a shape run off to where no fit moves (a conductor's eta of 10⁸): every start searched
-        return fit_one(known.fine, model, loss, solving=REFIT_SOLVING, holding=holding)
-    return fit_one(known.fine, model, loss, start=coarse.params, solving=REFIT_SOLVING, holding=holding)
+        return fit_one(known.fine, model, loss, solving=REFIT_SOLVING, holding=holding, caveats=False)
+    return fit_one(known.fine, model, loss, start=coarse.params, solving=REFIT_SOLVING, holding=holding, caveats=False)
 
 
 def _freed(model: Model, holding: Holding) -> Holding:

@@ -122,8 +122,8 @@ def _model_values(theta, wi, wo, n_channels: int, extended: bool):
     return values[:, :n_channels]
 
 
-@jit(static_argnames=("loss_name", "n_channels", "extended"))
-def _solve(theta, wi, wo, measured, *, loss_name: str, n_channels: int, extended: bool):
+@jit(static_argnums=(4, 5, 6))  # positional, so that a later process runs the stored program (``_programs/jit.py``)
+def _solve(theta, wi, wo, measured, loss_name: str, n_channels: int, extended: bool):
     """Levenberg-Marquardt from ``theta`` on the residuals ``T(f) − T(y)`` (N, C) of the loss ``loss_name``: the
     optimum, its sum of squared residuals ``Σ r²``, the step count and whether the solver met its tolerances.
 
@@ -264,7 +264,7 @@ def fit_material(wi, wo, values, loss: str = "log", search=None) -> tuple[GltfMa
     n_channels = values.shape[1]
 
     def solved(theta, extended: bool, pairs) -> _Solved:
-        found = _solve(jnp.asarray(theta), *pairs, loss_name=loss_name, n_channels=n_channels, extended=extended)
+        found = _solve(jnp.asarray(theta), *pairs, loss_name, n_channels, extended)
         return _Solved(np.asarray(found[0]), float(found[1]), int(found[2]), bool(found[3]))
 
     searched = (wi, wo, values) if search is None else tuple(np.asarray(a, dtype=np.float64) for a in search)

@@ -216,21 +216,22 @@ class GltfMaterial:
 
     def brdf(self, wi, wo) -> np.ndarray:
         """This material's BRDF (N, 3) in 1/sr at direction pairs ``wi``, ``wo`` (N, 3) (:func:`gltf_brdf`)."""
-        with float64():
-            values = _gltf_brdf_compiled(
-                np.asarray(self.base_color),
-                self.metallic,
-                self.roughness,
-                1.0 if self.specular is None else self.specular,
-                np.asarray(self.specular_color or (1.0, 1.0, 1.0)),
-                DEFAULT_IOR if self.ior is None else self.ior,
-                np.array([self.clearcoat, self.clearcoat_roughness]),
-                np.array([self.anisotropy_strength, self.anisotropy_rotation]),
-                np.asarray(self.sheen_color),
-                self.sheen_roughness,
-                np.asarray(wi, dtype=np.float64),
-                np.asarray(wo, dtype=np.float64),
-            )
+        arguments = (
+            self.base_color,
+            self.metallic,
+            self.roughness,
+            1.0 if self.specular is None else self.specular,
+            self.specular_color or (1.0, 1.0, 1.0),
+            DEFAULT_IOR if self.ior is None else self.ior,
+            (self.clearcoat, self.clearcoat_roughness),
+            (self.anisotropy_strength, self.anisotropy_rotation),
+            self.sheen_color,
+            self.sheen_roughness,
+            wi,
+            wo,
+        )
+        with float64():  # every argument an array, so that a later process runs the stored program (``_programs``)
+            values = _gltf_brdf_compiled(*(np.asarray(argument, dtype=np.float64) for argument in arguments))
         return np.asarray(values)
 
     def material_object(self, name: str, extras: dict[str, Any] | None = None) -> dict[str, Any]:

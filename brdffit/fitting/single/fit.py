@@ -52,15 +52,23 @@ def fit_one(
     start: dict[str, Any] | None = None,
     solving: Solving = SOLVING,
     holding: Holding = HOLDING_NOTHING,
+    caveats: bool = True,
     **model_options: Any,
 ) -> FitResult:
-    """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`."""
-    return fit_checked(checked(samples, model, loss, max_theta, holding, **model_options), solving, start)
+    """Fit ``model`` to ``samples`` by minimising ``loss``; the arguments are those of :func:`brdffit.fit`, and
+    ``caveats`` those of :func:`fit_checked`."""
+    setup = checked(samples, model, loss, max_theta, holding, **model_options)
+    return fit_checked(setup, solving, start, caveats=caveats)
 
 
 @float64
-def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = None) -> FitResult:
-    """The fit of what :func:`checked` passed, from ``start`` (a parameter dictionary) or the data's own starts."""
+def fit_checked(
+    setup: Setup, solving: Solving, start: dict[str, Any] | None = None, *, caveats: bool = True
+) -> FitResult:
+    """The fit of what :func:`checked` passed, from ``start`` (a parameter dictionary) or the data's own starts.
+    ``caveats=False``: the result says only what the fit held (a parameter on its bound), not what the data may hide
+    (``caveats.py``): for samples that are a model's own values (an export's refit), where the caveats' screens and
+    checks would cost more than the solve and say nothing."""
     model, loss, samples, constraints, max_theta = setup
     if not isinstance(model, LobeModel | PcaModel):
         raise BrdfInputError(
@@ -86,10 +94,12 @@ def fit_checked(setup: Setup, solving: Solving, start: dict[str, Any] | None = N
             dtype,
             fewer_lobes_cost,
             max_theta,
-            more_caveats=by_lobe.caveats(loss, solving.n_starts),
+            more_caveats=by_lobe.caveats(loss, solving.n_starts) if caveats else (),
             constraints=constraints,
+            with_caveats=caveats,
         )
-    fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=default_strategy())  # for one dataset
+    strategy = default_strategy()
+    fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=strategy, caveats=caveats)  # one dataset
     given = None if start is None else start_vector(model, start, samples.n_channels)[None]
     thetas = fit.starts(given)  # start: the given one, or the grid's best shapes, raced
     solved = fit.solve(thetas)  # solve: Levenberg-Marquardt

@@ -73,18 +73,24 @@ def result_of(
     more_caveats: Sequence[str] = (),
     constraints: Constraints | None = None,
     params: Params | None = None,
+    with_caveats: bool = True,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
     ``samples`` are those fitted, selected by ``max_theta``. ``screened``: what the caveats' screens found for this fit,
     when the caller screened many fits at once (``caveats.screen_bucket``). ``constraints``: what the fit
     held; its fixed values are written exactly, and a parameter that ended on a bound is said. ``params``: the
-    solve's :func:`final_params`, when the caller has them."""
+    solve's :func:`final_params`, when the caller has them. ``with_caveats=False``: only what the constraints say
+    (``fit.fit_checked``)."""
     converged = bool(solved.converged)
     params = final_params(model, solved, samples.n_channels) if params is None else params
     params = canonical_params(model, params, constraints)
     if constraints is not None:
         params = constraints.within_bounds(constraints.with_fixed(params))
         more_caveats = [*constraints.bound_warnings(solved.theta), *more_caveats]
+    found = []
+    if with_caveats:
+        held = frozenset(() if constraints is None else constraints.fixed)
+        found = caveats(model, samples, params, float(solved.cost), fewer_lobes_cost, screened=screened, held=held)
     return FitResult(
         model=model.name,
         model_options=model.model_options,
@@ -100,18 +106,7 @@ def result_of(
         converged=converged,
         message="" if converged else failure_message(int(solved.result), max_steps),
         dtype=dtype,
-        warnings=[
-            *caveats(
-                model,
-                samples,
-                params,
-                float(solved.cost),
-                fewer_lobes_cost,
-                screened=screened,
-                held=frozenset(() if constraints is None else constraints.fixed),
-            ),
-            *more_caveats,
-        ],
+        warnings=[*found, *more_caveats],
         quantity=samples.provenance.quantity if samples.provenance else None,
         max_theta=max_theta,
         fixed={} if constraints is None else dict(constraints.fixed),

@@ -78,6 +78,7 @@ class StackedFit:
         strategy: str,
         stack: int | None = None,
         on_stage: Callable[[str], None] | None = None,
+        caveats: bool = True,
     ):
         self.model, self.loss, self.samples, self.hold = model, loss, list(samples), hold
         max_steps, dtype = solving.max_steps, solving.dtype
@@ -91,7 +92,8 @@ class StackedFit:
         )
         self.solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
         self.budget = step_budget(max_steps)
-        self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count))
+        self.caveats = caveats
+        self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count)) if caveats else None
 
     @float64
     def starts(self, given: np.ndarray | None = None) -> np.ndarray:
@@ -165,8 +167,10 @@ class StackedFit:
         each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(self.samples))]
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
-        self._screen_compiling.join()
-        screens = screen_bucket(self.model, params, self.samples, self.count)
+        screens = [None] * len(params)
+        if self.caveats:
+            self._screen_compiling.join()
+            screens = screen_bucket(self.model, params, self.samples, self.count)
         return [
             result_of(
                 self.model,
@@ -179,6 +183,7 @@ class StackedFit:
                 screened=screened,
                 constraints=constraints,
                 params=fitted,
+                with_caveats=self.caveats,
             )
             for samples, one, fitted, screened in zip(self.samples, each, params, screens, strict=True)
         ]

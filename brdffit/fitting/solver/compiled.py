@@ -239,8 +239,6 @@ def outcome_of(result):
 
 def failure_message(outcome: int, max_steps: int) -> str:
     """Why a solve that ended with ``outcome`` (an index into :data:`OUTCOMES`) did not converge."""
-    import optimistix as optx
-
     if outcome >= len(OUTCOMES):
         return "the solver stopped for a reason brdffit does not know (optimistix's result is new)"
     name = OUTCOMES[outcome]
@@ -249,4 +247,6 @@ def failure_message(outcome: int, max_steps: int) -> str:
             f"the maximum number of solver steps ({max_steps}) was reached before the tolerances were met;"
             " allow more steps"
         )
+    import optimistix as optx  # 0.3 s to import: a fit that runs stored programs needs it for this message alone
+
     return optx.RESULTS[getattr(optx.RESULTS, name)]
