@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-heavy bench bench-pca bench-renderers bench-exports bench-reading bench-threads lint format docs examples clean
+.PHONY: demo test test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-reading bench-threads lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -28,8 +28,33 @@ $(VALIDATOR): $(STAMP)
 test: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q
 
+# The lowest versions pyproject.toml allows (issue 30: what `pip install brdffit` may give a user): a second venv
+# resolved by uv with --resolution lowest-direct (every direct dependency at its lower limit), the shipped example
+# fitted, and the tests of LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver,
+# the stored programs, pandas and colour-science, Dask, the command line's streams and extras (~10 minutes on 2
+# cores). Needs the package index; CI runs it after `make test`.
+LOWEST := .venv-lowest
+LOWEST_TESTS := tests/physics tests/export tests/uncertainty tests/fitting/test_fit.py tests/fitting/test_solver.py \
+	tests/data/test_formats.py tests/data/test_spectral.py tests/cli/test_streams.py tests/cli/test_extras.py \
+	tests/test_cluster.py tests/test_programs.py tests/test_jit.py tests/test_float64.py tests/test_startup.py
+test-lowest: $(STAMP) $(VALIDATOR)
+	$(BIN)/python -m pip install --quiet 'uv>=0.5'
+	rm -rf $(LOWEST)
+	$(BIN)/uv venv --quiet --python $(BIN)/python $(LOWEST)
+	$(BIN)/uv pip install --quiet --python $(LOWEST)/bin/python --resolution lowest-direct '.[test]'
+	$(LOWEST)/bin/python -c "import jax, numpy, optimistix, equinox; print('lowest:', 'jax', jax.__version__, \
+		'numpy', numpy.__version__, 'optimistix', optimistix.__version__, 'equinox', equinox.__version__)"
+	$(LOWEST)/bin/brdffit fit examples/ward-pickled-oak.csv --model ward -q -o $(LOWEST)/ward-pickled-oak.json
+	$(LOWEST)/bin/python -m pytest -n 2 -q $(LOWEST_TESTS)
+
 test-heavy: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q -m heavy
+
+# The notebooks run in Jupyter's kernel, their outputs kept in the files (issue 30; ~3 minutes): run it after a change
+# that changes what they show. tests/test_notebooks.py checks that every code cell kept its output.
+notebooks: $(STAMP)
+	$(BIN)/python -m pip install --quiet 'nbclient>=0.10' ipykernel
+	$(BIN)/python notebooks/execute.py
 
 # The benchmarks of issues 3 and 4 (not tests): ~30 minutes, prints a table, writes benchmarks/results/latest.{json,md}.
 bench: $(STAMP)

@@ -231,10 +231,18 @@ def _computed_as_jvp(function, primals, tangents):
 def outcome_of(result):
     """The index into :data:`OUTCOMES` of optimistix's ``result`` (JAX), ``len(OUTCOMES)`` for one it does not
     list."""
+    known = [(index, item) for index, item in enumerate(map(_result_item, OUTCOMES)) if item is not None]
+    return jnp.select([result == item for _, item in known], [index for index, _ in known], len(OUTCOMES))
+
+
+def _result_item(name: str):
+    """optimistix's ``RESULTS.<name>``, or None where this optimistix has none (``nonfinite`` came in 0.1.0)."""
     import optimistix as optx
 
-    ended = [result == getattr(optx.RESULTS, name) for name in OUTCOMES]
-    return jnp.select(ended, list(range(len(OUTCOMES))), len(OUTCOMES))
+    try:
+        return getattr(optx.RESULTS, name)
+    except (AttributeError, KeyError):  # its enumeration's lookup raises KeyError
+        return None
 
 
 def failure_message(outcome: int, max_steps: int) -> str:
