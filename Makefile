@@ -87,9 +87,11 @@ bench-reading: $(STAMP)
 bench-threads: $(STAMP)
 	$(BIN)/python benchmarks/threads.py
 
+# mypy: the package's types (pyproject.toml's [tool.mypy]).
 lint: $(STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/ruff check .
+	$(BIN)/python -m mypy brdffit
 
 format: $(STAMP)
 	$(BIN)/ruff format .

@@ -139,8 +139,8 @@ def __getattr__(name: str):
         globals()[name] = module
         return module
     if name in _EXPORTS:
-        module, _, attribute = _EXPORTS[name].partition(":")
-        value = getattr(importlib.import_module(module, __name__), attribute or name)
+        module_name, _, attribute = _EXPORTS[name].partition(":")
+        value = getattr(importlib.import_module(module_name, __name__), attribute or name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'brdffit' has no attribute {name!r}")

@@ -132,7 +132,7 @@ def fit_batch(
     check_options(uncertainty, mcmc)
     read_options = dict(read_options or {})
     check_read_options(read_options)
-    options = dict(
+    options: dict[str, Any] = dict(
         strategy=strategy,
         max_theta=max_theta,
         solving=solving,
@@ -144,13 +144,13 @@ def fit_batch(
         first_start = start if isinstance(start, dict) or start is None else next(iter(start), None)
         built = model_for(model, first_start, **model_options) if isinstance(model, str) else model
         get_loss(loss)
-        spread = dict(read_options=read_options, start=start, progress=progress)
+        spread: dict[str, Any] = dict(read_options=read_options, start=start, progress=progress)
         results = fit_on_cluster(client, samples, built, loss, **spread, **options)
     else:
-        samples = [as_samples(one, **read_options) for one in samples]
+        datasets = [as_samples(one, **read_options) for one in samples]
         if uncertainty == "mcmc":  # before any fit: emcee needs two walkers per sampled coordinate
             options["on_checked"] = partial(_check_walkers, mcmc or MCMC())
-        results = fit_here(samples, model, loss, start=start, progress=progress, **options, **model_options)
+        results = fit_here(datasets, model, loss, start=start, progress=progress, **options, **model_options)
     for result in results:
         warn_about(result)
     return results

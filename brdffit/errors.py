@@ -19,14 +19,16 @@ import sys
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import FrameType
 
 
 @dataclass(frozen=True)
 class Argument:
-    """An argument a message speaks of: its Python name and, where the message quotes it, the value as shown."""
+    """An argument a message speaks of: its Python name and, where the message quotes it, the value as shown (written
+    with ``str``)."""
 
     name: str
-    shown: str | None = None
+    shown: object = None
 
     @classmethod
     def given(cls, name: str, value) -> "Argument":
@@ -38,9 +40,10 @@ class Argument:
         return self.name if self.shown is None else f"{self.name}={self.shown}"
 
 
-class Spelled:
+class Spelled(Exception):
     """A message built from ``parts``, each a piece of text or an :class:`Argument`; ``str()`` spells the
-    arguments as Python does, :meth:`spelled` as any caller wants."""
+    arguments as Python does, :meth:`spelled` as any caller wants. The base of brdffit's errors and warnings, each
+    also a subclass of a built-in one (``ValueError``, ``UserWarning``, …)."""
 
     def __init__(self, *parts: "str | Argument"):
         self.parts = parts
@@ -80,6 +83,9 @@ def not_a_choice(name: str, value, choices, verb: str = "is not allowed") -> Brd
 class UncertaintyWarning(Spelled, UserWarning):
     """An uncertainty estimate that needs care: a degenerate pair, an undetermined parameter, a short chain."""
 
+    #: The finding's code (``uncertainty/findings.py``), attached to the warnings an estimate issues.
+    code: str
+
 
 #: brdffit's own folder: frames of its files are skipped when a warning names where it was raised (:func:`warn`).
 _PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
@@ -89,6 +95,7 @@ def warn(warning: Warning) -> None:
     """Issue ``warning`` at the line of the code that called brdffit (the first frame outside this package), so that the
     message, and a filter by module, name the user's line rather than brdffit's own (Python 3.12's
     ``skip_file_prefixes``, for 3.11 as well)."""
+    frame: FrameType | None
     frame, level = sys._getframe(1), 2
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
         frame, level = frame.f_back, level + 1

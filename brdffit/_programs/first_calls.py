@@ -12,7 +12,7 @@ class FirstCalls:
     that compiled a bucket's solve at once traced it twice, 1.5 s each). Calls of other signatures, and every later
     call, never wait. Stored programs (``stored.py``) do not come here: their exports share one lock there."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._guard = threading.Lock()
         self._locks: dict = {}  # signature → its lock while a first call runs, None once one has ended
 

@@ -9,6 +9,7 @@ cache is on (``stored.py``), and lets only one thread compile each signature (``
 import functools
 import threading
 from collections.abc import Callable
+from typing import Any, Protocol, cast
 
 from .._jax import float64, jax
 from . import stored
@@ -24,6 +25,15 @@ CPU_COMPILER_OPTIONS = {
     "xla_cpu_use_xnnpack": False,
     "xla_cpu_experimental_ynn_fusion_type": "",
 }
+
+
+class Compiled(Protocol):
+    """What :func:`jit` returns: the function, and its ``precompile`` and ``is_compiled``."""
+
+    precompile: Callable[..., None]
+    is_compiled: Callable[..., bool]
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any: ...
 
 
 def built_once(builder: Callable) -> Callable:
@@ -170,9 +180,10 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         precompiled in this process: then it compiles nothing."""
         return _call_key(args, kwargs, static_argnums) in compiled
 
-    call.precompile = precompile
-    call.is_compiled = is_compiled
-    return call
+    compiled_call = cast(Compiled, call)
+    compiled_call.precompile = precompile
+    compiled_call.is_compiled = is_compiled
+    return compiled_call
 
 
 def _module_level(function) -> bool:

@@ -32,7 +32,7 @@ def key_of(value) -> Key | None:
         return None if any(item is None for item in items) else ["tuple", items]
     method = getattr(value, "cache_key", None)
     key = method() if callable(method) else None
-    kind = class_key(type(value))
+    kind = class_key(type(value))  # type: ignore[arg-type]  # a class is hashable; mypy takes type[Any] as not
     return None if key is None or kind is None else [kind, key]
 
 
@@ -61,6 +61,8 @@ def class_key(kind: type) -> Key | None:
         return None
     try:
         source = inspect.getsourcefile(kind)
+        if source is None:  # no file to read
+            return None
         with open(source, "rb") as stream:
             digest = hashlib.sha256(stream.read()).hexdigest()
     except (TypeError, OSError):

@@ -25,6 +25,7 @@ folder is the user's own, writable by no one else, ``cache.py`` checks before tu
 that fails the first time it is compiled or run is discarded (:func:`discard`, from ``jit.py``) and exported again.
 """
 
+import enum
 import hashlib
 import hmac
 import importlib
@@ -37,6 +38,7 @@ import threading
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
+from typing import Final
 
 import numpy as np
 
@@ -53,7 +55,15 @@ KEY_FILE = "key"
 KEY_BYTES = 32
 
 _lock = threading.Lock()  # held while a program is loaded or exported, and while it is published in ``_loaded``
-_MISSING = object()  # not in ``_loaded`` (None there means: cannot be stored)
+
+
+class _Missing(enum.Enum):
+    """Not in ``_loaded`` (None there means: cannot be stored)."""
+
+    MISSING = enum.auto()
+
+
+_MISSING: Final = _Missing.MISSING
 _loaded: dict[str, Callable | None] = {}  # signature → compiled call, None when it cannot be stored
 _registered: set[type] = set()
 _lock_count = threading.Lock()
@@ -247,7 +257,7 @@ def _named_tuple(name: str) -> type:
         module = sys.modules[module_name]
     else:
         raise UntrustedProgram(f"it names {name!r}, of a module that is not loaded")
-    kind = module
+    kind: object = module
     for part in qualified.split("."):
         kind = getattr(kind, part, None)
     if not (isinstance(kind, type) and issubclass(kind, tuple) and hasattr(kind, "_fields")):

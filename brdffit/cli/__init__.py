@@ -291,7 +291,7 @@ def _print_completion(words: list[str]) -> int:
             if isinstance(action, argparse._SubParsersAction):
                 parsers += action.choices.values()
             elif action.metavar in FILE_METAVARS:
-                action.complete = shtab.FILE
+                action.complete = shtab.FILE  # type: ignore[attr-defined]  # shtab's attribute on argparse's Action
     print(shtab.complete(parser, shell=words[0]))
     return EXIT_OK
 

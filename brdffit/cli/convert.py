@@ -42,7 +42,9 @@ def run(args: argparse.Namespace) -> int:
             f"brdffit: warning: {output}: {kind} files hold no sigma or weight columns; they are not written",
             file=sys.stderr,
         )
-    FORMATS[kind].write(samples, output)
+    write = FORMATS[kind].write
+    assert write is not None  # a format written from samples (else tabulated, above)
+    write(samples, output)
     shown = "-" if args.output == "-" else output
     print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) to {shown} ({kind})")
     return EXIT_OK

@@ -30,6 +30,7 @@ from contextlib import contextmanager, redirect_stdout
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import overload
 
 from ..errors import BrdfInputError, BrdfWriteError, Spelled
 
@@ -200,6 +201,10 @@ def is_standard(value) -> bool:
     return isinstance(value, str) and value == STANDARD
 
 
+@overload
+def input_path(value: str) -> str: ...
+@overload
+def input_path(value: None) -> None: ...
 def input_path(value: str | None) -> str | None:
     """The file to read for the input ``value``: itself (None too), or for ``-`` the copy of standard input (read at
     the first call; a command reads one input from it)."""

@@ -224,7 +224,8 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
     """
     stream = sys.stderr if outputs is None else sys.stdout
     caveats_seen = False
-    written = [None if problem else output for output, problem in zip(outputs or [None], problems, strict=True)]
+    each: list[Path | None] = list(outputs) if outputs else [None]
+    written = [None if problem else output for output, problem in zip(each, problems, strict=True)]
     if args.quiet:  # no table nor summary, wherever it would go (-q -o -: the result alone on standard output)
         pass
     elif args.json:
@@ -319,7 +320,8 @@ def output_paths(inputs: list[str], output: str | None, model) -> list[Path] | N
     folder = Path(output) if output else Path(".")
     if folder.exists() and not folder.is_dir():
         raise BrdfInputError(f"-o {output}: is a file; with several samples files give a folder (OUTDIR/)")
-    if not folder.exists() and folder.suffix.lower() == ".json" and not output.endswith(("/", os.sep)):
+    json_named = folder.suffix.lower() == ".json" and output is not None and not output.endswith(("/", os.sep))
+    if not folder.exists() and json_named:
         raise BrdfInputError(f"-o {output}: looks like a file; with several samples files give a folder (OUTDIR/)")
     existing = next((parent for parent in (folder, *folder.parents) if parent.exists()), Path("."))
     if not os.access(existing, os.W_OK):

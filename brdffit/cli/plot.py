@@ -221,7 +221,7 @@ def output_paths(figures, results, output: str | None, samples_path: str) -> lis
         return f"{stem}.{kind}{which}.png"
 
     as_folder = bool(_names_a_folder(output))
-    if as_folder and Path(output).exists() and not Path(output).is_dir():
+    if as_folder and output is not None and Path(output).exists() and not Path(output).is_dir():
         raise BrdfInputError(f"-o {output}: {output.rstrip('/' + os.sep)} is a file; give a folder (OUTDIR/)")
     if len(figures) > 1 and output is not None and not as_folder:
         raise BrdfInputError(f"-o {output}: {len(figures)} figures need a folder; give OUTDIR/")

@@ -141,7 +141,7 @@ def _split(text: str, source: str) -> tuple[dict[str, tuple[int, str]], list[tup
             continue
         match = _KEYWORD.fullmatch(stripped)
         keyword = match.group(1).upper() if match else ""
-        if keyword in ("NUM_POINTS", "VARS"):
+        if match and keyword in ("NUM_POINTS", "VARS"):
             if keyword in keywords:
                 raise BrdfInputError(
                     f"{source}: line {number}: {keyword} appears twice (first on line {keywords[keyword][0]})"

@@ -186,7 +186,11 @@ def _table_by_cells(
     lines = _data_lines(path, header_line)
     while chunk := list(itertools.islice(lines, CHUNK_ROWS)):
         cells = [[cell.strip() for cell in line.split("#", 1)[0].split(delimiter)] for _, line in chunk]
-        shifted = TableChecks(lambda row, offset=done: checks.locate(offset + row))
+
+        def locate(row: int, offset: int = done) -> str:  # this chunk's rows, numbered in the whole table
+            return checks.locate(offset + row)
+
+        shifted = TableChecks(locate)
         for row, row_cells in enumerate(cells):
             if len(row_cells) != len(names):
                 raise BrdfInputError(

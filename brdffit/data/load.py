@@ -21,7 +21,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..checks import choice
 from ..errors import Argument, BrdfInputError, InputWarning, warn
@@ -116,7 +116,7 @@ def load_samples(
     if frame and format not in (None, "csv"):
         raise BrdfInputError(Argument("format", repr(format)), " does not apply to a DataFrame (read as a CSV's table)")
     where = "the DataFrame" if frame else Path(path)
-    kind = "csv" if frame else detect_format(where, format)
+    kind = "csv" if frame else detect_format(Path(path), format)
     if kind != "csv" and angles != "degrees":
         raise BrdfInputError(
             Argument("angles"), f" applies to CSV files; {where} is {kind} (its angle units are fixed)"
@@ -127,7 +127,7 @@ def load_samples(
     if frame:  # a CSV's table, without a file or its header
         return _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer)
     path = where
-    reader_options = {
+    reader_options: dict[str, dict[str, Any]] = {
         "csv": {"angles": angles},
         "merl": {
             "subsample": subsample,
@@ -137,6 +137,7 @@ def load_samples(
         },
     }
     samples = FORMATS[kind].read(path, **reader_options.get(kind, {}))
+    assert samples.provenance is not None  # every reader records how it read the file
     header = samples.provenance.header_quantity
     if given is not None and header is not None and given != header:
         warn(
@@ -153,6 +154,7 @@ def _as_quantity(
     """Samples as read, their values made BRDFs from the quantity ``given`` (else the ``header``'s, else ``brdf``) and
     their channels converted as ``spectral_to`` asks (:func:`load_samples`)."""
     quantity = given or header or "brdf"
+    assert samples.provenance is not None  # read from a file or a DataFrame
     samples = replace(
         to_brdf(samples, quantity),
         provenance=replace(samples.provenance, quantity=quantity, quantity_given=given is not None),
@@ -169,8 +171,9 @@ def _is_data_frame(value) -> bool:
 def as_samples(samples: "Samples | str | os.PathLike", **read_options) -> Samples:
     """Samples as they are, or the samples a file (or a pandas ``DataFrame``) holds (read by :func:`load_samples` with
     ``read_options``)."""
-    readable = isinstance(samples, str | os.PathLike) or _is_data_frame(samples)
-    return load_samples(samples, **read_options) if readable else samples
+    if isinstance(samples, str | os.PathLike) or _is_data_frame(samples):
+        return load_samples(samples, **read_options)
+    return samples
 
 
 def check_read_options(read_options: dict) -> None:
@@ -188,12 +191,13 @@ def save_samples(samples: Samples, path: str | os.PathLike) -> None:
     ASTM), else as a samples CSV; :func:`load_samples` reads it back. A MERL table is written from a model
     (``brdffit/export``), not from samples."""
     kind = format_of_output(Path(path)) or "csv"
-    if FORMATS[kind].write is None:
+    write = FORMATS[kind].write
+    if write is None:
         raise BrdfInputError(
             f"{path}: a {kind} file is written from a fitted model (brdffit convert RESULT.json {Path(path).name}),"
             " not from samples"
         )
-    FORMATS[kind].write(samples, path)
+    write(samples, path)
 
 
 def _first_lines(path: Path, count: int = 64) -> list[str]:

@@ -79,10 +79,10 @@ def read_merl(
     table = _read_table(Path(path))  # (3, N) stored numbers
     bad = first_bad(~np.isfinite(table))
     if bad is not None:
-        channel, index = bad
-        where = np.unravel_index(index, SHAPE)
+        channel, bin_index = bad
+        where = np.unravel_index(bin_index, SHAPE)
         raise BrdfInputError(
-            f"{source}: stored value {table[channel, index]} in channel {CHANNELS[channel]} at bin"
+            f"{source}: stored value {table[channel, bin_index]} in channel {CHANNELS[channel]} at bin"
             f" (θh {where[0]}, θd {where[1]}, φd {where[2]}) is not allowed (values must be finite)"
         )
     wi, wo = bin_directions(bin_centres)

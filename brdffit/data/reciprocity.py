@@ -131,6 +131,7 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
 
 def header_contradiction(found: Reciprocity) -> str:
     """The line that says a file's header names the wrong quantity (:attr:`Reciprocity.header_contradicted`)."""
+    assert found.header is not None  # contradicted: the header named a quantity
     header = _reading(found.header)
     return (
         f"the file's header says its values are {found.header}, but its {found.pairs} reciprocal pairs contradict it:"

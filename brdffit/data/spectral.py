@@ -39,7 +39,7 @@ colour-science (``colour``) takes about 1.5 s to import, so it is imported on fi
 
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
 from functools import lru_cache
@@ -161,7 +161,12 @@ def spectral_to(
             what = (
                 f"linear sRGB {names[column]} = {values[row, column]:.4g} < 0 (the spectrum is outside the sRGB gamut)"
             )
-            instead = ["use ", Argument("spectral_to", "xyz"), " or ", Argument("spectral_to", "keep")]
+            instead: list[str | Argument] = [
+                "use ",
+                Argument("spectral_to", "xyz"),
+                " or ",
+                Argument("spectral_to", "keep"),
+            ]
         else:
             what = (
                 f"CIE {names[column].upper()} = {values[row, column]:.4g} < 0 (the interpolated spectrum dips below 0)"
@@ -194,10 +199,10 @@ def _check_wavelengths(values) -> np.ndarray:
     return bands
 
 
-def _choices(names: Sequence[str]) -> str:
-    names = list(names)
-    shown = ", ".join(names[:_SHOWN_CHOICES])
-    return shown if len(names) <= _SHOWN_CHOICES else f"{shown}, … ({len(names)} in all)"
+def _choices(names: Iterable[str]) -> str:
+    listed = list(names)
+    shown = ", ".join(listed[:_SHOWN_CHOICES])
+    return shown if len(listed) <= _SHOWN_CHOICES else f"{shown}, … ({len(listed)} in all)"
 
 
 # ------------------------------------------------------------------ colour-science

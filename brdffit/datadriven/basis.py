@@ -21,7 +21,7 @@ import zlib
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -125,7 +125,7 @@ def horizon_filled() -> np.ndarray:
 # ------------------------------------------------------------------------------------------------ the file
 def save_basis(basis: Basis, path: str | os.PathLike) -> None:
     """Write ``basis`` to ``path`` (an ``.npz``, whatever its name), atomically."""
-    arrays = dict(
+    arrays: dict[str, Any] = dict(  # keywords of savez_compressed, whose stubs take allow_pickle among them
         kind=np.array(KIND),
         version=np.array(VERSION),
         mapping=np.array(basis.mapping),

@@ -53,14 +53,14 @@ def fit_pca(
     if start is None:
         coefficients = ridge_start(model, corners, np.asarray(problem.measured), scale, wi, wo)
     else:
-        coefficients = model.dictionary.to_params(start).specular
+        coefficients = np.asarray(model.dictionary.to_params(start).specular)
         if coefficients.shape[1] != samples.n_channels:
             raise BrdfInputError(
                 Argument("start"),
                 f" coefficients have {coefficients.shape[1]} channel(s) but the samples have {samples.n_channels}",
             )
     device_corners = jax.device_put(corners)
-    solved, outcomes, steps = [], [], []
+    solutions, outcomes, steps = [], [], []
     for c in range(samples.n_channels):
         channel = Channel(
             corners=device_corners,
@@ -74,10 +74,10 @@ def fit_pca(
         value, outcome, n_steps = _solve_channel(
             loss, model.basis.mapping, max_steps, jnp.asarray(coefficients[:, c]), channel
         )
-        solved.append(np.asarray(value))
+        solutions.append(np.asarray(value))
         outcomes.append(int(outcome))
         steps.append(int(n_steps))
-    coefficients = np.stack(solved, axis=1)
+    coefficients = np.stack(solutions, axis=1)
     predicted = corners.brdf(model.basis.mapping, coefficients)
     real = np.asarray(problem.real)
     residuals = (np.asarray(loss.transform(predicted, problem.measured, problem.wi[:, 2:3])) - target) * scale

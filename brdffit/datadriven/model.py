@@ -154,8 +154,10 @@ class PcaModel(Model):
             return [*(half for part in corners[:4] for half in _split(part)), corners.components.astype(np.float32)]
 
         parts = jax.pure_callback(on_host, shapes, wi, wo, vmap_method="sequential")
-        joined = [parts[2 * i].astype(wi.dtype) + parts[2 * i + 1].astype(wi.dtype) for i in range(4)]
-        corners = Corners(*joined, parts[8].astype(wi.dtype))
+        weight, mean, reference, cosine = (
+            parts[2 * i].astype(wi.dtype) + parts[2 * i + 1].astype(wi.dtype) for i in range(4)
+        )
+        corners = Corners(weight, mean, reference, cosine, parts[8].astype(wi.dtype))
         values = corners.brdf(self.basis.mapping, jnp.asarray(params.specular, wi.dtype))
         return jnp.where(visible[:, None], values, 0.0)
 

@@ -15,6 +15,7 @@ every candidate model (:class:`Reference`).
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -55,7 +56,8 @@ def turned(pairs: tuple[np.ndarray, np.ndarray], turns: int) -> tuple[np.ndarray
     ``k · 180°/turns`` for ``k = 1 … turns − 1``, one after another ((turns · N, 3) each): ``turns = 1``, the pairs
     as they are."""
     angles = -np.arange(turns) * np.pi / turns  # in_turned_frame turns the frame: a direction turns the other way
-    return tuple(np.concatenate([in_turned_frame(w, angle) for angle in angles]) for w in pairs)
+    wi, wo = (np.concatenate([in_turned_frame(w, angle) for angle in angles]) for w in pairs)
+    return wi, wo
 
 
 def dense_grid(shape: tuple[int, int, int] = GRID, turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -131,7 +133,8 @@ def error_grid(turns: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """The pairs an approximation's error is measured on: :func:`dense_grid` and :func:`plane_of_incidence`
     (38,880 + 1,092 pairs), with the light at ``turns`` azimuths (:func:`turned`)."""
     pairs = dense_grid(turns=turns), plane_of_incidence(turns=turns)
-    return tuple(np.concatenate([pair[i] for pair in pairs]) for i in (0, 1))
+    wi, wo = (np.concatenate([pair[i] for pair in pairs]) for i in (0, 1))
+    return wi, wo
 
 
 @dataclass(frozen=True)
@@ -148,7 +151,7 @@ class Approximation:
     albedo_incidence: float
     albedo_channel: str
     relative_rmse: float = float("nan")
-    largest: dict[str, float] | None = None
+    largest: dict[str, Any] | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -207,6 +210,11 @@ class Reference:
     albedos: np.ndarray
     turns: int = 1
 
+    def grids(self) -> tuple[Samples, Samples]:
+        """``fine`` and ``coarse``, of a reference that tabulated them (:func:`reference`)."""
+        assert self.fine is not None and self.coarse is not None, "a reference of values alone (reference_values)"
+        return self.fine, self.coarse
+
 
 def light_turns(result: FitResult) -> int:
     """How many light azimuths ``result``'s BRDF is tabulated and measured at: 1 where it is :func:`isotropic`, else
@@ -248,7 +256,7 @@ def approximation_error(
     worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)
     pair, channel = np.unravel_index(int(np.argmax(np.abs(approximated - fitted))), fitted.shape)
     (theta_i, phi_i), (theta_o, phi_o) = (np.degrees(direction_to_spherical(w[pair])) for w in (wi, wo))
-    largest = {
+    largest: dict[str, Any] = {
         "theta_i": float(theta_i),
         "phi_i": float(phi_i) % 360.0 if theta_i > 0.0 else 0.0,
         "theta_o": float(theta_o),

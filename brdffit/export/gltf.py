@@ -20,7 +20,7 @@ import os
 from collections.abc import Sequence
 from functools import partial
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import jax
 import jax.numpy as jnp
@@ -205,7 +205,7 @@ def _material_of(theta: np.ndarray, n_channels: int, extended: bool) -> GltfMate
             np.asarray(p, dtype=float) for p in _parameters(jnp.asarray(theta), n_channels, extended)
         )
     base = np.broadcast_to(base, (3,))
-    material = {
+    material: dict[str, Any] = {
         "base_color": tuple(_snapped(float(b)) for b in base),
         "metallic": _snapped(float(metallic)),
         "roughness": _snapped(float(roughness)),
@@ -387,7 +387,7 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
     sheen_color = [float(value) for value in params.get("sheen_color", [0.0])]  # none without gltf:sheen=true
     ior = float(params["ior"])
     return GltfMaterial(
-        tuple(base_color * 3 if len(base_color) == 1 else base_color),
+        _rgb(base_color),
         float(params["metallic"]),
         float(params["roughness"]),
         ior=None if ior == DEFAULT_IOR else ior,
@@ -395,7 +395,7 @@ def gltf_of_gltf_fit(result: FitResult) -> GltfMaterial | None:
         clearcoat_roughness=float(params["clearcoat_roughness"]),
         anisotropy_strength=float(params["anisotropy_strength"]),
         anisotropy_rotation=float(params["anisotropy_rotation"]),
-        sheen_color=tuple(sheen_color * 3 if len(sheen_color) == 1 else sheen_color),
+        sheen_color=_rgb(sheen_color),
         sheen_roughness=float(params.get("sheen_roughness", 0.0)),
     )
 
@@ -414,6 +414,11 @@ def _tangent_notes(material: GltfMaterial) -> list[str]:
     ]
 
 
+def _rgb(values: list[float]) -> tuple[float, float, float]:
+    """A colour of one channel (grey) or three (r, g, b) as glTF's three numbers."""
+    return cast("tuple[float, float, float]", tuple(values * 3 if len(values) == 1 else values))
+
+
 def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str]:
     if not isinstance(result, FitResult):
         raise BrdfInputError(Argument("result"), f" must be a FitResult, not {type(result).__name__}")
@@ -429,7 +434,7 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
     if known.turns > 1:
         material, fit_notes = _anisotropic_material(rgb)
     else:
-        fine, coarse = ((samples.wi, samples.wo, samples.values) for samples in (rgb.fine, rgb.coarse))
+        fine, coarse = ((samples.wi, samples.wo, samples.values) for samples in rgb.grids())
         material, fit_notes = fit_material(*fine, result.loss, search=coarse)
     approximation = approximation_error(result, _in_channels(material, plan), known)
     warnings = approximation.warnings("glTF's metallic-roughness BRDF")
@@ -454,6 +459,7 @@ def _anisotropic_material(known: Reference) -> tuple[GltfMaterial, list[str]]:
         " with the lobe)"
     ]
     material = gltf_of_gltf_fit(fitted)
+    assert material is not None  # fitted in linear RGB or grey, which a glTF material holds
     return material, notes + _tangent_notes(material)
 
 
@@ -467,7 +473,8 @@ def _in_rgb(known: Reference) -> Reference:
             samples.wi, samples.wo, samples.values @ to_rgb, channels=("r", "g", "b"), source=samples.source
         )
 
-    return dataclasses.replace(known, fine=converted(known.fine), coarse=converted(known.coarse))
+    fine, coarse = known.grids()
+    return dataclasses.replace(known, fine=converted(fine), coarse=converted(coarse))
 
 
 def fit_gltf(result: FitResult) -> tuple[GltfMaterial, Approximation]:

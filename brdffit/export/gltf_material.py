@@ -138,7 +138,7 @@ def _three_numbers(name: str, value, upper: float | None) -> tuple[float, float,
         raise BrdfInputError(Argument.given(name, value), f" is not allowed; give {allowed}")
     if upper is not None and np.any(numbers > upper):
         raise BrdfInputError(Argument.given(name, value), f" is not allowed; give {allowed}")
-    return tuple(float(c) for c in numbers)
+    return float(numbers[0]), float(numbers[1]), float(numbers[2])
 
 
 @dataclass(frozen=True)

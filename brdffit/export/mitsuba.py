@@ -48,6 +48,7 @@ from ..errors import Argument, BrdfInputError
 from ..fitting.options import Holding
 from ..fitting.single.result import FitResult
 from ..physics.geometry import in_turned_frame
+from ..physics.models.model import LobeModel
 from ..physics.models.registry import MODELS, get_model
 from ..physics.models.specs import spec_of
 
@@ -141,11 +142,13 @@ class MitsubaExport:
         if self.exact:
             beckmann = self.exported.model_options.get("distribution") == "beckmann"
             how = "exact" + (" but for Mitsuba's Beckmann G1 (Walter's approximation, within 0.5%)" if beckmann else "")
-        elif self.change:
-            how = f"exact but for {self.change}: {self.approximation.line()}"
         else:
-            how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
-            how += self.approximation.line()
+            assert self.approximation is not None  # every export but an exact one says how far it lies
+            if self.change:
+                how = f"exact but for {self.change}: {self.approximation.line()}"
+            else:
+                how = f"approximate: {spec_of(self.exported.model, self.exported.model_options)} fitted to it, "
+                how += self.approximation.line()
         at_data = [] if self.at_data is None else [self.at_data.line()]
         return [made, how, *at_data, *self.notes]
 
@@ -170,7 +173,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
             f" cannot hold it beside a specular albedo of {_albedo_maxima(result)[1]:.3g}"
         )
         approximation = approximation_error(result, without.predict)
-        bsdf = _exact_bsdf(without)
+        bsdf = _exact_bsdf_of(without)
         return MitsubaExport(bsdf, source, without, approximation, notes + _tangent_notes(result), change=change)
 
     known = reference(result)
@@ -184,7 +187,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     else:
         exported, approximation = _best_stand_in(known)
     notes += _tangent_notes(exported) + approximation.warnings("Mitsuba's microfacet model")
-    return MitsubaExport(_exact_bsdf(exported), source, exported, approximation, notes)
+    return MitsubaExport(_exact_bsdf_of(exported), source, exported, approximation, notes)
 
 
 #: A stand-in whose coarse fit lies farther from the fitted BRDF than this many times the best one's (rmse over the
@@ -241,7 +244,7 @@ def _without_negligible_diffuse(result: FitResult) -> FitResult | None:
     diffuse, specular = _albedo_maxima(result)
     if not (0.0 < diffuse <= NEGLIGIBLE_DIFFUSE and specular <= 1.0):
         return None
-    name = get_model(result.model, **result.model_options).diffuse_name
+    name = _lobe_model(result).diffuse_name
     return dataclasses.replace(result, params=result.params | {name: [0.0] * len(result.channels)})
 
 
@@ -254,7 +257,7 @@ def _in_range(result: FitResult) -> bool:
 
 
 def _range_text(result: FitResult) -> str:
-    model = get_model(result.model, **result.model_options)
+    model = _lobe_model(result)
     names = model.diffuse_name + (f" + {model.specular_name}" if model.n_lobes else "")
     return f"{names} up to {sum(_albedo_maxima(result)):.3g}, at most 1"
 
@@ -262,7 +265,7 @@ def _range_text(result: FitResult) -> str:
 def _range_holding(result: FitResult) -> Holding:
     """Bounds that keep a refit of ``result``'s model within Mitsuba's range: the diffuse and specular albedos
     share it as ``result``'s largest ones do (``max kd + max ks ≤ 1``); an albedo that is 0 stays 0."""
-    model = get_model(result.model, **result.model_options)
+    model = _lobe_model(result)
     diffuse, specular = _albedo_maxima(result)
     top = 1.0 - _RANGE_MARGIN
     if not model.n_lobes:
@@ -280,6 +283,21 @@ def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
     the model, or these options of it, have no exact counterpart."""
     mapping = MODELS[result.model].exact_export("mitsuba") if result.model in MODELS else None
     return None if mapping is None else mapping(result)
+
+
+def _exact_bsdf_of(result: FitResult) -> dict[str, Any]:
+    """:func:`_exact_bsdf` of a result whose model has an exact mapping (Mitsuba's own, or one of the model's)."""
+    bsdf = _exact_bsdf(result)
+    assert bsdf is not None, f"no exact Mitsuba BSDF for {result.model}"
+    return bsdf
+
+
+def _lobe_model(result: FitResult) -> LobeModel:
+    """``result``'s model, a lobe model: only those have exact exports to Mitsuba, whose albedos these functions
+    weigh."""
+    model = get_model(result.model, **result.model_options)
+    assert isinstance(model, LobeModel), f"{result.model} is not a lobe model"
+    return model
 
 
 def _anisotropic(result: FitResult) -> bool:

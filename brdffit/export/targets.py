@@ -77,7 +77,7 @@ def export_format(to: str, format: str | None = None, path: str | os.PathLike | 
         raise BrdfInputError(
             Argument("format", kind), f" does not apply to target {to}; it writes {', '.join(formats)}"
         )
-    if named is not None and named != kind:
+    if named is not None and path is not None and named != kind:  # named: path ends with a format's suffix
         raise BrdfInputError(
             Argument("format", kind),
             f" writes {formats[kind]} files, not {Path(path).name} (a {named} file's name); name it"

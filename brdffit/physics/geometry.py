@@ -11,7 +11,7 @@ numpy back, so this module imports no JAX of its own.
 
 from __future__ import annotations  # the jaxtyping annotations stay unevaluated: importing jax costs ~0.5 s
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
@@ -24,6 +24,8 @@ if TYPE_CHECKING:
     from jaxtyping import Array, Bool, Float
 
     Directions = Float[Array, "*batch 3"] | Float[np.ndarray, "*batch 3"]
+    #: Angles on the host, whose directions are numpy's.
+    HostAngles = np.ndarray | float
 
 #: The surface normal, used to stand in for directions the models must ignore.
 NORMAL = (0.0, 0.0, 1.0)
@@ -31,7 +33,11 @@ NORMAL = (0.0, 0.0, 1.0)
 UNIT_LENGTH_TOLERANCE = 1e-3
 
 
-def spherical_to_direction(theta, phi) -> Directions:
+@overload
+def spherical_to_direction(theta: HostAngles, phi: HostAngles) -> np.ndarray: ...
+@overload
+def spherical_to_direction(theta: Any, phi: Any) -> Directions: ...
+def spherical_to_direction(theta, phi):
     """Unit vector ``(sin θ cos φ, sin θ sin φ, cos θ)`` for zenith ``θ`` and azimuth ``φ`` (radians)."""
     xp = namespace(theta, phi)
     sin_theta = xp.sin(theta)
@@ -86,7 +92,13 @@ def to_half_difference(wi: Directions, wo: Directions):
     return theta_h, phi_h, theta_d, phi_d
 
 
-def from_half_difference(theta_h, phi_h, theta_d, phi_d) -> tuple[Directions, Directions]:
+@overload
+def from_half_difference(
+    theta_h: HostAngles, phi_h: HostAngles, theta_d: HostAngles, phi_d: HostAngles
+) -> tuple[np.ndarray, np.ndarray]: ...
+@overload
+def from_half_difference(theta_h: Any, phi_h: Any, theta_d: Any, phi_d: Any) -> tuple[Directions, Directions]: ...
+def from_half_difference(theta_h, phi_h, theta_d, phi_d):
     """``wi, wo`` (N, 3) of Rusinkiewicz's angles (radians), the inverse of :func:`to_half_difference`:
     ``wi = R_z(φh) R_y(θh) d(θd, φd)`` and ``wo = R_z(φh) R_y(θh) (−d_x, −d_y, d_z)``. numpy or JAX."""
     xp = namespace(theta_h, phi_h, theta_d, phi_d)
@@ -105,7 +117,11 @@ def _rotated(v, theta_h, phi_h):
     return xp.stack([cos_p * x - sin_p * y, sin_p * x + cos_p * y, z], axis=-1)
 
 
-def in_turned_frame(w: Directions, azimuth) -> Directions:
+@overload
+def in_turned_frame(w: np.ndarray, azimuth: HostAngles) -> np.ndarray: ...
+@overload
+def in_turned_frame(w: Directions, azimuth: Any) -> Directions: ...
+def in_turned_frame(w, azimuth):
     """Directions ``w`` as seen in the frame turned by ``azimuth`` (radians) about the normal: their components along
     ``t = (cos a, sin a, 0)``, ``b = (−sin a, cos a, 0)`` and ``z``. An anisotropic lobe's tangent ``t`` at azimuth
     ``a``: ``w·t`` and ``w·b`` are its tangent-frame slopes' numerators. numpy or JAX."""
@@ -121,7 +137,9 @@ def mirror_direction(w: Directions) -> Directions:
     return w * xp.asarray([-1.0, -1.0, 1.0], dtype=w.dtype)
 
 
-def above_horizon(wi: Directions, wo: Directions) -> tuple[Bool[Array, " n"], Directions, Directions]:
+def above_horizon(
+    wi: Directions, wo: Directions
+) -> tuple[Bool[Array, " n"] | Bool[np.ndarray, " n"], Directions, Directions]:
     """Which pairs have both directions above the horizon, and the directions with every other pair
     replaced by the normal.
 

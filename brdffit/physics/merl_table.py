@@ -35,7 +35,8 @@ def bin_angles(centres: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarra
     theta_h = (i / SHAPE[0]) ** 2 * (math.pi / 2)
     theta_d = j / SHAPE[1] * (math.pi / 2)
     phi_d = k / SHAPE[2] * math.pi
-    return tuple(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"))
+    theta_h, theta_d, phi_d = np.meshgrid(theta_h, theta_d, phi_d, indexing="ij")
+    return theta_h, theta_d, phi_d
 
 
 def bin_directions(centres: bool = False) -> tuple[np.ndarray, np.ndarray]:

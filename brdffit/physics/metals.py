@@ -172,7 +172,7 @@ def metal_index(metal: Metal, channels: tuple[str, ...]) -> tuple[np.ndarray, np
     matches = [_WAVELENGTH.fullmatch(channel) for channel in lowered]
     if not lowered or None in matches:
         return None
-    bands = np.array([float(match.group(1)) for match in matches])
+    bands = np.array([float(match.group(1)) for match in matches if match is not None])
     return np.interp(bands, BANDS_NM, metal.eta), np.interp(bands, BANDS_NM, metal.k)
 
 

@@ -31,7 +31,7 @@ prior's support or wherever the model cannot be evaluated.
 """
 
 from functools import partial
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -152,10 +152,10 @@ class Frame(NamedTuple):
     """Where the walkers' free coordinates sit in the sampling vector (data to the compiled density): the optimum,
     whose fixed entries stay, the indices of the free ones, and the bounds of every coordinate."""
 
-    optimum: object  # (k,)
-    free_index: object  # (n_free,) int
-    low: object  # (k,)
-    high: object
+    optimum: Any  # (k,)
+    free_index: Any  # (n_free,) int
+    low: Any  # (k,)
+    high: Any
 
 
 @built_once

@@ -8,6 +8,7 @@ import os
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from ..errors import Argument, BrdfInputError, InputWarning, warn
 from ..fitting.single.result import FitResult
 from ..physics.models.specs import spec_of
 
+if TYPE_CHECKING:
+    from matplotlib.typing import LineStyleType
+
 #: File types figures are written as (matplotlib chooses the format by suffix).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -25,7 +29,7 @@ FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 CHANNEL_COLOURS = {"r": "#d62728", "g": "#2ca02c", "b": "#1f77b4", "value": "#333333", "y": "#333333"}
 #: Line styles that tell several fits apart on one axis (colour already tells the channels apart): solid, dashed,
 #: dotted, dash-dot, long dashes, dash-dot-dot, loose dots; more fits than these repeat them.
-FIT_STYLES = ("-", "--", ":", "-.", (0, (8, 3)), (0, (5, 2, 1, 2, 1, 2)), (0, (1, 4)))
+FIT_STYLES: "tuple[LineStyleType, ...]" = ("-", "--", ":", "-.", (0, (8, 3)), (0, (5, 2, 1, 2, 1, 2)), (0, (1, 4)))
 
 
 def label(result: FitResult) -> str:

@@ -12,6 +12,9 @@
 :data:`KINDS` names the first four as ``brdffit plot --kind`` takes them.
 """
 
+from collections.abc import Callable
+from typing import Any
+
 from ..errors import needs
 
 needs("matplotlib", "plots", "brdffit's figures")  # before the figure modules, which import it: one line if absent
@@ -23,6 +26,6 @@ from .slices import slices  # noqa: E402
 from .sphere import sphere  # noqa: E402
 
 #: The figures ``brdffit plot --kind`` draws from result files and samples, in the order ``--kind all`` writes them.
-KINDS = {"slices": slices, "polar": polar, "residuals": residuals, "sphere": sphere}
+KINDS: dict[str, Callable[..., Any]] = {"slices": slices, "polar": polar, "residuals": residuals, "sphere": sphere}
 
 __all__ = ["KINDS", "corner", "polar", "residuals", "slices", "sphere"]

@@ -91,7 +91,8 @@ class Light:
 
 
 def _towards(x: float, y: float, z: float) -> tuple[float, float, float]:
-    return tuple(float(c) for c in np.array([x, y, z]) / np.linalg.norm([x, y, z]))
+    unit = np.array([x, y, z]) / np.linalg.norm([x, y, z])
+    return float(unit[0]), float(unit[1]), float(unit[2])
 
 
 #: Light presets by name. ``point``: one white light from the upper left, in front (54.7° from the view
@@ -188,12 +189,12 @@ def resolve_lights(lights: "str | Sequence[Light]") -> tuple[Light, ...]:
     """A preset's lights (a key of :data:`LIGHTS`) or the given :class:`Light` sequence, checked."""
     if isinstance(lights, str):
         return LIGHTS[choice("lights", lights, LIGHTS)]
-    lights = tuple(lights) if isinstance(lights, Sequence) else ()
-    if not lights or not all(isinstance(light, Light) for light in lights):
+    given: tuple[Light, ...] = tuple(lights) if isinstance(lights, Sequence) and not isinstance(lights, str) else ()
+    if not given or not all(isinstance(light, Light) for light in given):
         raise BrdfInputError(
             Argument("lights"), f" must be one of: {', '.join(LIGHTS)}, or a non-empty sequence of Light"
         )
-    return lights
+    return given
 
 
 def channel_irradiance(lights: Sequence[Light], channels: Sequence[str] | None, n_channels: int) -> np.ndarray:

@@ -7,7 +7,7 @@ above the data, blue below.
 """
 
 import os
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, cast
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -19,6 +19,9 @@ from ..fitting.objective.losses import LOSSES
 from ..fitting.single.result import FitResult
 from ..physics.geometry import direction_to_spherical
 from .figures import characters_in, check_figure_path, checked_samples, evenly_spread, label, save_figure, wrapped
+
+if TYPE_CHECKING:
+    from matplotlib.projections.polar import PolarAxes
 
 #: Data with at most this many distinct light directions are a goniometer's: one map per light direction.
 MAX_LIGHTS = 12
@@ -159,6 +162,7 @@ def _light_maps(samples: Samples, shown_maps: _Shown, limit: float, bar_label: s
     theta_i = samples.theta_i
     mean_residual, light_index, n_lights = shown_maps.mean_residual, shown_maps.light_index, shown_maps.n_lights
     shown = shown_maps.lights
+    assert shown is not None and light_index is not None  # lights mapped (_shown)
     columns = min(MAP_COLUMNS, len(shown))
     rows = -(-len(shown) // columns)
     figure = Figure(figsize=(0.4 + 3.3 * columns + 1.6, 0.7 + 3.4 * rows), layout="constrained")
@@ -169,7 +173,7 @@ def _light_maps(samples: Samples, shown_maps: _Shown, limit: float, bar_label: s
     axes = []
     for index, light in enumerate(shown):
         members = light_index == light
-        axis = figure.add_subplot(rows, columns, index + 1, projection="polar")
+        axis = cast("PolarAxes", figure.add_subplot(rows, columns, index + 1, projection="polar"))
         axes.append(axis)
         axis.set_theta_zero_location("W")  # towards the light on the left, the mirror side on the right
         axis.set_theta_direction(-1)
@@ -196,6 +200,7 @@ def _light_maps(samples: Samples, shown_maps: _Shown, limit: float, bar_label: s
         light_phi = float(np.degrees(phi_i[members][0]))
         azimuth = f", φi = {light_phi:.3g}°" if abs(light_phi) > 0.25 and light_theta > 0.25 else ""
         axis.set_title(f"θi = {light_theta:.3g}°{azimuth} ({int(members.sum())} samples)", fontsize=9)
+    assert mappable is not None  # one light or more
     bar = figure.colorbar(mappable, ax=axes, shrink=0.8, extend="both")
     bar.set_label(bar_label, fontsize=8)
     shown_note = f"{len(shown)} of {n_lights} light directions; " if len(shown) < n_lights else ""
@@ -211,6 +216,7 @@ def _light_maps(samples: Samples, shown_maps: _Shown, limit: float, bar_label: s
 
 def _half_difference_map(samples: Samples, shown: _Shown, limit: float, bar_label: str) -> Figure:
     edges, means = shown.edges, shown.means
+    assert edges is not None and means is not None  # binned (_shown)
     bins = len(edges) - 1
     figure = Figure(figsize=(6.4, 5.0), layout="constrained")
     axis = figure.add_subplot()

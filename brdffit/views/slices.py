@@ -17,6 +17,7 @@ import os
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -162,7 +163,7 @@ def slices(
 
 
 # ------------------------------------------------------------------ arguments
-def checked_arguments(results, samples, path):
+def checked_arguments(results, samples, path) -> tuple[list[FitResult], Samples, Path | None]:
     """``results`` as a list of :class:`FitResult` with the samples' channels, the samples, and the figure path
     (None, or a path whose suffix matplotlib writes in a folder that exists); one-line errors naming the argument."""
     fits = isinstance(results, FitResult | Comparison | Sequence) and not isinstance(results, str)

@@ -128,10 +128,14 @@ class ModelScore:
             quantity=None if comparison.get("quantity") is None else str(comparison["quantity"]),
             max_theta=None if comparison.get("max_theta") is None else float(comparison["max_theta"]),
         )
+        aic, bic, cv_loss, cv_stderr = (_number(entry[key]) for key in ("aic", "bic", "cv_loss", "cv_stderr"))
         return cls(
             entry["spec"],
             int(entry["k"]),
-            *(_number(entry[key]) for key in ("aic", "bic", "cv_loss", "cv_stderr")),
+            aic,
+            bic,
+            cv_loss,
+            cv_stderr,
             [_number(value) for value in entry["fold_losses"]],
             result,
             [bool(value) for value in entry.get("fold_converged", [])],

@@ -25,7 +25,7 @@ class Folds(NamedTuple):
     """Which fold each sample is held out in (N,), how the folds were made, and how many groups they hold."""
 
     fold: np.ndarray  # (N,) in 0 … count − 1
-    count: int
+    count: int  # type: ignore[assignment]  # a field, named as the tuple method it shadows
     kind: str  # "light-direction" or "random"
     groups: int  # distinct light directions
 

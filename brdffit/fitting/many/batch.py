@@ -87,7 +87,8 @@ def fit_many(
             (index,) = unit.indices
             results[index] = fit_checked(setups[index], solving, starts[index])
             return 1
-        given = np.stack([vectors[i] for i in unit.indices]) if unit.given else None
+        present = [vector for vector in (vectors[i] for i in unit.indices) if vector is not None]
+        given = np.stack(present) if unit.given else None  # a unit given starts has one for each dataset
         constraints = setups[unit.indices[0]].constraints  # one per channel count; a bucket has one
         hold = None if constraints is None else constraints.hold()
         unit_samples = [kept[i] for i in unit.indices]
@@ -105,7 +106,14 @@ def fit_many(
         run_units(units, fit_unit, threads, bar)
     finally:
         bar.close()
-    return results
+    return every_fitted(results)
+
+
+def every_fitted(results: list[FitResult | None]) -> list[FitResult]:
+    """``results``, once every dataset's fit has filled its place."""
+    fitted = [result for result in results if result is not None]
+    assert len(fitted) == len(results), "a dataset was left unfitted"
+    return fitted
 
 
 def starts_per_dataset(start, count: int) -> list:

@@ -30,7 +30,7 @@ from ...physics.models.model import Model
 from ..options import Holding
 from ..single.fit import checked
 from ..single.result import FitResult
-from .batch import fit_many, progress_bar, starts_per_dataset
+from .batch import every_fitted, fit_many, progress_bar, starts_per_dataset
 from .buckets import work_units
 
 #: The most datasets one task fits: a few seconds of work for small ones, so that a lost worker costs little and
@@ -107,7 +107,7 @@ def fit_on_cluster(
     finally:
         bar.close()
         client.cancel(list(futures))
-    return results
+    return every_fitted(results)
 
 
 def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, workers: int) -> list[list[int]]:

@@ -34,23 +34,23 @@ from jaxtyping import Array, Float
 from ...physics.domains import ALBEDO
 from ...physics.geometry import above_horizon
 from ...physics.models.model import LobeModel
-from ...physics.models.params import albedo_size, whole_albedos
+from ...physics.models.params import albedo_size, lobe_family, whole_albedos
 
 
 def value_and_basis(
     model: LobeModel,
     theta: Float[Array, " k"],
-    wi: Float[Array, "n 3"],
-    wo: Float[Array, "n 3"],
+    wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+    wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
     n_channels: int,
     dtype=None,
 ) -> tuple[Float[Array, "n C"], Float[Array, "n M"] | Float[Array, "n C M"]]:
     """BRDF values (N, C) and the basis (N, M) at the unconstrained ``theta``, in ``dtype`` (default: ``wi``'s); a
     basis (N, C, M) for a lobe with per-channel parameters (module docstring)."""
     dtype = dtype or wi.dtype
-    if model.n_lobes and model.lobe.channels_coupled:
+    if model.lobe is not None and model.lobe.channels_coupled:  # a lobe exactly when n_lobes > 0
         return _whole_jacobian(model, theta, wi, wo, n_channels, dtype)
-    if model.n_lobes and model.lobe.channel_names:
+    if model.lobe is not None and model.lobe.channel_names:
         return _per_channel_value_and_basis(model, theta, wi, wo, n_channels, dtype)
     visible, wi, wo = above_horizon(wi, wo)
     n, c = wi.shape[0], n_channels
@@ -60,7 +60,7 @@ def value_and_basis(
     columns = [diffuse_term]
     if model.n_lobes:
         k = model.n_lobes
-        shape_coordinates = model.lobe.unconstrained
+        shape_coordinates = lobe_family(model).unconstrained
         s = len(shape_coordinates.names)
         specular = ALBEDO.to_physical(theta[c : (1 + k) * c].reshape(k, c)).astype(dtype)
 
@@ -96,6 +96,7 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
     visible, wi, wo = above_horizon(wi, wo)
     c, k = n_channels, model.n_lobes
     shared, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
+    assert per_channel is not None  # a lobe with per-channel parameters
     s, p = len(shared.names), len(per_channel.names)
     diffuse, specular = _albedos(model, theta, c, dtype)
     diffuse_term = model.diffuse({}, wi, wo).astype(dtype)  # (N,): the diffuse term of unit albedo
@@ -147,15 +148,15 @@ def jacobian_coefficients(model: LobeModel, theta: Float[Array, " k"], n_channel
     shape-derivative rows carry the specular albedos.
     """
     c, k = n_channels, model.n_lobes
-    if k and model.lobe.channels_coupled:  # the basis is the Jacobian itself
+    if model.lobe is not None and model.lobe.channels_coupled:  # the basis is the Jacobian itself
         return jnp.broadcast_to(jnp.eye(theta.shape[0], dtype=theta.dtype), (c, theta.shape[0], theta.shape[0]))
-    if k and model.lobe.channel_names:
+    if model.lobe is not None and model.lobe.channel_names:
         return _per_channel_coefficients(model, theta, c)
     eye_c = jnp.eye(c, dtype=theta.dtype)
     _, diffuse_slope = jax.jvp(ALBEDO.to_physical, (theta[:c],), (jnp.ones(c, theta.dtype),))
     if not k:
         return (eye_c * diffuse_slope)[:, None, :]
-    s = len(model.lobe.unconstrained.names)
+    s = len(lobe_family(model).unconstrained.names)
     u_specular = theta[c : (1 + k) * c].reshape(k, c)
     specular, specular_slope = jax.jvp(ALBEDO.to_physical, (u_specular,), (jnp.ones_like(u_specular),))
     eye_k, eye_s = jnp.eye(k, dtype=theta.dtype), jnp.eye(s, dtype=theta.dtype)
@@ -178,7 +179,9 @@ def _per_channel_coefficients(model: LobeModel, theta, n_channels: int):
     ``specular[k, c]`` at the entry of θ it differentiates: shared coordinate ``t`` of lobe ``k``, or per-channel
     parameter ``t - S`` of lobe ``k`` in channel ``c``."""
     c, k = n_channels, model.n_lobes
-    s, p = len(model.unconstrained.shared.names), len(model.unconstrained.per_channel.names)
+    shared, per_channel = model.unconstrained.shared, model.unconstrained.per_channel
+    assert per_channel is not None  # a lobe with per-channel parameters
+    s, p = len(shared.names), len(per_channel.names)
     size, a = model.unconstrained.size(c), albedo_size(model, c)
     channel = np.arange(c)
     lobe, tangent = np.meshgrid(np.arange(k), np.arange(s + p), indexing="ij")  # (K, S + P)

@@ -25,7 +25,7 @@ from ..._jax import float64
 from ..._programs import jit
 from ...data.samples import Samples
 from ...physics.geometry import NORMAL
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
 from .jacobian import jacobian_coefficients, value_and_basis
 from .losses import Loss, residual_scale
@@ -45,12 +45,12 @@ class Problem(NamedTuple):
     them on the fly where they are missing.
     """
 
-    wi: Float[Array, "N 3"]
-    wo: Float[Array, "N 3"]
-    measured: Float[Array, "N C"]  # BRDF, 1/sr
-    sigma: Float[Array, "N C"] | None  # 1-σ uncertainty of measured, 1/sr
-    weight: Float[Array, " N"] | None
-    real: Bool[Array, " N"]  # a sample, not padding
+    wi: Float[Array, "N 3"] | Float[np.ndarray, "N 3"]  # numpy on the host (host_problems)
+    wo: Float[Array, "N 3"] | Float[np.ndarray, "N 3"]
+    measured: Float[Array, "N C"] | Float[np.ndarray, "N C"]  # BRDF, 1/sr
+    sigma: Float[Array, "N C"] | Float[np.ndarray, "N C"] | None  # 1-σ uncertainty of measured, 1/sr
+    weight: Float[Array, " N"] | Float[np.ndarray, " N"] | None
+    real: Bool[Array, " N"] | Bool[np.ndarray, " N"]  # a sample, not padding
     target: Float[Array, "N C"] | None = None  # T(measured), None until prepared
     scale: Float[Array, "N C"] | Float[Array, "N 1"] | None = None  # residual scale, 0 on padding; None until prepared
 
@@ -98,7 +98,7 @@ def host_problems(samples: Sequence[Samples], dtype: str = "float64", count: int
     return Problem(
         wi,
         wo,
-        _stacked(samples, count, lambda one: one.values, dtype),
+        _stacked_all(samples, count, lambda one: one.values, dtype),
         _stacked(samples, count, lambda one: one.sigma, dtype, 1.0),
         _stacked(samples, count, lambda one: one.weight, dtype),
         real,
@@ -109,10 +109,17 @@ def stacked_directions(samples: Sequence[Samples], dtype: str, count: int) -> tu
     """``wi``, ``wo`` (count, N, 3) and ``real`` (count, N) of ``samples`` as :func:`host_problems` stacks them:
     padded with the normal, which is not real, the rows after the last dataset copies of the first."""
     return (
-        _stacked(samples, count, lambda one: one.wi, dtype, NORMAL),
-        _stacked(samples, count, lambda one: one.wo, dtype, NORMAL),
-        _stacked(samples, count, lambda one: np.ones(one.n_samples, bool), bool, False),
+        _stacked_all(samples, count, lambda one: one.wi, dtype, NORMAL),
+        _stacked_all(samples, count, lambda one: one.wo, dtype, NORMAL),
+        _stacked_all(samples, count, lambda one: np.ones(one.n_samples, bool), bool, False),
     )
+
+
+def _stacked_all(samples: Sequence[Samples], count: int, field, dtype, fill=0.0) -> np.ndarray:
+    """:func:`_stacked` of a field every dataset has (its directions, its values)."""
+    stacked = _stacked(samples, count, field, dtype, fill)
+    assert stacked is not None
+    return stacked
 
 
 def _stacked(samples: Sequence[Samples], count: int, field, dtype, fill=0.0) -> np.ndarray | None:
@@ -195,7 +202,7 @@ def sample_residuals(model: Model, loss: Loss, params: Params, samples: Samples)
 _residuals_at = jit(residuals_at, static_argnums=(0, 1))
 
 
-def residuals_and_basis(model: Model, loss: Loss, theta, problem: Problem):
+def residuals_and_basis(model: LobeModel, loss: Loss, theta, problem: Problem):
     """Residuals ``r`` (N, C), their weights ``w = scale·T'(f)`` (N, C), the model's basis (N, M) and values (N, C).
 
     The residual Jacobian is ``∂r[n, c]/∂θ = w[n, c] · Σ_m basis[n, m] · A[c, m]``
@@ -223,7 +230,7 @@ class Sums(NamedTuple):
     squared_error: Float[Array, ""]  # Σ (f - y)² over the real samples and every channel, (1/sr)²: the rmse's numerator
 
 
-def normal_equations(model: Model, loss: Loss, theta: Float[Array, " k"], problem: Problem) -> Sums:
+def normal_equations(model: LobeModel, loss: Loss, theta: Float[Array, " k"], problem: Problem) -> Sums:
     """``rᵀr``, ``Jᵀr``, ``JᵀJ`` and ``Σ (f - y)²`` at ``theta``, float64, in one pass over the chunks of ``problem``.
 
     With ``J[n, c] = w[n, c] Σ_m B[n, m] A[c, m]`` (:func:`residuals_and_basis`; ``B[n, c, m]`` for a lobe with

@@ -19,7 +19,7 @@
 import re
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import NamedTuple
+from typing import NamedTuple, TypeGuard
 
 import jax
 import jax.numpy as jnp
@@ -32,7 +32,7 @@ from ...data.samples import Samples
 from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
 from ...physics.models.model import LobeModel, Model
-from ...physics.models.params import Params, albedo_size
+from ...physics.models.params import Params, albedo_size, lobe_family
 from ..objective.problem import padded_size, stacked_directions
 
 #: A lobe whose share of the model stays below this at every sample and channel contributes nothing.
@@ -79,10 +79,12 @@ def caveats(
         screened = Screened(ALBEDO_INCIDENCE, np.zeros(0))
     elif screened is None:
         (screened,) = screen_bucket(model, [params], [samples], 1)
-    found += _dead_lobes(model, params, screened.lobe_shares)
+    if isinstance(model, LobeModel):  # the data-driven kind has no lobes (its shares are none)
+        found += _dead_lobes(model, params, screened.lobe_shares)
     found += _implausible(model, params, samples.channels, held)
     found += _albedo_above_one(model, params, samples.channels, screened.albedo_open)
-    if cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9):
+    worse = cost is not None and fewer_lobes_cost is not None and cost > fewer_lobes_cost * (1 + 1e-9)
+    if worse and isinstance(model, LobeModel):  # fewer lobes: only a lobe model has them
         found.append(
             f"the fit ends at cost {cost:.6g}, worse than the {fewer_lobes_cost:.6g} of {model.n_lobes - 1} lobe(s):"
             " it stopped in a local minimum"
@@ -94,7 +96,7 @@ def lobe_name(model: LobeModel, params: Params, k: int) -> str:
     """How a message names lobe ``k``: ``lobe 2 (cxy +0.577, cz 0.577, n 1.8e+03)``, or the specular lobe."""
     if not model.lobes_as_list:
         return f"the specular lobe ({model.specular_name})"
-    shape = ", ".join(f"{name} {float(params.shape[name][k]):.3g}" for name in model.lobe.names)
+    shape = ", ".join(f"{name} {float(params.shape[name][k]):.3g}" for name in lobe_family(model).names)
     return f"lobe {k + 1} ({shape})"
 
 
@@ -117,7 +119,7 @@ def as_fitted(model: Model, params: Params) -> Model:
     (``Lobe.anisotropy_names``: glTF's) lies off the values the model holds it at (a user freed it, or fixed it
     elsewhere) as the anisotropic model it then is, whose albedo the screens compute without an isotropic model's
     shortcuts (:func:`_model_quadrature`: half the grid, one azimuth at normal incidence); else ``model`` itself."""
-    if not isinstance(model, LobeModel) or not model.isotropic or not model.n_lobes:
+    if not isinstance(model, LobeModel) or not model.isotropic or model.lobe is None:
         return model
     defaults = dict(model.held)
     names = model.lobe.anisotropy_names
@@ -131,7 +133,7 @@ def _anisotropy_undetermined(model: Model, samples: Samples, held: frozenset[str
     in that plane alone, where a tangent and its mirror image about the plane look alike and the two roughnesses
     enter only in combination. An isotropic model whose lobe's anisotropy the fit freed (``Lobe.anisotropy_names``,
     not ``held``) is one."""
-    if not isinstance(model, LobeModel) or not model.n_lobes:
+    if not isinstance(model, LobeModel) or model.lobe is None:
         return []
     anisotropy = model.lobe.anisotropy_names
     if model.isotropic and all(name in held for name in anisotropy):
@@ -154,7 +156,7 @@ def _coat_undetermined(model: Model, samples: Samples, held: frozenset[str]) -> 
     """A clear coat fitted (``principled``'s or ``gltf``'s ``clearcoat``, not held) to data of one incidence: the coat
     and the base's specular lobe are told apart by how each changes with the incidence (the coat's Fresnel term and
     its own narrow shape), which one incidence does not show."""
-    if not isinstance(model, LobeModel) or not model.n_lobes or "clearcoat" not in model.lobe.names:
+    if not isinstance(model, LobeModel) or model.lobe is None or "clearcoat" not in model.lobe.names:
         return []
     if "clearcoat" in held:
         return []
@@ -176,7 +178,7 @@ def _sheen_undetermined(model: Model, samples: Samples, held: frozenset[str]) ->
     over a base of roughness 0.8, one in-plane scan of 45 viewers, 1% noise): lit at 5° from the normal the fitted
     sheen colour is off by up to 60%; at 10°, 6%; at 20°, 4%; at 45°, 1% — one incidence away from the normal
     determines it, an in-plane one included, as do directions all within 60° of the normal."""
-    if not isinstance(model, LobeModel) or not model.n_lobes or "sheen_color" not in model.lobe.names:
+    if not isinstance(model, LobeModel) or model.lobe is None or "sheen_color" not in model.lobe.names:
         return []
     if "sheen_color" in held:
         return []
@@ -241,7 +243,7 @@ def _implausible(
     # The albedos come first; a shape parameter of a domain ≥ 0 (a conductor's k) ends on its lower end as an
     # albedo of 0 does not: its map exp(u) reaches 0 only in the limit, where the fit compensates elsewhere.
     n_albedos = albedo_size(model, len(channels)) if isinstance(model, LobeModel) else len(values)
-    meaningful_ends = model.lobe.meaningful_ends if isinstance(model, LobeModel) and model.n_lobes else ()
+    meaningful_ends = model.lobe.meaningful_ends if isinstance(model, LobeModel) and model.lobe is not None else ()
     for index, (label, value, domain) in enumerate(
         zip(model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True)
     ):
@@ -340,9 +342,9 @@ def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
     return tuple(theta for theta, bound in zip(ALBEDO_INCIDENCE, bounds, strict=True) if np.any(bound >= SCREEN_BELOW))
 
 
-def _screenable(model: LobeModel) -> bool:
+def _screenable(model: Model) -> TypeGuard[LobeModel]:
     """Whether the screen applies: a model with lobes, each peaking at the mirror direction (not Lafortune's)."""
-    return bool(model.n_lobes) and model.lobe.peaks_at_mirror
+    return isinstance(model, LobeModel) and model.lobe is not None and model.lobe.peaks_at_mirror
 
 
 @jit(static_argnums=0)

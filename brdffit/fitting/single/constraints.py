@@ -27,7 +27,7 @@ import numpy as np
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import Domain
 from ...physics.models.model import LobeModel, Model
-from ...physics.models.params import Params, albedo_size
+from ...physics.models.params import Params, albedo_size, lobe_family
 from ..options import parameter_mapping
 from ..solver.hold import Hold, on_bound
 
@@ -55,7 +55,7 @@ class Constraints:
     written to the result file (``fit.fixed``, ``fit.bounds``) as they are here.
     """
 
-    model: Model
+    model: LobeModel
     n_channels: int
     fixed: dict[str, Any] = field(default_factory=dict)
     bounds: dict[str, list[float]] = field(default_factory=dict)
@@ -120,7 +120,7 @@ class Constraints:
         model, c = self.model, self.n_channels
         diffuse = np.full(c, _ANY_ALBEDO)
         specular = np.full((model.n_lobes, c), _ANY_ALBEDO)
-        given: list[dict[str, float]] = [{} for _ in range(model.n_lobes)]
+        given: list[dict[str, Any]] = [{} for _ in range(model.n_lobes)]  # numbers, or (C,) per channel
         for name, value in values.items():
             target = _target(model, name)
             if target.kind == "diffuse":
@@ -131,7 +131,7 @@ class Constraints:
                 given[target.lobe][target.parameter] = np.broadcast_to(np.asarray(value, float), (c,)).copy()
             else:
                 given[target.lobe][target.parameter] = float(value)
-        shapes = [model.lobe.shape_holding(one, _prefix(model, k)) for k, one in enumerate(given)]
+        shapes = [lobe_family(model).shape_holding(one, _prefix(model, k)) for k, one in enumerate(given)]
         names = model.lobe.names if model.lobe else ()
         one = lambda name, value: np.broadcast_to(value, (c,)) if name in _per_channel(model) else value
         shape = {name: np.array([one(name, lobe[name]) for lobe in shapes]) for name in names}
@@ -147,13 +147,14 @@ class Constraints:
         for name in self.fixed:
             target = _target(self.model, name)
             if target.kind == "diffuse":
-                diffuse = placed.diffuse
+                diffuse = np.asarray(placed.diffuse)
             elif target.kind == "specular":
                 specular[target.lobe] = placed.specular[target.lobe]
             else:
                 index = _coordinate(self.model, target)
-                for tied in self.model.lobe.names:
-                    if self.model.lobe.coordinate_index(tied) == index:
+                family = lobe_family(self.model)
+                for tied in family.names:
+                    if family.coordinate_index(tied) == index:
                         shape[tied][target.lobe] = placed.shape[tied][target.lobe]
         return Params(diffuse, specular, shape)
 
@@ -251,7 +252,7 @@ def _with_default_holds(model: Model, fixed: dict[str, Any], bounds: dict[str, A
 
 def _per_channel(model: Model) -> tuple[str, ...]:
     """The names of ``model``'s shape parameters with one value per channel (``Lobe.channel_names``)."""
-    return model.lobe.channel_names if getattr(model, "lobe", None) is not None else ()
+    return model.lobe.channel_names if isinstance(model, LobeModel) and model.lobe is not None else ()
 
 
 def parameter_names(model: Model) -> list[str]:
@@ -259,22 +260,22 @@ def parameter_names(model: Model) -> list[str]:
     if not isinstance(model, LobeModel):  # the data-driven kind: every coefficient under its prior
         return []
     if model.whole:  # a renderer's own model: its lobe's shape alone
-        return list(model.lobe.names)
+        return list(lobe_family(model).names)
     names = [model.diffuse_name]
     for k in range(model.n_lobes):
         prefix = _prefix(model, k)
-        names += [prefix + model.specular_name] + [prefix + name for name in model.lobe.names]
+        names += [prefix + model.specular_name] + [prefix + name for name in lobe_family(model).names]
     return names
 
 
-def _prefix(model: Model, k: int) -> str:
+def _prefix(model: LobeModel, k: int) -> str:
     return f"lobes[{k}]." if model.lobes_as_list else ""
 
 
 def _target(model: Model, name: str, argument: str = "fixed") -> Target:
     """The parameter ``name`` names in ``model``, or a one-line error listing the names it has."""
-    known = parameter_names(model)
-    if isinstance(name, str) and name in known:
+    known = parameter_names(model)  # none but a lobe model's
+    if isinstance(model, LobeModel) and isinstance(name, str) and name in known:
         if model.lobes_as_list and (match := _LOBE_NAME.match(name)):
             lobe, parameter = int(match.group(1)), match.group(2)
         else:
@@ -282,25 +283,25 @@ def _target(model: Model, name: str, argument: str = "fixed") -> Target:
         if parameter == model.diffuse_name and name == model.diffuse_name:
             return Target(name, "diffuse", 0, parameter, model.diffuse.albedo_domain)
         if parameter == model.specular_name:
-            return Target(name, "specular", lobe, parameter, model.lobe.albedo_domain)
-        return Target(name, "shape", lobe, parameter, dict(model.lobe.parameters)[parameter])
+            return Target(name, "specular", lobe, parameter, lobe_family(model).albedo_domain)
+        return Target(name, "shape", lobe, parameter, dict(lobe_family(model).parameters)[parameter])
     raise _error(argument, f"{model.name} has no parameter {name!r}; its parameters are {', '.join(known)}")
 
 
-def _coordinate(model: Model, target: Target) -> int:
-    return model.lobe.coordinate_index(target.parameter)
+def _coordinate(model: LobeModel, target: Target) -> int:
+    return lobe_family(model).coordinate_index(target.parameter)
 
 
-def _entries(model: Model, target: Target, n_channels: int) -> list[int]:
+def _entries(model: LobeModel, target: Target, n_channels: int) -> list[int]:
     """The indices of ``target``'s entries in the flat vectors (``coordinates.py``: diffuse, specular, shapes)."""
     c, k, a = n_channels, model.n_lobes, albedo_size(model, n_channels)
     if target.kind == "diffuse":
         return list(range(c))
     if target.kind == "specular":
         return list(range(c + target.lobe * c, c + (target.lobe + 1) * c))
-    s = len(model.unconstrained.shared.names)
-    if target.parameter in _per_channel(model):  # after every lobe's shared coordinates: lobe, parameter, channel
-        names = model.unconstrained.per_channel.names
+    s, per_channel = len(model.unconstrained.shared.names), model.unconstrained.per_channel
+    if per_channel is not None and target.parameter in _per_channel(model):  # after every lobe's shared ones
+        names = per_channel.names  # lobe, parameter, channel
         first = a + k * s + (target.lobe * len(names) + names.index(target.parameter)) * c
         return list(range(first, first + c))
     return [a + target.lobe * s + _coordinate(model, target)]
@@ -317,7 +318,7 @@ def _error(argument: str, text: str) -> BrdfInputError:
     return BrdfInputError(Argument(argument), f": {text}")
 
 
-def _fixed_value(model: Model, name: str, value: Any, n_channels: int):
+def _fixed_value(model: LobeModel, name: str, value: Any, n_channels: int):
     """The fixed value checked: a list of ``n_channels`` values of an albedo or a per-channel shape parameter, or one
     number, inside the parameter's domain."""
     target = _target(model, name, "fixed")
@@ -341,7 +342,7 @@ def _fixed_value(model: Model, name: str, value: Any, n_channels: int):
     return numbers
 
 
-def _bound(model: Model, name: str, value: Any) -> list[float]:
+def _bound(model: LobeModel, name: str, value: Any) -> list[float]:
     """The bound checked: two finite numbers ``lo < hi`` inside the parameter's domain."""
     target = _target(model, name, "bounds")
     if not isinstance(value, list | tuple | np.ndarray) or len(value) != 2:
@@ -354,7 +355,7 @@ def _bound(model: Model, name: str, value: Any) -> list[float]:
     return [low, high]
 
 
-def _check_overlaps(model: Model, fixed: dict[str, Any], bounds: dict[str, Any]) -> None:
+def _check_overlaps(model: LobeModel, fixed: dict[str, Any], bounds: dict[str, Any]) -> None:
     """A parameter is fixed or bounded, not both; a Lafortune direction is held by one of ``cxy`` and ``cz``."""
     held: dict[tuple[str, int, int], tuple[str, str]] = {}
     for how, name in [*(("fixed", name) for name in fixed), *(("bounds", name) for name in bounds)]:

@@ -17,6 +17,7 @@ from ...datadriven.model import PcaModel
 from ...errors import Argument, BrdfInputError
 from ...physics.domains import START_FACTOR
 from ...physics.models.model import LobeModel, Model
+from ...physics.models.params import lobe_family
 from ...physics.models.registry import MODELS, get_model, model_option_names, recorded_options
 from ..objective.losses import Loss, get_loss
 from ..objective.problem import Problem, build_problem
@@ -185,6 +186,7 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
     each lobe-shape parameter's plausible range: beyond :data:`~brdffit.physics.domains.START_FACTOR` times its
     upper end a fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report
     a converged fit that never moved. An albedo can start anywhere: the fit moves its logarithm."""
+    assert isinstance(model, LobeModel), f"start_vector takes a lobe model, not {type(model).__name__}"
     params = model.dictionary.to_params(start)
     if params.diffuse.size != n_channels:
         raise BrdfInputError(
@@ -192,7 +194,7 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
         )
     if model.n_lobes:
         for k in range(model.n_lobes):
-            for name, domain in model.lobe.parameters:
+            for name, domain in lobe_family(model).parameters:
                 # the largest channel's value for a per-channel parameter (a conductor's eta, k)
                 value, limit = float(np.max(params.shape[name][k])), START_FACTOR * domain.plausible[1]
                 if value > limit:

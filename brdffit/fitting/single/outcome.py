@@ -37,7 +37,7 @@ def _onto_meaningful_ends(model: Model, params: Params) -> Params:
     """``params`` with each parameter whose domain's ends are values of their own (``Lobe.meaningful_ends``: glTF's
     metallic) put onto the end it lies within :data:`~brdffit.fitting.single.caveats.EDGE` of: the solver's logistic
     map reaches an end only in the limit, and a user reads ``metallic 0``, not ``7e-09``."""
-    if not isinstance(model, LobeModel) or not model.n_lobes or not model.lobe.meaningful_ends:
+    if not isinstance(model, LobeModel) or model.lobe is None or not model.lobe.meaningful_ends:
         return params
     shape = dict(params.shape)
     for name in model.lobe.meaningful_ends:
@@ -51,7 +51,7 @@ def canonical_params(model: Model, params: Params, constraints: Constraints | No
     """``params`` (numpy) with each lobe's shape in its family's canonical form (``Lobe.canonical``: an anisotropic
     lobe's ``alpha_u ≤ alpha_v``), unless that would move a shape parameter ``constraints`` hold: the user's naming
     wins."""
-    if not isinstance(model, LobeModel) or not model.n_lobes:
+    if not isinstance(model, LobeModel) or model.lobe is None:
         return params
     shape = model.lobe.canonical({name: np.asarray(value) for name, value in params.shape.items()})
     held = set() if constraints is None else constraints.held_shapes

@@ -60,7 +60,9 @@ class Uncertainty(Mapping[str, Any]):
             raise BrdfInputError(f"{source}: 'uncertainty' must be an object with a 'method'")
         values = {}
         for item in fields(cls):
-            kind = typing.get_origin(item.type) or item.type  # dict[str, Any] → dict (``is`` never matches an alias)
+            kind: Any = (
+                typing.get_origin(item.type) or item.type
+            )  # dict[str, Any] → dict (``is`` never matches an alias)
             if kind is str:
                 values[item.name] = content[item.name]
                 continue

@@ -30,7 +30,7 @@ from ..options import Solving
 from ..solver.compiled import SAME_COST, best_index, solved_from
 from ..solver.hold import Hold, at_bounds
 from ..starts.grid import grid_channels, grid_starts, search_subset
-from .caveats import screen_bucket, screen_program
+from .caveats import Screened, screen_bucket, screen_program
 from .constraints import Constraints
 from .outcome import final_params, result_of
 from .result import FitResult
@@ -112,7 +112,10 @@ class StackedFit:
         subsets = [search_subset(one, self.seed) for one in self.samples]
         search = None
         if subsets[0] is not None:
-            chosen = [one.select(subset) for one, subset in zip(self.samples, subsets, strict=True)]
+            # a bucket's datasets have one size: a subset for each, or none
+            chosen = [
+                one if subset is None else one.select(subset) for one, subset in zip(self.samples, subsets, strict=True)
+            ]
             search = build_problems(chosen, self.dtype, count)
         subset_race = search is not None and self.n_starts > 1
         compiling = None if subset_race else winners()
@@ -131,6 +134,7 @@ class StackedFit:
             compiling = winners()
             if thetas.shape[1] > 1:  # the starts race to convergence on the subset
                 thetas = _best(self.solver(thetas, search, holds, self.budget)).theta[:, None]
+        assert compiling is not None  # started before the search, or after the race
         compiling.join()
         if not (subset_race and said):
             self.on_stage("compiled")
@@ -153,7 +157,7 @@ class StackedFit:
             problems64 = build_problems(samples, "float64", count)
             refined = solver64(solved.theta[:, None], problems64, holds, self.budget)
             solved = _best(refined)._replace(n_steps=solved.n_steps + np.asarray(refined.n_steps)[:, 0])
-        if holds is not None and np.any(self.hold.bounded):
+        if holds is not None and self.hold is not None and np.any(self.hold.bounded):
             again = lambda theta, held: solver64(theta[:, None], problems64, held, self.budget)
             solved = onto_bounds(again, solved, holds)
         self.problems = None  # the results need none of it: its memory (~110 MB at MERL size) back before the caveats
@@ -167,8 +171,8 @@ class StackedFit:
         each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(self.samples))]
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
-        screens = [None] * len(params)
-        if self.caveats:
+        screens: Sequence[Screened | None] = [None] * len(params)
+        if self._screen_compiling is not None:  # with caveats
             self._screen_compiling.join()
             screens = screen_bucket(self.model, params, self.samples, self.count)
         return [
@@ -244,7 +248,7 @@ def step_budget(steps: int) -> np.ndarray:
 
 
 @built_once
-def bucket_solver(model: Model, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
+def bucket_solver(model: LobeModel, loss: Loss, max_steps: int, dtype: str, vectorise: bool):
     """``solve(thetas (D, S, k), problems (D, N, …), holds (D, k) or None, budget) -> Solved (D, S, …)``: every
     start of every dataset, each solve stopping after ``budget`` steps (:func:`step_budget`, at most
     ``max_steps``): one compiled program runs both the race of the starts and the winner's solve."""

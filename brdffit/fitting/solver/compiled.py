@@ -20,7 +20,7 @@ import numpy as np
 
 from ..._jax import jax, jnp
 from ..._programs import built_once, jit
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel
 from ...physics.models.params import Params
 from ..objective.losses import Loss
 from ..objective.problem import Problem, Sums, chunks, cost, normal_equations, prepared, residuals
@@ -98,7 +98,7 @@ def best(runs: list[Solved]) -> Solved:
 
 
 @built_once
-def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "float64"):
+def compiled_solver(model: LobeModel, loss: Loss, max_steps: int, dtype: str = "float64"):
     """``solve(theta0, problem, hold=None) -> Solved`` (:func:`solved_from`), compiled once per problem size and
     once for fits that hold parameters (``hold.py``): the held values and bounds are data, so changing them
     compiles nothing.
@@ -111,7 +111,7 @@ def compiled_solver(model: Model, loss: Loss, max_steps: int, dtype: str = "floa
 
 
 def solved_from(
-    model: Model,
+    model: LobeModel,
     loss: Loss,
     max_steps: int,
     dtype: str,
@@ -136,6 +136,7 @@ def solved_from(
     problem = prepared(loss, problem)
     residual_fn = partial(fit_residuals, model, loss)
     equations = partial(normal_equations, model, loss)
+    data: Problem | tuple[Problem, Hold]
     if hold is None:
         data = problem
         start = jnp.asarray(theta0, jnp.float64)  # the optimum is float64's whatever the start's dtype
@@ -170,7 +171,7 @@ def solved_from(
     return Solved(theta, total, solution.stats["num_steps"], outcome_of(solution.result), converged, params, rmse)
 
 
-def fit_residuals(model: Model, loss: Loss, theta, problem: Problem):
+def fit_residuals(model: LobeModel, loss: Loss, theta, problem: Problem):
     """The fit's residual function as the solver sees it: the residuals (N, C) of ``problem.residuals`` at
     ``theta`` and, as their aux, ``Σ (f - y)²`` over the real samples (float64, the rmse's numerator), computed
     chunk by chunk (``problem.chunks``).
@@ -189,7 +190,7 @@ def fit_residuals(model: Model, loss: Loss, theta, problem: Problem):
     return r.reshape(problem.measured.shape[0], -1), total
 
 
-def _brdf_error(model: Model, theta, problem: Problem):
+def _brdf_error(model: LobeModel, theta, problem: Problem):
     """``f - y`` (N, C) at ``theta``, 0 on padding, 1/sr, computed in the problem's dtype as the residuals are."""
     params = model.unconstrained.to_params(theta, problem.measured.shape[1])
     params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
@@ -257,4 +258,4 @@ def failure_message(outcome: int, max_steps: int) -> str:
         )
     import optimistix as optx  # 0.3 s to import: a fit that runs stored programs needs it for this message alone
 
-    return optx.RESULTS[getattr(optx.RESULTS, name)]
+    return optx.RESULTS[getattr(optx.RESULTS, name)]  # type: ignore[misc]  # equinox's Enumeration is indexable

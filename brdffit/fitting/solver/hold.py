@@ -17,7 +17,7 @@ value, a bound, or which entries are held runs the same compiled solver. The map
 Jacobian ``dθ/dz`` is the diagonal :func:`slopes`.
 """
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -34,11 +34,11 @@ NEAR_BOUND = 1e-2
 class Hold(NamedTuple):
     """Which entries of the unconstrained vector move and how (arrays (k,), or (D, k) for a batch), float64."""
 
-    free: object  # 1 where the entry moves (freely or within bounds), 0 where it is fixed
-    bounded: object  # 1 where it moves within [low, high]
-    value: object  # θ of each fixed entry (anything elsewhere)
-    low: object  # the bounds of θ on bounded entries (0 elsewhere)
-    high: object
+    free: Any  # 1 where the entry moves (freely or within bounds), 0 where it is fixed
+    bounded: Any  # 1 where it moves within [low, high]
+    value: Any  # θ of each fixed entry (anything elsewhere)
+    low: Any  # the bounds of θ on bounded entries (0 elsewhere)
+    high: Any
 
 
 def theta_of(z, hold: Hold):

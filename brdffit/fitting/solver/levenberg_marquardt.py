@@ -387,8 +387,8 @@ class ScaledLevenbergMarquardt(optx.AbstractLeastSquaresSolver):
         if self.descent.absolute_radius and not self.descent.running_scale:
             raise ValueError("MinpackTrustRegion measures steps in MINPACK's running scale: running_scale=True")
 
-    @property
-    def norm(self) -> Callable:
+    @property  # type: ignore[misc]  # equinox lets a property implement an AbstractVar (optimistix's norm)
+    def norm(self) -> Callable:  # type: ignore[override]  # as above
         """Required by optimistix's solver interface; the stopping tests here need no norm."""
         return optx.max_norm
 
@@ -505,7 +505,7 @@ def least_squares(
     it has no derivative with respect to ``y0``, on which the optimum does not depend.
     """
     search = MinpackTrustRegion() if descent.absolute_radius else CappedTrustRegion()
-    solver = ScaledLevenbergMarquardt(
+    solver = ScaledLevenbergMarquardt(  # type: ignore[call-arg]  # norm: a property here, not a field
         rtol=rtol, atol=atol, gtol=gtol, normal_equations=normal_equations, descent=descent, search=search
     )
     return optx.least_squares(

@@ -20,8 +20,8 @@ from ..._jax import float64, jax, jnp
 from ..._programs import jit
 from ...data.samples import Samples
 from ...physics.domains import ALBEDO
-from ...physics.models.model import Model
-from ...physics.models.params import Params, albedo_size, whole_albedos
+from ...physics.models.model import LobeModel
+from ...physics.models.params import Params, albedo_size, lobe_family, whole_albedos
 from ..objective.losses import Loss, linearised_weight
 from ..objective.problem import Problem, prepared, residuals
 from ..solver.hold import Hold, respected
@@ -68,7 +68,7 @@ def search_subset(samples: Samples, seed: int) -> np.ndarray | None:
 
 @float64
 def starting_points(
-    model: Model,
+    model: LobeModel,
     loss: Loss,
     problem: Problem,
     n_starts: int,
@@ -91,17 +91,17 @@ def starting_points(
     return [thetas[index] for index in order[:n_starts]]
 
 
-def grid_channels(model: Model, channels: tuple[str, ...] | None) -> tuple[str, ...] | None:
+def grid_channels(model: LobeModel, channels: tuple[str, ...] | None) -> tuple[str, ...] | None:
     """The channel names the grid search of ``model`` depends on: the data's, for a lobe with per-channel parameters
     (its measured starts, ``Lobe.channel_grid``, are in the data's channels), else None (every dataset, whatever its
     channels' names, shares one compiled search)."""
-    has_channel_starts = model.n_lobes and model.lobe.channel_names and channels is not None
-    return tuple(channels) if has_channel_starts else None
+    has_channel_starts = model.lobe is not None and model.lobe.channel_names  # a lobe exactly when n_lobes > 0
+    return tuple(channels) if has_channel_starts and channels is not None else None
 
 
 @jit(static_argnums=(0, 1, 2, 5))
 def grid_starts(
-    model: Model,
+    model: LobeModel,
     loss: Loss,
     n_starts: int,
     problems: Problem,
@@ -134,32 +134,32 @@ class LobeSearch:
     then leaves alone: the fit of fewer lobes runs in the compiled solver of all of them).
     """
 
-    def __init__(self, model: Model, loss: Loss, problem: Problem, hold: Hold | None = None):
+    def __init__(self, model: LobeModel, loss: Loss, problem: Problem, hold: Hold | None = None):
         self.model, self.loss, self.problem, self.hold = model, loss, problem, hold
-        self.grid = model.lobe.grid
+        self.grid = lobe_family(model).grid
 
     @float64
     def candidates(self, chosen: list[dict[str, float]]) -> tuple[np.ndarray, list[np.ndarray]]:
         """Costs (G,) and unconstrained vectors of the whole model with lobe ``len(chosen) + 1`` at each grid shape."""
-        shapes = {name: np.array([shape[name] for shape in chosen], float) for name in self.model.lobe.names}
+        shapes = {name: np.array([shape[name] for shape in chosen], float) for name in lobe_family(self.model).names}
         costs, thetas = _lobe_candidates(self.model, self.loss, self.problem, self.hold, shapes if chosen else {})
         return np.asarray(costs), list(np.asarray(thetas))
 
 
-def _grid(model: Model, channels: tuple[str, ...] | None = None) -> tuple[dict[str, float], ...]:
+def _grid(model: LobeModel, channels: tuple[str, ...] | None = None) -> tuple[dict[str, float], ...]:
     """The lobe family's grid of shapes, and its measured shapes in ``channels`` (``Lobe.channel_grid``) where
     given; one empty shape for a model without lobes (its one start)."""
-    if not model.n_lobes:
+    if model.lobe is None:  # no lobes
         return ({},)
     return model.lobe.grid + (model.lobe.channel_grid(channels) if channels else ())
 
 
 @jit(static_argnums=(0, 1))
-def _lobe_candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict):
+def _lobe_candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict):
     return _candidates(model, loss, problem, hold, chosen)
 
 
-def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict, channels=None):
+def _candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | None, chosen: dict, channels=None):
     """Costs (G,) and unconstrained vectors (G, k) of the model with its next lobe at each grid shape (JAX).
 
     ``chosen``: the shapes (K₀,) of the lobes already placed, {} for none. Each candidate's albedos are the
@@ -175,18 +175,19 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
     weight = linearised_weight(loss, problem.measured, problem.wi[:, 2:3], problem.scale)
     grid = _grid(model, channels)
     n_placed = len(next(iter(chosen.values()), ()))
-    per_channel = model.lobe.channel_names if model.n_lobes else ()
+    lobe_of = model.lobe
+    per_channel = lobe_of.channel_names if lobe_of is not None else ()
     fixed = model.diffuse({}, problem.wi, problem.wo)[None].astype(problem.wi.dtype)  # the diffuse term's basis
     if per_channel:  # (B₀, N, C)
         fixed = jnp.broadcast_to(fixed[:, :, None], (*fixed.shape, n_channels))
     if chosen:
         fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
-    if model.n_lobes:
+    if lobe_of is not None:
         stacked = {
             name: jnp.asarray(
                 [np.broadcast_to(shape[name], (n_channels,)) if name in per_channel else shape[name] for shape in grid]
             )
-            for name in model.lobe.names
+            for name in lobe_of.names
         }
         if hold is not None:
             stacked = _held_shapes(model, stacked, hold, n_placed, n_channels)
@@ -196,13 +197,13 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
     if per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
 
         def normal_equations_of(shape):
-            lobe = model.lobe(shape, problem.wi, problem.wo)  # (N, C)
+            lobe = lobe_family(model)(shape, problem.wi, problem.wo)  # (N, C)
             return _normal_equations(jnp.concatenate([fixed, lobe[None]]), weight, problem.measured)
 
         grams, rhs = jax.lax.map(normal_equations_of, stacked, batch_size=PER_CHANNEL_BATCH)
     else:
         if model.n_lobes:
-            lobes = jax.vmap(lambda shape: model.lobe(shape, problem.wi, problem.wo))(stacked)  # (G, N)
+            lobes = jax.vmap(lambda shape: lobe_family(model)(shape, problem.wi, problem.wo))(stacked)  # (G, N)
             bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
         else:
             bases = fixed[None]
@@ -238,7 +239,7 @@ def _candidates(model: Model, loss: Loss, problem: Problem, hold: Hold | None, c
     return costs, thetas
 
 
-def _whole_candidates(model: Model, stacked: dict, n_channels: int, hold: Hold | None, cost_of):
+def _whole_candidates(model: LobeModel, stacked: dict, n_channels: int, hold: Hold | None, cost_of):
     """Costs (G,) and unconstrained vectors (G, k) of a whole-lobe model (``LobeModel.whole``) at each grid shape."""
 
     def theta_of(index):
@@ -250,7 +251,7 @@ def _whole_candidates(model: Model, stacked: dict, n_channels: int, hold: Hold |
     return jax.lax.map(cost_of, thetas, batch_size=PER_CHANNEL_BATCH), thetas
 
 
-def _held_shapes(model: Model, stacked: dict, hold: Hold, lobe: int, n_channels: int) -> dict:
+def _held_shapes(model: LobeModel, stacked: dict, hold: Hold, lobe: int, n_channels: int) -> dict:
     """The grid's shapes (G,) for lobe ``lobe``, each moved onto what ``hold`` allows (its fixed values, inside its
     bounds), through the solver's coordinates."""
     coordinates, per_channel = model.unconstrained.shared, model.unconstrained.per_channel

@@ -25,9 +25,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...physics.models.model import Model
+from ...physics.models.model import LobeModel
+from ...physics.models.params import lobe_family
 from ..objective.losses import Loss
 from ..objective.problem import Problem
+from ..solver.compiled import Solved
 from ..solver.hold import Hold
 from .grid import LobeSearch, starting_points
 
@@ -40,7 +42,7 @@ class LobeFit(NamedTuple):
     """The best run of a lobe-by-lobe fit (a ``solver/compiled.Solved``), the cost with one lobe less and the costs
     the last lobe's runs ended at, on the problem searched."""
 
-    best: object
+    best: Solved
     fewer_lobes_cost: float
     last_costs: tuple[float, ...] = ()
     #: Whether the levels were searched on every sample (their costs then compare with the fit's), not a subset.
@@ -71,14 +73,20 @@ def distinct_minima(costs) -> list[float]:
 
 
 def lobe_by_lobe(
-    model: Model, loss: Loss, problem: Problem, solve: Callable, n_starts: int, best: Callable, hold: Hold | None = None
+    model: LobeModel,
+    loss: Loss,
+    problem: Problem,
+    solve: Callable,
+    n_starts: int,
+    best: Callable,
+    hold: Hold | None = None,
 ) -> LobeFit:
     """Fit ``model``'s lobes one at a time on ``problem`` with the compiled ``solve``; ``best`` picks among runs.
     Every start respects ``hold``, which ``solve`` applies (``hold.py``)."""
     search = LobeSearch(model, loss, problem, hold)
     n_channels = problem.measured.shape[1]
     level_costs = []
-    fitted = None
+    fitted: Solved | None = None
     for placed in range(model.n_lobes):
         chosen = [] if fitted is None else _shapes(model, fitted.theta, n_channels, placed)
         costs, thetas = search.candidates(chosen)
@@ -91,14 +99,15 @@ def lobe_by_lobe(
             runs.append(fitted)  # the lobes so far with the new one off: never worse than one lobe less
         fitted = best(runs)
         level_costs.append(float(fitted.cost))
+    assert fitted is not None  # a model fitted lobe by lobe has lobes
     fewer = level_costs[-2] if len(level_costs) > 1 else float("nan")
     return LobeFit(fitted, fewer, started)
 
 
-def _shapes(model: Model, theta, n_channels: int, count: int) -> list[dict[str, float]]:
+def _shapes(model: LobeModel, theta, n_channels: int, count: int) -> list[dict[str, float]]:
     """The shapes of the first ``count`` lobes at the unconstrained ``theta``."""
     shape = model.unconstrained.to_params(np.asarray(theta), n_channels).shape
-    return [{name: float(shape[name][k]) for name in model.lobe.names} for k in range(count)]
+    return [{name: float(shape[name][k]) for name in lobe_family(model).names} for k in range(count)]
 
 
 def _each_family(grid: tuple[dict[str, float], ...], costs: np.ndarray, extra: int) -> list[int]:

@@ -22,7 +22,7 @@ which depends on the half vector alone, applies to it unchanged.
 """
 
 from dataclasses import dataclass
-from typing import final
+from typing import Any, final
 
 import numpy as np
 
@@ -208,7 +208,11 @@ def cook_torrance(
     or ``"true"`` as a spec writes it; default False)."""
     anisotropic = boolean("anisotropic", anisotropic)
     lobe = CookTorranceLobe(fresnel, distribution, shadowing)
-    options = (("fresnel", fresnel), ("distribution", distribution), ("shadowing", shadowing))
+    options: tuple[tuple[str, Any], ...] = (
+        ("fresnel", fresnel),
+        ("distribution", distribution),
+        ("shadowing", shadowing),
+    )
     options += (("anisotropic", anisotropic),)
     # A conductor's reflectance is its Fresnel term: ks is held at 1 unless a user frees it (docs/holding.md).
     held = (("ks", 1.0),) if fresnel == "conductor" else ()

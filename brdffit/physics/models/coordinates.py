@@ -21,12 +21,12 @@ reported in the *physical* one (labels ``rho_d[r]``, ``alpha``, ``lobes[0].cxy``
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, replace
-from typing import final
+from typing import TypeVar, final
 
 from ..._jax import namespace
 from ..domains import ALBEDO, Domain
-from .lobe import BoundedShapeCoordinates, ShapeCoordinates
-from .params import Layout, Params, albedo_size, whole_albedos
+from .lobe import BoundedShapeCoordinates, PhysicalShape, ShapeCoordinates, UnconstrainedShape
+from .params import Layout, Params, albedo_size, lobe_family, whole_albedos
 
 
 @dataclass(frozen=True)
@@ -63,10 +63,11 @@ class FlatCoordinates(ABC):
         if lobe is None or not lobe.channel_names:
             return self.shape, None
         # A lobe with per-channel parameters has elementwise coordinates over named parameters (lobe.py).
-        parameters = self.shape.parameters
-        shared = tuple(one for one in parameters if one[0] not in lobe.channel_names)
-        per_channel = tuple(one for one in parameters if one[0] in lobe.channel_names)
-        return replace(self.shape, parameters=shared), replace(self.shape, parameters=per_channel)
+        shape = self.shape
+        if isinstance(shape, PhysicalShape):
+            return _split_named(shape, lobe.channel_names)
+        assert isinstance(shape, UnconstrainedShape)
+        return _split_named(shape, lobe.channel_names)
 
     def size(self, n_channels: int) -> int:
         """The vector's length for ``n_channels`` channels."""
@@ -123,6 +124,16 @@ class FlatCoordinates(ABC):
         return Params(diffuse, specular, shape)
 
 
+_Named = TypeVar("_Named", PhysicalShape, UnconstrainedShape)
+
+
+def _split_named(shape: _Named, channel_names: tuple[str, ...]) -> tuple[_Named, _Named]:
+    """``shape``'s coordinates split into those all channels share and those with one value per channel."""
+    shared = tuple(one for one in shape.parameters if one[0] not in channel_names)
+    per_channel = tuple(one for one in shape.parameters if one[0] in channel_names)
+    return replace(shape, parameters=shared), replace(shape, parameters=per_channel)
+
+
 class BoundedFlatCoordinates(FlatCoordinates):
     """Coordinates whose entries live in domains (with priors): the sampling and the physical ones, where an
     albedo is its own value."""
@@ -142,10 +153,13 @@ class BoundedFlatCoordinates(FlatCoordinates):
         k, diffuse = self.model.n_lobes, [self.model.diffuse.albedo_domain] * n_channels
         if not k:
             return diffuse
-        specular = [self.model.lobe.albedo_domain] * (k * n_channels)
-        per_channel = [d for d in self.per_channel.domains for _ in range(n_channels)] if self.per_channel else []
+        specular = [lobe_family(self.model).albedo_domain] * (k * n_channels)
+        shared, per_channel_shape = self._split()  # bounded, as self.shape is
+        assert isinstance(shared, BoundedShapeCoordinates)
+        assert per_channel_shape is None or isinstance(per_channel_shape, BoundedShapeCoordinates)
+        per_channel = [d for d in per_channel_shape.domains for _ in range(n_channels)] if per_channel_shape else []
         albedos = [] if self.model.whole else diffuse + specular
-        return albedos + list(self.shared.domains) * k + per_channel * k
+        return albedos + list(shared.domains) * k + per_channel * k
 
 
 @final
@@ -154,7 +168,7 @@ class UnconstrainedCoordinates(FlatCoordinates):
 
     @property
     def shape(self) -> ShapeCoordinates:
-        return self.model.lobe.unconstrained
+        return lobe_family(self.model).unconstrained
 
     def albedo_to_vector(self, albedos):
         return ALBEDO.to_unconstrained(albedos)
@@ -169,7 +183,7 @@ class SamplingCoordinates(BoundedFlatCoordinates):
 
     @property
     def shape(self) -> BoundedShapeCoordinates:
-        return self.model.lobe.sampling
+        return lobe_family(self.model).sampling
 
 
 @final
@@ -178,4 +192,4 @@ class PhysicalCoordinates(BoundedFlatCoordinates):
 
     @property
     def shape(self) -> BoundedShapeCoordinates:
-        return self.model.lobe.physical
+        return lobe_family(self.model).physical

@@ -16,7 +16,7 @@ import numpy as np
 
 from ...errors import BrdfInputError
 from ..domains import ALBEDO
-from .params import Layout, Params, whole_albedos
+from .params import Layout, Params, lobe_family, whole_albedos
 
 
 @dataclass(frozen=True)
@@ -30,12 +30,12 @@ class ParameterDictionary:
         """The dictionary's top-level names, in the order of the result file."""
         model = self.model
         if model.whole:
-            return model.lobe.names
+            return lobe_family(model).names
         if not model.n_lobes:
             return (model.diffuse_name,)
         if model.lobes_as_list:
             return (model.diffuse_name, "lobes")
-        return (model.diffuse_name, model.specular_name, *model.lobe.names)
+        return (model.diffuse_name, model.specular_name, *lobe_family(model).names)
 
     def to_params(self, values: Mapping[str, Any]) -> Params:
         """Check a parameter dictionary and convert it to :class:`Params` (numpy arrays).
@@ -51,12 +51,13 @@ class ParameterDictionary:
         diffuse = _albedo(values[model.diffuse_name], f"{model.name}: {model.diffuse_name}")
         if not model.n_lobes:
             return Params(diffuse, np.zeros((0, diffuse.size)), {})
+        family = lobe_family(model)
         if model.lobes_as_list:
             lobes = values["lobes"]
             if not isinstance(lobes, list | tuple) or len(lobes) != model.n_lobes:
                 got = len(lobes) if isinstance(lobes, list | tuple) else type(lobes).__name__
                 raise BrdfInputError(f"{model.name}: 'lobes' must be a list of {model.n_lobes} lobe(s), got {got}")
-            names = (model.specular_name, *model.lobe.names)
+            names = (model.specular_name, *family.names)
             for index, lobe in enumerate(lobes):
                 if not isinstance(lobe, Mapping):
                     raise BrdfInputError(f"{model.name}: lobes[{index}] must be a JSON object")
@@ -76,10 +77,10 @@ class ParameterDictionary:
                 f" but {model.diffuse_name} has {diffuse.size}"
             )
         shapes = [
-            model.lobe.checked_shape(_shape_numbers(lobe, model.lobe, diffuse.size, prefix), prefix)
+            family.checked_shape(_shape_numbers(lobe, family, diffuse.size, prefix), prefix)
             for lobe, prefix in zip(lobes, prefixes, strict=True)
         ]
-        shape = {name: np.array([one[name] for one in shapes]) for name in model.lobe.names}
+        shape = {name: np.array([one[name] for one in shapes]) for name in family.names}
         return Params(diffuse, specular, shape)
 
     def from_params(self, params: Params) -> dict[str, Any]:
@@ -103,20 +104,20 @@ class ParameterDictionary:
 
 def _shape_written(model: Layout, params: Params, k: int) -> dict[str, Any]:
     """Lobe ``k``'s shape as the file writes it: numbers, and lists for the lobe's per-channel parameters."""
-    per_channel = model.lobe.channel_names
+    family = lobe_family(model)
     return {
-        name: _floats(params.shape[name][k]) if name in per_channel else float(params.shape[name][k])
-        for name in model.lobe.names
+        name: _floats(params.shape[name][k]) if name in family.channel_names else float(params.shape[name][k])
+        for name in family.names
     }
 
 
 def _whole_params(model: Layout, values: Mapping[str, Any]) -> Params:
     """A whole-lobe model's parameters: its lobe's shape, with as many channels as its per-channel parameters' longest
     list (one number stands for every channel)."""
-    prefix = f"{model.name}: "
-    lengths = [len(values[name]) for name in model.lobe.channel_names if isinstance(values[name], list | tuple)]
+    prefix, family = f"{model.name}: ", lobe_family(model)
+    lengths = [len(values[name]) for name in family.channel_names if isinstance(values[name], list | tuple)]
     n_channels = max(lengths, default=1)
-    shape = model.lobe.checked_shape(_shape_numbers(values, model.lobe, n_channels, prefix), prefix)
+    shape = family.checked_shape(_shape_numbers(values, family, n_channels, prefix), prefix)
     diffuse, specular = whole_albedos(n_channels)
     return Params(diffuse, specular, {name: np.array([value]) for name, value in shape.items()})
 
@@ -146,7 +147,7 @@ def _albedo(value: Any, where: str) -> np.ndarray:
 def _shape_numbers(values: Mapping[str, Any], lobe, n_channels: int, where: str) -> dict[str, Any]:
     """The lobe's shape parameters: numbers, and lists of ``n_channels`` for its ``channel_names`` (one number
     broadcast to every channel)."""
-    numbers = {}
+    numbers: dict[str, Any] = {}
     for name in lobe.names:
         value = values[name]
         if name in lobe.channel_names:

@@ -114,21 +114,32 @@ class Lobe(ABC):
     Concrete lobes are frozen dataclasses, hence hashable: JAX treats them as static configuration.
     """
 
-    #: The shape parameters that take one value per channel (a conductor's complex index ``eta``, ``k``), the last
-    #: of :attr:`names`; with any, the lobe's values are (N, C), one lobe per channel. Every coordinate map of a
-    #: lobe with such parameters is elementwise (a :class:`MappedLobe`'s), so one map serves all channels.
-    channel_names: tuple[str, ...] = ()
-    #: The shape parameters whose domain's ends are values of their own, not limits a fit runs into (glTF's
-    #: ``metallic``: 0 is a dielectric, 1 a metal): a fit ending there is not warned about.
-    meaningful_ends: tuple[str, ...] = ()
-    #: Whether a channel's value depends on other channels' parameters (principled's tints divide the colour by its
-    #: luminance): then the fit takes the model's whole Jacobian, one forward-mode tangent per parameter and channel,
-    #: where a lobe of per-channel parameters otherwise takes one tangent per parameter for every channel at once.
-    channels_coupled: bool = False
     #: The shape parameters that make the lobe of an isotropic model (``LobeModel.isotropic``) anisotropic, which the
     #: model holds by default at values that keep it isotropic (glTF's ``anisotropy_strength`` 0, and its rotation): a
     #: fit that frees them, or holds them elsewhere, is checked as an anisotropic model's (``caveats.py``).
     anisotropy_names: tuple[str, ...] = ()
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The shape parameters that take one value per channel (a conductor's complex index ``eta``, ``k``), the last
+        of :attr:`names`; with any, the lobe's values are (N, C), one lobe per channel. Every coordinate map of a lobe
+        with such parameters is elementwise (a :class:`MappedLobe`'s), so one map serves all channels. None by
+        default; a lobe overrides it with a class attribute or a property."""
+        return ()
+
+    @property
+    def meaningful_ends(self) -> tuple[str, ...]:
+        """The shape parameters whose domain's ends are values of their own, not limits a fit runs into (glTF's
+        ``metallic``: 0 is a dielectric, 1 a metal): a fit ending there is not warned about. None by default."""
+        return ()
+
+    @property
+    def channels_coupled(self) -> bool:
+        """Whether a channel's value depends on other channels' parameters (principled's tints divide the colour by
+        its luminance): then the fit takes the model's whole Jacobian, one forward-mode tangent per parameter and
+        channel, where a lobe of per-channel parameters otherwise takes one tangent per parameter for every channel at
+        once. False by default."""
+        return False
 
     def channel_grid(self, channels: tuple[str, ...]) -> tuple[dict[str, Any], ...]:
         """Starting shapes beside :attr:`grid` whose :attr:`channel_names` have one value per channel (a list in the
@@ -164,7 +175,12 @@ class Lobe(ABC):
         """Starting shapes for the fit: coarse, but spanning realistic materials."""
 
     @abstractmethod
-    def __call__(self, shape: Shape, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, " n"]:
+    def __call__(
+        self,
+        shape: Shape,
+        wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+        wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+    ) -> Float[Array, " n"]:
         """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars (of arrays (C,)
         for the :attr:`channel_names`, and then values (N, C))."""
 

@@ -43,7 +43,7 @@ from .coordinates import PhysicalCoordinates, SamplingCoordinates, Unconstrained
 from .dictionary import ParameterDictionary
 from .diffuse import LAMBERTIAN
 from .lobe import Lobe, WholeLobe
-from .params import Params
+from .params import Params, lobe_family
 
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
@@ -70,9 +70,14 @@ class Model(ABC):
 
     # ------------------------------------------------------------------ evaluation
     @abstractmethod
-    def brdf(self, params: Params, wi: Float[Array, "n 3"], wo: Float[Array, "n 3"]) -> Float[Array, "n C"]:
+    def brdf(
+        self,
+        params: Params,
+        wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+        wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+    ) -> Float[Array, "n C"]:
         """BRDF values (N, C) in 1/sr (JAX), zero where ``wi_z ≤ 0`` or ``wo_z ≤ 0``; plain JAX in the caller's
-        precision (float32 unless the caller has float64 on)."""
+        precision (float32 unless the caller has float64 on), of JAX or numpy directions."""
 
     @abstractmethod
     def host_brdf(self, params: Params, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
@@ -175,7 +180,8 @@ class LobeModel(Model):
     def lobe_values(self, shape: Mapping[str, Any], wi, wo) -> Float[Array, "K n"] | Float[Array, "K n C"]:
         """Unit-albedo lobe values (K, N), one row per lobe, for upper-hemisphere directions; (K, N, C) for a lobe
         with per-channel parameters (``Lobe.channel_names``)."""
-        return jax.vmap(lambda one_shape: self.lobe(one_shape, wi, wo))(dict(shape))
+        lobe = lobe_family(self)
+        return jax.vmap(lambda one_shape: lobe(one_shape, wi, wo))(dict(shape))
 
     # ------------------------------------------------------------ parameter forms
     @property

@@ -87,6 +87,7 @@ not determine: other C are refused.
 """
 
 from collections.abc import Mapping
+from typing import Any
 
 from ..._jax import jnp
 from ...checks import choice
@@ -96,7 +97,7 @@ from ..geometry import above_horizon, half_vector
 from ..microfacet import anisotropic_slope2, ggx_anisotropic_distribution, ggx_lambda, ggx_slope_lambda, smith_shadowing
 
 #: Mitsuba's default of each parameter (``Principled``'s constructor; ``base_color`` 0.5 in every channel).
-DEFAULTS = {
+DEFAULTS: dict[str, Any] = {  # numbers, and base_color's (r, g, b)
     "base_color": (0.5, 0.5, 0.5),
     "roughness": 0.5,
     "metallic": 0.0,

@@ -53,7 +53,7 @@ following ``α`` (its derivative in ``α`` is 0 there) rather than costing more 
 import functools
 import math
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -201,7 +201,9 @@ def write_shipped_rows(path: Path = SHIPPED_ROWS) -> None:
     """Write :data:`SHIPPED_ROWS`: :func:`tabulated_rows` of each distribution at Mitsuba's default index, one array a
     distribution (ALPHA_NODES, 65). Run ``python -m brdffit.physics.renderers.roughplastic`` after changing the
     quadrature or the table's nodes; a test checks that the shipped rows are the quadrature's."""
-    rows = {distribution: tabulated_rows(distribution, DEFAULT_INT_IOR / EXT_IOR) for distribution in DISTRIBUTIONS}
+    rows: dict[str, Any] = {  # savez keywords, whose stubs take allow_pickle among them
+        distribution: tabulated_rows(distribution, DEFAULT_INT_IOR / EXT_IOR) for distribution in DISTRIBUTIONS
+    }
     with open(path, "wb") as file:
         np.savez(file, **rows)
 
