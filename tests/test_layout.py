@@ -27,6 +27,7 @@ LAYERS = {
     "brdffit._jax": 0,
     "brdffit._programs": 0,
     "brdffit._files": 0,
+    "brdffit._progress": 0,
     "brdffit.errors": 0,
     "brdffit.checks": 0,
     "brdffit.physics": 1,

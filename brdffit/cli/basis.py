@@ -88,8 +88,7 @@ def library_files(entries: list[str]) -> list[Path]:
 
 
 def _build(args: argparse.Namespace) -> int:
-    from tqdm.auto import tqdm
-
+    from .._progress import progress_bar
     from ..data.merl import N_BINS
     from ..datadriven.basis import save_basis
     from ..datadriven.build import build_basis
@@ -99,7 +98,7 @@ def _build(args: argparse.Namespace) -> int:
         raise BrdfInputError("-o -: a basis is a binary file; give a file name (basis.npz)")
     output = output_file(args.output, "-o")
     started = time.perf_counter()
-    with tqdm(total=2 * N_BINS, unit="bin", unit_scale=True, disable=True if args.quiet else None, leave=False) as bar:
+    with progress_bar(2 * N_BINS, "bin", False if args.quiet else None, unit_scale=True) as bar:
         basis = build_basis(files, components=args.components, mapping=args.mapping, progress=bar.update)
     save_basis(basis, output)
     print(f"wrote {output}: {describe_basis(basis)} ({time.perf_counter() - started:.1f} s)")
@@ -112,9 +111,9 @@ def _directions(args: argparse.Namespace) -> int:
 
     output = output_file(args.output, "-o")
     basis = load_basis(args.basis)
-    from tqdm.auto import tqdm
+    from .._progress import progress_bar
 
-    with tqdm(total=args.n, unit="pair", disable=True if args.quiet else None, leave=False) as bar:
+    with progress_bar(args.n, "pair", False if args.quiet else None) as bar:
         options = dict(max_theta=args.max_theta, candidates=args.candidates, seed=args.seed, progress=bar.update)
         chosen = choose_directions(basis, args.n, **options)
     write_directions(chosen.angles, output)

@@ -280,9 +280,9 @@ def compare(
     setups = [checked(samples, model, loss, max_theta, _held_by(model, holding)) for model in chosen]
     split = make_folds(samples, folds, seed)
     problem = build_problem(samples)
-    from tqdm.auto import tqdm
+    from ..._progress import progress_bar
 
-    bar = tqdm(total=len(chosen), unit="model", disable=None if progress is None else not progress, leave=False)
+    bar = progress_bar(len(chosen), "model", progress)
     scores = []
     try:
         for model, setup in zip(chosen, setups, strict=True):

@@ -125,8 +125,7 @@ def starts_per_dataset(start, count: int) -> list:
 
 
 def progress_bar(total: int, enabled: bool | None):
-    """A bar of ``total`` fits on stderr."""
-    from tqdm.auto import tqdm
+    """A bar of ``total`` fits on stderr (``_progress.progress_bar``)."""
+    from ..._progress import progress_bar as bar
 
-    # disable=None: tqdm shows the bar only when its stream (stderr) is a terminal.
-    return tqdm(total=total, unit="fit", disable=None if enabled is None else not enabled, leave=False)
+    return bar(total, "fit", enabled)
