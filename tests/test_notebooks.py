@@ -57,3 +57,23 @@ def test_notebook_runs(notebook, monkeypatch):
         pixels = np.asarray(canvas.buffer_rgba(), dtype=float)
         assert np.all(np.isfinite(pixels)) and pixels.std() > 0
     plt.close("all")
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[path.stem for path in NOTEBOOKS])
+def test_notebook_keeps_the_outputs_of_its_code(notebook):
+    """The file holds what Jupyter showed for the code as it is (``make notebooks``): its code cells run in order, each
+    with an output and none an error, and the code unchanged since (the digest ``notebooks/execute.py`` recorded)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("execute", notebook.parent / "execute.py")
+    execute = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(execute)
+    document = json.loads(notebook.read_text(encoding="utf-8"))
+    code = [cell for cell in document["cells"] if cell["cell_type"] == "code"]
+    recorded = document["metadata"].get("brdffit", {}).get("code_digest")
+    assert recorded == execute.code_digest(document["cells"]), "code changed since its outputs: run make notebooks"
+    assert [cell["execution_count"] for cell in code] == list(range(1, len(code) + 1))
+    for cell in code:
+        source = "".join(cell["source"])
+        assert cell["outputs"], f"no output kept: {source[:60]!r}"
+        assert not [output for output in cell["outputs"] if output["output_type"] == "error"], source[:60]
