@@ -29,8 +29,10 @@ test: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q
 
 # The lowest versions pyproject.toml allows (issue 30: what `pip install brdffit` may give a user): a second venv
-# resolved by uv with --resolution lowest-direct (every direct dependency at its lower limit), the shipped example
-# fitted, and the tests of LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver,
+# resolved by uv with --resolution lowest-direct (every direct dependency at its lower limit, the package installed
+# from the clone as a wheel), `python -m brdffit` and a fit of the example from another folder, the wheel and the sdist
+# built and checked for LICENSE, py.typed and (the sdist) the tests (tests/dist_contents.py), and the tests of
+# LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver,
 # the stored programs, pandas and colour-science, Dask, the command line's streams and extras (~10 minutes on 2
 # cores). Needs the package index; CI runs it after `make test`.
 LOWEST := .venv-lowest
@@ -44,7 +46,10 @@ test-lowest: $(STAMP) $(VALIDATOR)
 	$(BIN)/uv pip install --quiet --python $(LOWEST)/bin/python --resolution lowest-direct '.[test]'
 	$(LOWEST)/bin/python -c "import jax, numpy, optimistix, equinox; print('lowest:', 'jax', jax.__version__, \
 		'numpy', numpy.__version__, 'optimistix', optimistix.__version__, 'equinox', equinox.__version__)"
-	$(LOWEST)/bin/brdffit fit examples/ward-pickled-oak.csv --model ward -q -o $(LOWEST)/ward-pickled-oak.json
+	cd $(LOWEST) && bin/python -m brdffit --version
+	cd $(LOWEST) && BRDFFIT_CACHE_DIR=cache bin/brdffit fit ../examples/ward-pickled-oak.csv --model ward -q -o ward.json
+	$(BIN)/uv build --quiet --sdist --wheel --out-dir $(LOWEST)/dist
+	$(BIN)/python tests/dist_contents.py $(LOWEST)/dist
 	$(LOWEST)/bin/python -m pytest -n 2 -q $(LOWEST_TESTS)
 
 test-heavy: $(STAMP) $(VALIDATOR)
