@@ -26,6 +26,10 @@ parameters (``Lobe.channels_coupled``: principled's tints, through the colour's 
 its basis, ``basis[n, c, p] = ∂f[n, c]/∂θ_p`` (M = k, one tangent per entry of θ), with identity coefficients.
 """
 
+from __future__ import annotations  # Directions is a type checker's name (physics/geometry.py)
+
+from typing import TYPE_CHECKING
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -36,12 +40,15 @@ from ...physics.geometry import above_horizon
 from ...physics.models.model import LobeModel
 from ...physics.models.params import albedo_size, lobe_family, whole_albedos
 
+if TYPE_CHECKING:
+    from ...physics.geometry import Directions
+
 
 def value_and_basis(
     model: LobeModel,
     theta: Float[Array, " k"],
-    wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
-    wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+    wi: Directions,
+    wo: Directions,
     n_channels: int,
     dtype=None,
 ) -> tuple[Float[Array, "n C"], Float[Array, "n M"] | Float[Array, "n C M"]]:

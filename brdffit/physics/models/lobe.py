@@ -31,6 +31,8 @@ from ..domains import ALBEDO, Domain, MappedDomain
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
 
+    from ..geometry import Directions
+
 #: A lobe's shape: each parameter's value, an array (K,) for K lobes or a number for one; a parameter with one value
 #: per channel (:attr:`Lobe.channel_names`) an array (K, C), or (C,) for one lobe.
 Shape = Mapping[str, Any]
@@ -178,8 +180,8 @@ class Lobe(ABC):
     def __call__(
         self,
         shape: Shape,
-        wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
-        wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+        wi: Directions,
+        wo: Directions,
     ) -> Float[Array, " n"]:
         """Lobe values (N,) in 1/sr for directions (N, 3) with positive ``z``; ``shape`` of scalars (of arrays (C,)
         for the :attr:`channel_names`, and then values (N, C))."""

@@ -48,6 +48,8 @@ from .params import Params, lobe_family
 if TYPE_CHECKING:
     from jaxtyping import Array, Float
 
+    from ..geometry import Directions
+
 
 class Model(ABC):
     """A reflectance model, as every part of brdffit sees it (abstract: :class:`LobeModel` and ``PcaModel`` are its
@@ -73,11 +75,11 @@ class Model(ABC):
     def brdf(
         self,
         params: Params,
-        wi: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
-        wo: Float[Array, "n 3"] | Float[np.ndarray, "n 3"],
+        wi: Directions,
+        wo: Directions,
     ) -> Float[Array, "n C"]:
-        """BRDF values (N, C) in 1/sr (JAX), zero where ``wi_z ≤ 0`` or ``wo_z ≤ 0``; plain JAX in the caller's
-        precision (float32 unless the caller has float64 on), of JAX or numpy directions."""
+        """BRDF values (N, C) in 1/sr (JAX) at directions ``wi``, ``wo`` (N, 3), JAX or numpy arrays; zero where
+        ``wi_z ≤ 0`` or ``wo_z ≤ 0``; plain JAX in the caller's precision (float32 unless the caller has float64 on)."""
 
     @abstractmethod
     def host_brdf(self, params: Params, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
