@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..._jax import float64
+from ..._progress import progress_bar
 from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...errors import BrdfInputError
@@ -101,7 +102,7 @@ def fit_many(
         return len(unit.indices)
 
     units = work_units(built, kept, [vector is not None for vector in vectors], threads)
-    bar = progress_bar(len(samples), progress)
+    bar = progress_bar(len(samples), "fit", progress)
     try:
         run_units(units, fit_unit, threads, bar)
     finally:
@@ -122,10 +123,3 @@ def starts_per_dataset(start, count: int) -> list:
     if len(starts) != count:
         raise BrdfInputError(f"{len(starts)} starts for {count} datasets; give one per dataset or one for all")
     return starts
-
-
-def progress_bar(total: int, enabled: bool | None):
-    """A bar of ``total`` fits on stderr (``_progress.progress_bar``)."""
-    from ..._progress import progress_bar as bar
-
-    return bar(total, "fit", enabled)

@@ -23,6 +23,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
+from ..._progress import progress_bar
 from ...data.load import load_samples
 from ...data.samples import Samples
 from ...errors import BrdfInputError
@@ -30,7 +31,7 @@ from ...physics.models.model import Model
 from ..options import Holding
 from ..single.fit import checked
 from ..single.result import FitResult
-from .batch import every_fitted, fit_many, progress_bar, starts_per_dataset
+from .batch import every_fitted, fit_many, starts_per_dataset
 from .buckets import work_units
 
 #: The most datasets one task fits: a few seconds of work for small ones, so that a lost worker costs little and
@@ -95,7 +96,7 @@ def fit_on_cluster(
         for index, chunk in enumerate(chunks)
     }
     results: list[FitResult | None] = [None] * len(items)
-    bar = progress_bar(len(items), progress)
+    bar = progress_bar(len(items), "fit", progress)
     try:
         for future in as_completed(futures):
             chunk, fitted = futures[future], future.result()
