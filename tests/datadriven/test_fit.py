@@ -128,6 +128,8 @@ def test_start_batch_and_compare(basis_file, library):
     np.testing.assert_allclose(again.params["coefficients"], first.params["coefficients"], atol=1e-6)
     batch = brdffit.fit_batch(samples, model="pca", basis=str(basis_file), progress=False)
     np.testing.assert_allclose(batch[0].params["coefficients"], first.params["coefficients"], atol=1e-9)
+    started = brdffit.fit_batch(samples, model="pca", basis=str(basis_file), start=first.params, progress=False)
+    np.testing.assert_allclose(started[0].params["coefficients"], again.params["coefficients"], atol=1e-9)
     comparison = brdffit.compare(samples[1], models=["ward", f"pca:basis={basis_file}"], folds=3)
     scores = {score.spec.partition(":")[0]: score for score in comparison.models}
     assert scores["pca"].k == 18 and np.isfinite(scores["pca"].cv_loss)

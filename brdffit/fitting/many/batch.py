@@ -33,6 +33,7 @@ from ..._progress import progress_bar
 from ...checks import choice, whole_number
 from ...data.samples import Samples
 from ...errors import BrdfInputError
+from ...physics.models.model import LobeModel
 from ..options import HOLDING_NOTHING, SOLVING, Holding, Solving
 from ..single.fit import Setup, checked, fit_checked, start_vector
 from ..single.result import FitResult
@@ -76,8 +77,10 @@ def fit_many(
         on_checked(setup)
     built, built_loss = setups[0].model, setups[0].loss
     kept = [setup.samples for setup in setups]
+    # A lobe model's starts as the solver's vectors, checked here; the data-driven model's fits take theirs as given
+    # (each fitted alone, ``buckets.fitted_alone``; ``datadriven/fit.py`` checks them).
     vectors = [
-        None if one is None else start_vector(built, one, data.n_channels)
+        None if one is None or not isinstance(built, LobeModel) else start_vector(built, one, data.n_channels)
         for one, data in zip(starts, kept, strict=True)
     ]
     results: list[FitResult | None] = [None] * len(kept)
