@@ -69,7 +69,7 @@ bench: $(STAMP)
 # the basis build's time and memory, and held-out materials fitted from 20 pairs; writes benchmarks/results/pca.{json,md}.
 LIBRARY ?= $(HOME)/.cache/brdffit-library
 bench-pca: $(STAMP)
-	$(BIN)/python -m data_synth.library $(LIBRARY) --analytic 60 --mitsuba 40
+	$(BIN)/python -m brdffit.data_synth.library $(LIBRARY) --analytic 60 --mitsuba 40
 	$(BIN)/python benchmarks/pca.py $(LIBRARY)
 
 # Into the renderer (issue 28): materials made by Mitsuba 3's BSDFs, compared, fitted and exported, each export

@@ -1,7 +1,7 @@
 """(l) The data-driven model (issue 15) on a library of MERL tables: build time and memory, and held-out materials
 fitted from the 20 pairs the basis chooses, against the analytic models fitted to the same 20 samples.
 
-    .venv/bin/python -m data_synth.library LIBRARY --analytic 60 --mitsuba 40   # 100 tables, ~3 GB, ~3 min
+    .venv/bin/python -m brdffit.data_synth.library LIBRARY --analytic 60 --mitsuba 40   # 100 tables, ~3 GB, ~3 min
     .venv/bin/python benchmarks/pca.py LIBRARY [--components 8,16,24] [--held-out 0.25] [--seed 0]
 
 1. Build: ``build_basis`` of every table of the library (100), in a fresh process: wall time and peak resident
@@ -111,7 +111,7 @@ def dense_error(predicted: np.ndarray, truth: np.ndarray) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("library", type=Path, help="a folder written by python -m data_synth.library")
+    parser.add_argument("library", type=Path, help="a folder written by python -m brdffit.data_synth.library")
     parser.add_argument(
         "--components", type=lambda text: [int(k) for k in text.split(",")], default=[8, 16, 24], help="K,K,…"
     )

@@ -30,11 +30,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import data_synth  # noqa: E402
-from brdffit import Samples, compare, fit  # noqa: E402
+from brdffit import Samples, compare, data_synth, fit  # noqa: E402
+from brdffit.data_synth.library import mitsuba_brdf  # noqa: E402
 from brdffit.export.at_data import DARK  # noqa: E402
 from brdffit.export.mitsuba import mitsuba_bsdf  # noqa: E402
-from data_synth.library import mitsuba_brdf  # noqa: E402
 
 #: The data's noise: 1% of each value, seeded.
 NOISE = 0.01

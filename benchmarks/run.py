@@ -61,8 +61,7 @@ sys.path.insert(0, str(ROOT))
 
 from worker import BATCH_SOLVERS  # noqa: E402
 
-import data_synth  # noqa: E402
-from brdffit import get_model  # noqa: E402
+from brdffit import data_synth, get_model  # noqa: E402
 from brdffit.fitting.objective.losses import get_loss  # noqa: E402
 
 WORKER = Path(__file__).with_name("worker.py")

@@ -27,8 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import data_synth
-from brdffit import Samples, enable_compilation_cache, fit, fit_batch, get_model
+from brdffit import Samples, data_synth, enable_compilation_cache, fit, fit_batch, get_model
 from brdffit.fitting.objective.losses import get_loss
 
 LOSS = "log"

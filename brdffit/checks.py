@@ -1,4 +1,4 @@
-"""Checks of argument values shared by every layer (and ``data_synth``), with the one-line errors users see.
+"""Checks of argument values shared by every layer, with the one-line errors users see.
 
 Each check names the argument as the library's callers write it (``n_starts``); the command line spells
 the same message with its flag (``--starts``), see :mod:`brdffit.errors`.

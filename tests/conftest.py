@@ -97,8 +97,7 @@ def no_fit(monkeypatch):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """A small Ward dataset (``ward.csv``, one channel, 432 samples) and its fit (``ward.json``) in a folder."""
-    import data_synth
-    from brdffit import fit, save_samples
+    from brdffit import data_synth, fit, save_samples
 
     folder = tmp_path_factory.mktemp("ward")
     samples = data_synth.synthesize(

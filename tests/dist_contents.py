@@ -1,7 +1,8 @@
 """What the wheel and the sdist carry (``make test-lowest`` builds both): ``python tests/dist_contents.py DIST``.
 
-The wheel: the package, its ``py.typed`` (PEP 561) and the licence (``license-files``). The sdist: the same and what
-its tests need (the tests, the examples, the Makefile and ``constraints.txt``: an sdist runs its tests, issue 30).
+The wheel: the package (and no other top-level one), its ``py.typed`` (PEP 561) and the licence
+(``license-files``). The sdist: the same and what its tests need (the tests, the examples, the Makefile and
+``constraints.txt``: an sdist runs its tests, issue 30).
 Prints what it checked; exits 1 naming what is missing.
 """
 
@@ -10,7 +11,9 @@ import tarfile
 import zipfile
 from pathlib import Path
 
-WHEEL = ("brdffit/__init__.py", "brdffit/py.typed", "/licenses/LICENSE")
+WHEEL = ("brdffit/__init__.py", "brdffit/py.typed", "/licenses/LICENSE", "brdffit/data_synth/synthesize.py")
+#: Top-level packages the wheel installs: brdffit alone (``data_synth`` lives inside it, issue 30).
+TOP_LEVEL = {"brdffit"}
 SDIST = (
     "/LICENSE",
     "/brdffit/py.typed",
@@ -34,6 +37,10 @@ def main(folder: Path) -> int:
         return 1
     with zipfile.ZipFile(wheels[0]) as wheel:
         lacking = missing(wheel.namelist(), WHEEL)
+        tops = {name.split("/")[0] for name in wheel.namelist() if "/" in name and ".dist-info" not in name}
+    if tops != TOP_LEVEL:
+        print(f"{wheels[0].name} installs {', '.join(sorted(tops))}; only {', '.join(sorted(TOP_LEVEL))} is wanted")
+        return 1
     with tarfile.open(sdists[0]) as sdist:
         lacking += missing(sdist.getnames(), SDIST)
     if lacking:

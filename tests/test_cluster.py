@@ -11,8 +11,7 @@ import jax
 import numpy as np
 import pytest
 
-import data_synth
-from brdffit import BrdfInputError, fit_batch, save_samples
+from brdffit import BrdfInputError, data_synth, fit_batch, save_samples
 
 distributed = pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
 

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-import data_synth
-from brdffit import BrdfInputError
+from brdffit import BrdfInputError, data_synth
 from brdffit.physics.geometry import mirror_direction
 
 

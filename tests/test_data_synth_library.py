@@ -10,7 +10,7 @@ from conftest import random_directions
 
 from brdffit import evaluate
 from brdffit.data.merl import FILE_BYTES, HORIZON, bin_directions, read_merl
-from data_synth.library import Material, library_materials, main, mitsuba_split, write_library
+from brdffit.data_synth.library import Material, library_materials, main, mitsuba_split, write_library
 
 
 def test_materials_are_deterministic_for_a_seed():

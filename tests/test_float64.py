@@ -16,7 +16,7 @@ import numpy as np
 from paths import EXAMPLE, ROOT
 
 import brdffit
-import data_synth
+from brdffit import data_synth
 
 SCRIPT = """
 import json, warnings
@@ -27,7 +27,7 @@ import jax, jax.numpy as jnp, numpy as np
 assert not jax.config.jax_enable_x64
 user = jax.jit(lambda x: x * 2)
 assert user(jnp.ones(3)).dtype == jnp.float32
-import data_synth
+from brdffit import data_synth
 samples = brdffit.load_samples({example!r})
 result = brdffit.fit(samples, "ward")
 laplace = brdffit.fit(samples, "ward", uncertainty="laplace")

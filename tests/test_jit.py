@@ -10,7 +10,7 @@ import jax
 import jaxlib
 import numpy as np
 
-import data_synth
+from brdffit import data_synth
 from brdffit._programs import cache, jit
 from brdffit._programs.first_calls import FirstCalls
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from paths import ROOT
 
-PACKAGES = ("brdffit", "data_synth")
+PACKAGES = ("brdffit",)
 #: The layer of each package or module (the longest prefix named here counts); fractions order the rooms of a layer.
 LAYERS = {
     "brdffit": 7,  # the public face: names of every layer, loaded on first use
@@ -46,7 +46,7 @@ LAYERS = {
     "brdffit.api": 5,
     "brdffit.views": 5,
     "brdffit.export": 5,
-    "data_synth": 5,
+    "brdffit.data_synth": 5,  # synthetic measurements: a model evaluated on a geometry, packaged as samples
     "brdffit.cli": 6,
 }
 #: The house's limits: modules a folder holds, lines a module holds, modules flat in ``brdffit/`` (``__init__``s count).

@@ -10,7 +10,7 @@ from .files import Files
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    from data_synth import GEOMETRIES, NOISE_KINDS
+    from brdffit.data_synth import GEOMETRIES, NOISE_KINDS
 
     add_model_options(parser, None)
     parser.add_argument(
@@ -69,7 +69,7 @@ def files(args: argparse.Namespace) -> Files:
 
 
 def run(args: argparse.Namespace) -> int:
-    from data_synth import GEOMETRIES, synthesize
+    from brdffit.data_synth import GEOMETRIES, synthesize
 
     from .._programs.cache import enable_compilation_cache
     from ..data.load import save_samples

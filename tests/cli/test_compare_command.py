@@ -4,8 +4,7 @@ import json
 
 import pytest
 
-import data_synth
-from brdffit import save_samples
+from brdffit import data_synth, save_samples
 from brdffit.cli import main
 
 

@@ -9,8 +9,7 @@ import pytest
 from gltf_validator import assert_valid, needs_validator
 from paths import EXAMPLE
 
-import data_synth
-from brdffit import fit, load_samples, save_samples
+from brdffit import data_synth, fit, load_samples, save_samples
 from brdffit.cli import main
 
 PNG = b"\x89PNG\r\n\x1a\n"

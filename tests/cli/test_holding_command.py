@@ -5,8 +5,7 @@ import json
 
 import pytest
 
-import data_synth
-from brdffit import save_samples
+from brdffit import data_synth, save_samples
 from brdffit.cli import main
 
 TRUTH = {"kd": [0.1, 0.2, 0.3], "ks": [0.5, 0.5, 0.5], "m": 0.2, "eta": 1.5}

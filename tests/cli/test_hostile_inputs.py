@@ -19,8 +19,7 @@ from paths import ROOT
 
 import brdffit.api
 import brdffit.datadriven.basis
-import data_synth
-from brdffit import fit, save_samples
+from brdffit import data_synth, fit, save_samples
 from brdffit.cli import main
 from brdffit.datadriven.basis import load_basis
 from brdffit.errors import BrdfInputError

@@ -4,8 +4,7 @@ import json
 
 import pytest
 
-import data_synth
-from brdffit import fit, save_samples
+from brdffit import data_synth, fit, save_samples
 from brdffit.cli import main
 
 PNG = b"\x89PNG\r\n\x1a\n"

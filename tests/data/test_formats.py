@@ -8,8 +8,7 @@ import pytest
 from catalogue import CASES
 from paths import EXAMPLE, TAPE
 
-import data_synth
-from brdffit import BrdfInputError, load_samples, save_samples
+from brdffit import BrdfInputError, data_synth, load_samples, save_samples
 from brdffit.cli import main
 from brdffit.data.load import detect_format
 

@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 from paths import SHARED_DATA, TAPE
 
-import data_synth
-from brdffit import load_samples, save_samples
+from brdffit import data_synth, load_samples, save_samples
 from brdffit.cli import main
 from brdffit.data.quantities import stored_factor
 from brdffit.data.reciprocity import MIN_PAIRS, RECIPROCAL, reciprocity

@@ -22,7 +22,7 @@ from brdffit.data.spectral import (  # noqa: E402
     spectral_to,
     wavelengths,
 )
-from data_synth import uniform_random  # noqa: E402
+from brdffit.data_synth import uniform_random  # noqa: E402
 
 OBSERVER = "CIE 1931 2 Degree Standard Observer"
 CMFS = colour.MSDS_CMFS[OBSERVER]

@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 from paths import EXAMPLE
 
-import data_synth
-from brdffit import BrdfInputError, FitResult, load_samples
+from brdffit import BrdfInputError, FitResult, data_synth, load_samples
 from brdffit.export.at_data import MAX_PAIRS, data_error, data_for
 from brdffit.export.gltf_material import GltfMaterial
 from brdffit.export.targets import export

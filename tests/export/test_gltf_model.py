@@ -13,8 +13,7 @@ from catalogue import gltf_params
 from conftest import random_directions
 from gltf_validator import assert_valid, needs_validator
 
-import data_synth
-from brdffit import FitWarning, Samples, fit, get_model, load_result
+from brdffit import FitWarning, Samples, data_synth, fit, get_model, load_result
 from brdffit.cli import main
 from brdffit.data.load import save_samples
 from brdffit.export.gltf import write_gltf

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 from paths import EXAMPLE
 
-import data_synth
-from brdffit import FitResult, Samples, evaluate, fit, load_samples
+from brdffit import FitResult, Samples, data_synth, evaluate, fit, load_samples
 from brdffit.export.approximate import approximation_error
 from brdffit.export.at_data import data_error
 from brdffit.export.mitsuba import mitsuba_bsdf

@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 from test_mitsuba import mitsuba_brdf
 
-import data_synth
-from brdffit import Samples, fit
+from brdffit import Samples, data_synth, fit
 from brdffit.export.mitsuba import mitsuba_bsdf
 
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 from reference_materials import flat_parameters
 
-import data_synth
-from brdffit import BrdfInputError, fit, fit_batch, load_result, save_samples
+from brdffit import BrdfInputError, data_synth, fit, fit_batch, load_result, save_samples
 from brdffit.cli import main
 from brdffit.fitting.single.stacked import default_strategy
 

@@ -8,8 +8,7 @@ import pytest
 from catalogue import CASES
 from paths import TAPE
 
-import data_synth
-from brdffit import FitWarning, fit, get_model, load_samples
+from brdffit import FitWarning, data_synth, fit, get_model, load_samples
 from brdffit.fitting.single.caveats import caveats
 
 WARD = CASES[1][2]

@@ -9,8 +9,7 @@ import pytest
 from catalogue import CASES, case_id
 from paths import TAPE
 
-import data_synth
-from brdffit import BrdfInputError, FitWarning, Samples, fit, load_samples
+from brdffit import BrdfInputError, FitWarning, Samples, data_synth, fit, load_samples
 from brdffit.fitting.comparison.compare import Comparison, compare, default_specs, load_comparison
 from brdffit.fitting.comparison.folds import make_folds
 

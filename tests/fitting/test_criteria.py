@@ -8,8 +8,7 @@ import math
 import numpy as np
 import pytest
 
-import data_synth
-from brdffit import FitWarning, Samples, compare, fit, load_result
+from brdffit import FitWarning, Samples, compare, data_synth, fit, load_result
 
 WARD = {"rho_d": [0.15, 0.1, 0.05], "rho_s": [0.04, 0.035, 0.03], "alpha": 0.15}
 GEOMETRY = data_synth.uniform_random(400, seed=3)

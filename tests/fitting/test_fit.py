@@ -10,8 +10,18 @@ import pytest
 from catalogue import CASES, parametrize_cases
 from reference_materials import flat_parameters
 
-import data_synth
-from brdffit import BrdfInputError, FitResult, FitWarning, Samples, evaluate, fit, get_model, load_result, load_samples
+from brdffit import (
+    BrdfInputError,
+    FitResult,
+    FitWarning,
+    Samples,
+    data_synth,
+    evaluate,
+    fit,
+    get_model,
+    load_result,
+    load_samples,
+)
 
 #: A geometry that sees every lobe: 6000 random pairs plus 6000 around the mirror direction.
 _RANDOM = data_synth.uniform_random(6000, seed=1)

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-import data_synth
-from brdffit import BrdfInputError
+from brdffit import BrdfInputError, data_synth
 from brdffit.fitting.comparison.folds import MIN_GROUPS, make_folds
 
 LAMBERT = {"rho_d": [0.3]}

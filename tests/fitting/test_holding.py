@@ -17,8 +17,7 @@ import pytest
 from scipy.optimize import nnls
 
 import brdffit
-import data_synth
-from brdffit import BrdfInputError, get_model
+from brdffit import BrdfInputError, data_synth, get_model
 from brdffit.fitting.single.constraints import check_names, constraints_for
 from brdffit.fitting.solver.hold import Hold, on_bound, respected, slopes, theta_of, z_of
 from brdffit.fitting.starts.grid import nonnegative_least_squares

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 from catalogue import CASES
 
-import data_synth
-from brdffit import get_model
+from brdffit import data_synth, get_model
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problem, cost, normal_equations, prepared, residuals
 from brdffit.fitting.options import MAX_STEPS

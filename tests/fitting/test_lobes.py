@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 from paths import TAPE
 
-import data_synth
-from brdffit import FitWarning, fit, load_samples
+from brdffit import FitWarning, data_synth, fit, load_samples
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.starts.lobes import SAME_MINIMUM, LobeFit, distinct_minima
 from brdffit.physics.geometry import spherical_to_direction

@@ -12,8 +12,7 @@ from conftest import random_directions
 from test_holding import quiet_fit
 
 import brdffit
-import data_synth
-from brdffit import BrdfInputError, get_model
+from brdffit import BrdfInputError, data_synth, get_model
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problem, normal_equations, residuals
 from brdffit.fitting.single.constraints import constraints_for

@@ -6,7 +6,7 @@ import pytest
 from paths import EXAMPLE
 
 import brdffit
-import data_synth
+from brdffit import data_synth
 
 
 @pytest.fixture(scope="module")

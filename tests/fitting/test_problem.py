@@ -10,8 +10,7 @@ import pytest
 from catalogue import CASES, parametrize_cases
 
 import brdffit
-import data_synth
-from brdffit import get_model
+from brdffit import data_synth, get_model
 from brdffit.data.samples import Samples
 from brdffit.fitting.objective.losses import LOSSES, get_loss
 from brdffit.fitting.objective.problem import (

@@ -27,8 +27,7 @@ import numpy as np
 import pytest
 from reference_materials import NGAN_FOLDER, SKIP_REASON, flat_parameters, ngan_materials
 
-import data_synth
-from brdffit import get_model, save_samples
+from brdffit import data_synth, get_model, save_samples
 from brdffit.cli import main
 from brdffit.fitting.objective.losses import get_loss
 

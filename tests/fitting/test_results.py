@@ -11,11 +11,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from paths import EXAMPLE
 
-import data_synth
 from brdffit import (
     BrdfInputError,
     FitWarning,
     UncertaintyWarning,
+    data_synth,
     evaluate,
     fit,
     get_model,

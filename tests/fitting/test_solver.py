@@ -8,8 +8,7 @@ import optimistix as optx
 import pytest
 import scipy.optimize
 
-import data_synth
-from brdffit import fit, get_model
+from brdffit import data_synth, fit, get_model
 from brdffit.data.samples import Samples
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problem, residuals

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-import data_synth
-from brdffit import LobeModel, MappedLobe, Params, Samples, get_model
+from brdffit import LobeModel, MappedLobe, Params, Samples, data_synth, get_model
 from brdffit.fitting.objective.losses import get_loss
 from brdffit.fitting.objective.problem import build_problems
 from brdffit.fitting.starts.grid import grid_starts, nonnegative_least_squares

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-import data_synth
 from brdffit import (
     MCMC,
     BrdfInputError,
     FitWarning,
     UncertaintyWarning,
+    data_synth,
     fit,
     fit_batch,
     laplace_uncertainty,

@@ -7,8 +7,7 @@ from conftest import directions_from_degrees
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Annotation
 
-import data_synth
-from brdffit import BrdfInputError, FitResult
+from brdffit import BrdfInputError, FitResult, data_synth
 from brdffit.views.polar import MIN_POLAR_RANGE, POLAR_RANGE, polar
 
 #: A Ward lobe over a diffuse floor: the radius spans about a decade and a half.

@@ -6,8 +6,7 @@ import pytest
 from catalogue import RECIPROCAL_CASES, case_id
 from paths import EXAMPLE
 
-import data_synth
-from brdffit import BrdfInputError, evaluate, load_samples
+from brdffit import BrdfInputError, data_synth, evaluate, load_samples
 from brdffit.physics.geometry import from_half_difference
 from brdffit.views.render import (
     LIGHTS,

@@ -7,8 +7,7 @@ import subprocess
 import numpy as np
 import pytest
 
-import data_synth
-from brdffit import BrdfInputError, save_samples
+from brdffit import BrdfInputError, data_synth, save_samples
 from brdffit.cli import main
 from brdffit.views.report import report
 

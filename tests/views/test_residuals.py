@@ -9,8 +9,7 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PathCollection, QuadMesh
 
-import data_synth
-from brdffit import BrdfInputError, FitResult
+from brdffit import BrdfInputError, FitResult, data_synth
 from brdffit.data.summary import half_difference_angles
 from brdffit.views.residuals import LIMIT_FLOOR, LIMIT_PERCENTILE, MAX_MAPS, colour_limit, residuals
 

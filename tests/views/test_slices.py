@@ -10,8 +10,7 @@ from conftest import directions_from_degrees
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from paths import EXAMPLE, EXAMPLE_PARAMS
 
-import data_synth
-from brdffit import BrdfInputError, FitResult, load_samples
+from brdffit import BrdfInputError, FitResult, data_synth, load_samples
 from brdffit.data.samples import Samples
 from brdffit.views.slices import PLANE_TOLERANCE, slices
 

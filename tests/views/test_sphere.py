@@ -6,8 +6,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from paths import EXAMPLE, EXAMPLE_PARAMS
 
-import data_synth
-from brdffit import BrdfInputError, load_samples
+from brdffit import BrdfInputError, data_synth, load_samples
 from brdffit.fitting.single.result import FitResult
 from brdffit.views.sphere import sphere
 

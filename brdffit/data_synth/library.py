@@ -13,7 +13,7 @@ Ramamoorthi, "On optimal, minimal BRDF sampling for reflectance acquisition", SI
     materials = library_materials(50, 40, seed=0)
     write_library("/data/library", materials)  # <name>.binary for each, and library.json
 
-or ``python -m data_synth.library OUT_FOLDER --analytic 50 --mitsuba 40 --seed 0``.
+or ``python -m brdffit.data_synth.library OUT_FOLDER --analytic 50 --mitsuba 40 --seed 0``.
 
 Every value is a BRDF in 1/sr without cosine factor (``docs/conventions.md``); ``wi`` points towards the light,
 ``wo`` towards the viewer.
@@ -393,16 +393,17 @@ def library_materials(n_analytic: int, n_mitsuba: int, seed: int = 0) -> list[Ma
     """
     if n_analytic < 0 or n_mitsuba < 0 or seed < 0:
         raise ValueError(f"counts and seed must be ≥ 0, got {n_analytic}, {n_mitsuba}, {seed}")
-    materials, counts = [], {}
+    materials: list[Material] = []
+    counts: dict[str, int] = {}
     for position in range(n_analytic):
         model, _, draw = ANALYTIC_RECIPES[position % len(ANALYTIC_RECIPES)]
         params, options = draw(_generator(seed, position % len(ANALYTIC_RECIPES), position // len(ANALYTIC_RECIPES)))
         number = counts[model] = counts.get(model, -1) + 1
         materials.append(Material(f"{model}-{number:03d}", "brdffit", model, {"params": params, "options": options}))
     for stream, (plugin, count) in enumerate(mitsuba_split(n_mitsuba).items(), start=len(ANALYTIC_RECIPES)):
-        draw = MITSUBA_RECIPES[plugin]
+        draw_bsdf = MITSUBA_RECIPES[plugin]
         for index in range(count):
-            bsdf = draw(_generator(seed, stream, index), index)
+            bsdf = draw_bsdf(_generator(seed, stream, index), index)
             materials.append(Material(f"mitsuba-{plugin}-{index:03d}", "mitsuba", plugin, {"bsdf": bsdf}))
     return materials
 
@@ -427,16 +428,16 @@ def write_library(folder: str | os.PathLike, materials: list[Material], *, progr
     folder.mkdir(parents=True, exist_ok=True)
     entries = [material.entry(f"{material.name}.binary") for material in materials]
     _start_run(folder, entries)
-    wi = wo = None
+    directions: tuple[np.ndarray, np.ndarray] | None = None  # the bins' (wi, wo), made on first need
     for position, (material, entry) in enumerate(zip(materials, entries, strict=True), start=1):
         path = folder / entry["file"]
         start = time.perf_counter()
         if path.is_file() and path.stat().st_size == FILE_BYTES:
             done = "kept (already written)"
         else:
-            if wi is None:
-                wi, wo = bin_directions()
-            write_merl_table(_tabulate(material, wi, wo), path)
+            if directions is None:
+                directions = bin_directions()
+            write_merl_table(_tabulate(material, *directions), path)
             done = f"{time.perf_counter() - start:6.2f} s"
         if progress:
             print(f"[{position:3d}/{len(materials)}] {material.name:28s} {material.kind:14s} {done}", flush=True)
@@ -469,9 +470,9 @@ def _start_run(folder: Path, entries: list[dict]) -> None:
 
 # ---------------------------------------------------------------------- command line
 def main(argv: list[str] | None = None) -> int:
-    """``python -m data_synth.library OUT_FOLDER [--analytic N] [--mitsuba N] [--seed S] [--only-analytic]``."""
+    """``python -m brdffit.data_synth.library OUT_FOLDER [--analytic N] [--mitsuba N] [--seed S] [--only-analytic]``."""
     parser = argparse.ArgumentParser(
-        prog="python -m data_synth.library", description="Write a library of MERL BRDF tables and its manifest."
+        prog="python -m brdffit.data_synth.library", description="Write a library of MERL BRDF tables and its manifest."
     )
     parser.add_argument("folder", metavar="OUT_FOLDER", help="where the tables and library.json go")
     parser.add_argument("--analytic", type=int, default=50, metavar="N", help="brdffit materials (default 50)")

@@ -5,9 +5,9 @@ from typing import Any
 import numpy as np
 
 from brdffit.data.samples import Samples
+from brdffit.data_synth.noise import add_noise
 from brdffit.errors import BrdfInputError
 from brdffit.physics.evaluate import evaluate
-from data_synth.noise import add_noise
 
 
 def synthesize(
@@ -25,7 +25,7 @@ def synthesize(
 ) -> Samples:
     """Samples of ``model`` with ``params`` (a result file's parameter dictionary) at pairs ``wi``, ``wo`` (N, 3).
 
-    ``noise``/``noise_kind``/``seed`` as in :func:`data_synth.noise.add_noise`;
+    ``noise``/``noise_kind``/``seed`` as in :func:`brdffit.data_synth.noise.add_noise`;
     ``with_sigma`` stores the noise's 1-σ as the samples' ``sigma``. Channels
     are named ``r, g, b`` for three, ``value`` for one, ``c0, c1, …`` otherwise.
     """
