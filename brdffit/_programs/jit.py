@@ -116,7 +116,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         """The stored program for a top-level call, or None (``stored.stored_program``)."""
         if identity is None or kwargs:
             return None
-        return stored.stored_program(identity, top_level(), args, static_argnums, compiler_options())
+        return stored.stored_program(identity, top_level, args, static_argnums, compiler_options)
 
     def with_stored(args, kwargs, key, use, otherwise):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
@@ -170,7 +170,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
                 args,
                 kwargs,
                 key,
-                lambda program: program.lower(*stored.dynamic_arguments(args, static_argnums)).compile(),
+                lambda program: _compile(program, stored.dynamic_arguments(args, static_argnums)),
                 lambda: first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile()),
             )
             compiled.add(key)
@@ -197,3 +197,9 @@ def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tup
     leaves, tree = jax.tree.flatten((stored.dynamic_arguments(args, static_argnums), kwargs))
     statics = stored.static_arguments(args, static_argnums)
     return statics, tree, tuple(stored.array_description(leaf) for leaf in leaves)
+
+
+def _compile(program, dynamic_args) -> None:
+    """Compile a stored program for ``dynamic_args`` unless it is compiled already (an executable, loaded or made)."""
+    if not isinstance(program, jax.stages.Compiled):
+        program.lower(*dynamic_args).compile()

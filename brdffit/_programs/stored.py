@@ -6,8 +6,8 @@ computes by tracing the Python function and lowering it to StableHLO: for the sh
 as a serialized ``jax.export.Exported`` (its StableHLO and its argument and result trees). A later process
 computes the signature from the call alone, without tracing: the function's identity (its name, and the cache
 keys of what a closure closes over), the cache keys of its static arguments (``keys.py``), and the tree, shapes and
-dtypes of its array arguments. It deserializes the program (a few ms) and compiles it, which the compilation cache
-answers.
+dtypes of its array arguments. It deserializes the program (a few ms) and loads the executable compiled from it
+(``executables.py``), or compiles it, which the compilation cache answers.
 
 A stored program belongs to this brdffit version and source (every ``.py`` file of the package is hashed), this JAX
 and jaxlib, optimistix, equinox and lineax, this backend and device kind: a change of any of them gives new signatures,
@@ -30,31 +30,28 @@ import hashlib
 import hmac
 import importlib
 import json
-import os
-import secrets
 import sys
-import tempfile
 import threading
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
-from .._files import atomic_path
 from .._jax import jax
 from ..errors import InputWarning, warn
+from . import executables
+from .executables import shapes_of
 from .keys import key_of
+from .signing import UntrustedProgram, secret, signed, write_atomically
 
 #: A stored program's file: its HMAC (hex) on one line, one line of JSON (the named tuples its trees hold), and the
 #: serialized program.
 SUFFIX = ".jaxprogram"
-#: The file in ``programs/`` holding the cache's secret key (32 random bytes), which signs every program it stores.
-KEY_FILE = "key"
-KEY_BYTES = 32
 
 _lock = threading.Lock()  # held while a program is loaded or exported, and while it is published in ``_loaded``
+_compiling: dict[str, threading.Lock] = {}  # signature → held while its program is made (other programs go on)
 
 
 class _Missing(enum.Enum):
@@ -83,13 +80,18 @@ def count_trace() -> None:
 
 
 def stored_program(
-    identity: list, jitted, args: Sequence, static_argnums: Sequence[int], compile_options: dict | None
+    identity: list,
+    jitted: Callable[[], Callable],
+    args: Sequence,
+    static_argnums: Sequence[int],
+    compile_options: Callable[[], dict | None],
 ) -> Callable | None:
-    """A compiled call of the stored program for ``jitted(*args)`` (of the dynamic arguments only), or None.
+    """A compiled call of the stored program for ``jitted()(*args)`` (of the dynamic arguments only), or None.
 
     ``identity`` names the function (its module and qualified name, and the cache keys of what it closes over:
-    ``jit.jit``), ``jitted`` is its ``jax.jit``, used to export it the first time. None when programs are not being
-    stored or the call cannot be.
+    ``jit.jit``); ``jitted()`` gives its ``jax.jit``, used to export it the first time, and ``compile_options()`` the
+    options to compile it with: both asked for only when the program is exported or compiled (finding the options
+    compiles a program, ``jit.known_options``). None when programs are not being stored or the call cannot be.
     """
     from .cache import programs_folder
 
@@ -106,11 +108,19 @@ def stored_program(
     if program is not _MISSING:
         return program
     with _lock:
+        making = _compiling.setdefault(signature, threading.Lock())
+    with making:
         program = _loaded.get(signature, _MISSING)
         if program is _MISSING:
-            exported = _load_or_export(folder, signature, jitted, args, static_argnums)
-            program = None if exported is None else jax.jit(exported.call, compiler_options=compile_options)
-            _loaded[signature] = program
+            with _lock:
+                exported, name = _load_or_export(folder, signature, jitted, args, static_argnums)
+            if exported is not None:
+                dynamic = dynamic_arguments(args, static_argnums)
+                program = executables.compiled_program(folder, name, secret(folder), exported, dynamic, compile_options)
+            else:
+                program = None
+            with _lock:
+                _loaded[signature] = program
         return program
 
 
@@ -126,6 +136,10 @@ def discard(identity: list, args: Sequence, static_argnums: Sequence[int], error
     path = folder / f"{signature}{SUFFIX}"
     with _lock:
         _loaded.pop(signature, None)
+        try:
+            executables.discard(folder, _program_name(signature, path.read_bytes()))
+        except OSError:
+            pass
         path.unlink(missing_ok=True)
     reason = (str(error).strip().splitlines() or [type(error).__name__])[0]
     warn(InputWarning(f"the stored program {path} failed ({reason}); it is compiled again and replaced"))
@@ -195,17 +209,16 @@ def _environment() -> list[str]:
     ]
 
 
-class UntrustedProgram(Exception):
-    """A stored program that is not run: not signed by this cache, changed since, or naming a type it may not."""
-
-
-def _load_or_export(folder: Path, signature: str, jitted, args: Sequence, static_argnums: Sequence[int]):
-    """The ``Exported`` stored for ``signature`` in ``folder``, or the program exported now and stored there; None if
-    it cannot be. A file that fails the checks (:func:`_read`) is said in one warning and replaced."""
+def _load_or_export(
+    folder: Path, signature: str, jitted, args: Sequence, static_argnums: Sequence[int]
+) -> tuple[Any, str]:
+    """The ``Exported`` stored for ``signature`` in ``folder``, or the program exported now and stored there (None if
+    it cannot be), and its name (:func:`_program_name`). A file that fails the checks (:func:`_read`) is said in one
+    warning and replaced."""
     path = folder / f"{signature}{SUFFIX}"
-    key = _secret(folder)
+    key = secret(folder)
     try:
-        return _read(path, signature, key)
+        return _read(path, signature, key), _program_name(signature, path.read_bytes())
     except FileNotFoundError:
         pass
     except Exception as error:  # planted, flipped bytes, cut short by a crash: never run; exported again
@@ -217,34 +230,36 @@ def _load_or_export(folder: Path, signature: str, jitted, args: Sequence, static
         )
     count_trace()
     try:
-        exported = jax.export.export(jitted)(*(_shape_of(arg, i, static_argnums) for i, arg in enumerate(args)))
+        exported = jax.export.export(jitted())(*(_shape_of(arg, i, static_argnums) for i, arg in enumerate(args)))
         types = sorted(_named_tuples(exported.in_tree) | _named_tuples(exported.out_tree), key=_type_name)
         for kind in types:
             _register(kind)
         payload = exported.serialize()
     except Exception:  # jax.export refuses it (a callback, a custom call it does not know): compile it as usual
-        return None
+        return None, signature
+    body = json.dumps({"named_tuples": [_type_name(kind) for kind in types]}).encode() + b"\n" + bytes(payload)
+    content = b"" if key is None else signed(key, signature, body) + b"\n" + body
     if key is not None:  # no key (a cache that cannot be written): nothing is stored
-        body = json.dumps({"named_tuples": [_type_name(kind) for kind in types]}).encode() + b"\n" + bytes(payload)
-        _write_atomically(path, _signed(key, signature, body) + b"\n" + body)
-    return exported
+        write_atomically(path, content)
+    return exported, _program_name(signature, content)
+
+
+def _program_name(signature: str, content: bytes) -> str:
+    """A stored program's name for its executables (``executables.py``): its signature and its file's bytes, so
+    that a program exported again, or changed, never runs an executable compiled from another."""
+    return hashlib.sha256(signature.encode() + b"\n" + content).hexdigest()
 
 
 def _read(path: Path, signature: str, key: bytes | None):
     """The ``Exported`` in ``path``, once its HMAC proves that this cache wrote it for ``signature``; raises
     :class:`UntrustedProgram` otherwise (and ``FileNotFoundError`` when there is none)."""
     mac, _, body = path.read_bytes().partition(b"\n")
-    if key is None or not hmac.compare_digest(mac, _signed(key, signature, body)):
+    if key is None or not hmac.compare_digest(mac, signed(key, signature, body)):
         raise UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
     header, _, payload = body.partition(b"\n")
     for name in json.loads(header)["named_tuples"]:
         _register(_named_tuple(name))
     return jax.export.deserialize(bytearray(payload))
-
-
-def _signed(key: bytes, signature: str, body: bytes) -> bytes:
-    """The HMAC-SHA256 (hex) of a program's ``body`` stored for ``signature`` (a file moved to another name fails)."""
-    return hmac.new(key, signature.encode() + b"\n" + body, hashlib.sha256).hexdigest().encode()
 
 
 def _named_tuple(name: str) -> type:
@@ -265,59 +280,9 @@ def _named_tuple(name: str) -> type:
     return kind
 
 
-def _secret(folder: Path) -> bytes | None:
-    """This cache's key (``folder/key``), made now if there is none; None if it can be neither read nor made."""
-    path = folder / KEY_FILE
-    with _key_lock:
-        if path not in _keys:
-            _keys[path] = _read_or_make_key(path)
-        return _keys[path]
-
-
-_key_lock = threading.Lock()
-_keys: dict[Path, bytes | None] = {}
-
-
-def _read_or_make_key(path: Path) -> bytes | None:
-    try:
-        key = path.read_bytes()
-        if len(key) == KEY_BYTES:
-            return key
-    except FileNotFoundError:
-        pass
-    except OSError:
-        return None
-    # None yet (or not a key): 32 random bytes, mode 0600 (mkstemp's), published by a link, which fails if another
-    # process published its key first (then that one is everyone's)
-    try:
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=".key.")
-        try:
-            with os.fdopen(handle, "wb") as stream:
-                stream.write(secrets.token_bytes(KEY_BYTES))
-            if path.exists():  # a key of the wrong length: replaced
-                os.replace(temporary, path)
-            else:
-                try:
-                    os.link(temporary, path)
-                except FileExistsError:
-                    pass
-        finally:
-            Path(temporary).unlink(missing_ok=True)
-        key = path.read_bytes()
-    except OSError:
-        return None
-    return key if len(key) == KEY_BYTES else None
-
-
 def _shape_of(arg, index: int, static_argnums: Sequence[int]):
     """A static argument as it is; the arrays of a dynamic one as ``jax.ShapeDtypeStruct``."""
-    if index in static_argnums:
-        return arg
-    return jax.tree.map(
-        lambda leaf: jax.ShapeDtypeStruct(leaf.shape, leaf.dtype, weak_type=bool(getattr(leaf, "weak_type", False))),
-        arg,
-    )
+    return arg if index in static_argnums else shapes_of(arg)
 
 
 def _named_tuples(tree) -> set[type]:
@@ -339,14 +304,3 @@ def _register(kind: type) -> None:
     if kind not in _registered:
         jax.export.register_namedtuple_serialization(kind, serialized_name=_type_name(kind))
         _registered.add(kind)
-
-
-def _write_atomically(path: Path, data: bytes) -> None:
-    """``data`` into ``path`` atomically (``_files.atomic_path``): a reader never sees half a program. A cache that
-    cannot be written (read-only, full) stores nothing; the program is still used in this process."""
-    try:
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        with atomic_path(path) as temporary:
-            temporary.write_bytes(data)
-    except OSError:
-        pass

@@ -214,7 +214,26 @@ def run() -> None:
         # Python docs, "Note on SIGPIPE": point stdout at devnull so the final flush cannot fail again.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         status = EXIT_OK if status is None else status
-    sys.exit(status)
+        sys.exit(status)
+    _exit(status)
+
+
+def _exit(status: int) -> None:
+    """Exit with ``status``, without the interpreter's teardown once JAX is loaded: tearing down its backend took
+    0.2 s of a warm 1.1 s ``brdffit fit`` (issue 32). By now every file is written and closed; what the teardown would
+    still do is flush logging and the standard streams (done here), free memory the process gives back anyway, and
+    join idle worker threads. Where Dask was used (``--scheduler``, ``--workers``) the teardown runs as usual."""
+    if "jax" not in sys.modules or "distributed" in sys.modules:
+        sys.exit(status)
+    import logging
+
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a reader gone, a stream closed: nothing more can reach it
+            pass
+    os._exit(status)
 
 
 def _warn_in_one_line() -> None:

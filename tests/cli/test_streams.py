@@ -97,3 +97,32 @@ def test_a_binary_product_reaches_standard_output_byte_for_byte(tmp_path):
     assert len(done.stdout) == 34_992_012 and done.stdout == (tmp_path / "w.binary").read_bytes()
     assert done.stderr.decode().startswith("wrote -: a MERL table")
     assert json.loads(WARD.to_json())["model"] == "ward" and ROOT.exists()
+
+
+def test_a_command_that_ran_jax_exits_at_once_with_its_output_whole(tmp_path):
+    """``brdffit fit`` leaves without the interpreter's teardown once JAX ran (``cli._exit``): the result printed to a
+    pipe is whole, the status is the command's, and a process with Dask loaded is left to tear down as usual."""
+    fit = [sys.executable, "-m", "brdffit", "fit", str(EXAMPLE), "--model", "lambert", "-q"]
+    done = subprocess.run([*fit, "-o", "-"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert done.returncode == 0 and done.stderr == ""
+    assert json.loads(done.stdout)["model"] == "lambert"
+    refused = subprocess.run([*fit, "--fix", "nope=1"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert refused.returncode == 2 and refused.stderr.startswith("brdffit: error:")
+    probe = (
+        "import sys, brdffit.cli\n"
+        "exits = []\n"
+        "brdffit.cli.os._exit = lambda status: exits.append(status) or sys.exit(status)\n"
+        "sys.modules['jax'] = sys.modules.get('jax') or __import__('jax')\n"
+        "try:\n"
+        "    brdffit.cli._exit(3)\n"
+        "except SystemExit as leaving:\n"
+        "    print(exits, leaving.code)\n"
+        "sys.modules['distributed'] = object()\n"
+        "exits.clear()\n"
+        "try:\n"
+        "    brdffit.cli._exit(4)\n"
+        "except SystemExit as leaving:\n"
+        "    print(exits, leaving.code)\n"
+    )
+    lines = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=ROOT, check=True)
+    assert lines.stdout.split("\n")[:2] == ["[3] 3", "[] 4"]
