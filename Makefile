@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-reading bench-threads lint format docs examples clean
+.PHONY: demo test test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -81,6 +81,11 @@ bench-renderers: $(STAMP)
 # benchmarks/results/exports.{json,md}. BASELINE=CHECKOUT times another checkout in the same rounds.
 bench-exports: $(STAMP)
 	$(BIN)/python benchmarks/exports.py $(if $(BASELINE),--baseline $(BASELINE))
+
+# Where a single fit's time goes (issue 32): the example's brdffit fit and a MERL-size Cook-Torrance fit, cold and
+# warm, phase by phase (~5 minutes); writes benchmarks/results/phases.{json,md}, which docs/scale.md quotes.
+bench-phases: $(STAMP)
+	$(BIN)/python benchmarks/phases.py
 
 # Reading a samples file (issue 29): peak memory and time per row of load_samples on CSVs of 10⁵ and 10⁶ rows
 # (~1 minute); writes benchmarks/results/reading.{json,md}.

@@ -153,6 +153,8 @@ from jax._src.interpreters import mlir
 from brdffit._programs import stored
 sys.path.insert(0, sys.argv[2])
 from test_executables import A, B, solved_sum
+environment = stored._environment()
+stored._environment = lambda: environment + [sys.argv[3]]  # another brdffit version: other signatures
 brdffit.enable_compilation_cache(sys.argv[1])
 lowered = []
 real = mlir.lower_jaxpr_to_module
@@ -167,10 +169,11 @@ print(repr(value), len(lowered), ",".join(kinds))
 def test_a_later_process_runs_the_executable_without_lowering(tmp_path):
     """Across processes, with JAX's compilation cache on: the first compiles and stores; the second loads the
     executable (LAPACK made ready first) and lowers nothing; with the executable gone, a compile the cache answers
-    stores none, and the process after still runs."""
+    stores none, and the process after still runs. After an upgrade (new signatures, the cache still holding the
+    old version's compiles of the same module) the executable is compiled by XLA and stored again."""
 
-    def run():
-        command = [sys.executable, "-c", SCRIPT, str(tmp_path / "cache"), str(ROOT / "tests")]
+    def run(version="1"):
+        command = [sys.executable, "-c", SCRIPT, str(tmp_path / "cache"), str(ROOT / "tests"), version]
         value, lowered, kinds = subprocess.run(
             command, capture_output=True, text=True, check=True, cwd=tmp_path
         ).stdout.split()
@@ -187,3 +190,6 @@ def test_a_later_process_runs_the_executable_without_lowering(tmp_path):
     given_back = run()
     assert given_back[0] == cold[0] and executable_files(programs) == []
     assert run()[0] == cold[0]
+    upgraded = run("2")
+    assert upgraded[0] == cold[0] and len(executable_files(programs)) == 1
+    assert run("2") == (cold[0], 0, "Compiled")

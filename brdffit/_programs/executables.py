@@ -24,6 +24,7 @@ import os
 import platform
 import re
 import threading
+import types
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
@@ -56,7 +57,7 @@ def compiled_program(
         except Exception as error:  # planted, flipped bytes, cut short, another jaxlib's: never run; compiled again
             path.unlink(missing_ok=True)
             warn(InputWarning(f"the stored executable {path} is not used ({error}); it is removed and compiled again"))
-    jitted = jax.jit(exported.call, compiler_options=options())
+    jitted = jax.jit(_named_call(exported, name), compiler_options=options())
     _listen()
     hits, misses = _cache_events()
     try:
@@ -98,6 +99,18 @@ def _listen() -> None:
 
         jax.monitoring.register_event_listener(count)
         _listener.append(count)
+
+
+def _named_call(exported, name: str):
+    """``exported.call`` under the name ``brdffit_<name>``, which names the module JAX compiles. JAX's compilation
+    cache keys a module by its text, name included: so a program exported again (a new brdffit, whose programs have
+    new names) is compiled by XLA, not given back by the cache, and its executable can be stored."""
+
+    def call(self, *args):
+        return self.call(*args)
+
+    call.__name__ = call.__qualname__ = f"brdffit_{name[:16]}"
+    return types.MethodType(call, exported)
 
 
 def _cache_events() -> tuple[int, int]:
