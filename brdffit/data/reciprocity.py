@@ -27,6 +27,7 @@ import numpy as np
 
 from .quantities import stored_factor
 from .samples import Samples
+from .stored_pairs import STORED_FROM, store_pairs, stored_pairs
 
 if TYPE_CHECKING:  # scipy.spatial takes 0.3 s to import: every fit imports this module, few look pairs up
     from scipy.spatial import cKDTree
@@ -119,11 +120,13 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
             (first, second, within), kind = isotropic, "isotropic (zeniths swapped, same |φo − φi|)"
     if len(first) < MIN_PAIRS:
         return None
-    stored = samples.values * stored_factor(in_force, samples.wi, samples.wo)
+    both = np.concatenate([first, second])  # the paired samples only (a MERL-size file: 124 pairs of 1.4 million)
+    wi, wo = samples.wi[both], samples.wo[both]
+    stored = samples.values[both] * stored_factor(in_force, wi, wo)
     ratios = {}
     for reading in ("brdf", "cosine-weighted-in", "cosine-weighted-out"):
-        brdf = stored / stored_factor(reading, samples.wi, samples.wo)
-        a, b = brdf[first], brdf[second]
+        brdf = stored / stored_factor(reading, wi, wo)
+        a, b = brdf[: len(first)], brdf[len(first) :]
         usable = (a > 0) & (b > 0)
         ratios[reading] = float(np.median(a[usable] / b[usable])) if np.any(usable) else float("nan")
     header = provenance.header_quantity if provenance is not None else None
@@ -182,7 +185,7 @@ def _pairs(geometry: tuple, samples: Samples, general: bool) -> Pairs:
                 break
         underway.wait()
     try:
-        found = _paired(samples, general)
+        found = _stored_or_paired(geometry, samples, general)
         for indices in found[:2]:
             indices.flags.writeable = False  # shared by every later caller
         with _kept_lock:
@@ -194,6 +197,18 @@ def _pairs(geometry: tuple, samples: Samples, general: bool) -> Pairs:
         with _kept_lock:
             del _pairing[key]
         done.set()
+
+
+def _stored_or_paired(geometry: tuple, samples: Samples, general: bool) -> Pairs:
+    """:func:`_paired`; for a file of at least ``STORED_FROM`` samples, the pairs a previous process stored in the
+    compilation cache's folder, else paired now and stored there (``stored_pairs.py``)."""
+    if geometry[1] < STORED_FROM:
+        return _paired(samples, general)
+    found = stored_pairs(geometry, general)
+    if found is None:
+        found = _paired(samples, general)
+        store_pairs(geometry, general, found)
+    return found
 
 
 def _points(wi: np.ndarray, wo: np.ndarray, general: bool) -> np.ndarray:
