@@ -14,8 +14,9 @@ the start search (grid and race), the Levenberg-Marquardt solve, the caveats (th
 albedo, reciprocity, the rest), writing, and what is left of the process (Python's start and imports before the
 command's work, the interpreter's exit). "Programs made ready" is the time spent loading stored programs and
 executables, or tracing and compiling them, wherever it falls (it is part of the phases above; the part in
-background threads overlaps them). Medians of ``--repeats`` runs; prints the table and writes
-``benchmarks/results/phases.json`` and ``phases.md``, which ``docs/scale.md`` quotes.
+background threads overlaps them). Medians of ``--repeats`` runs; prints the table, writes
+``benchmarks/results/phases.json`` and ``phases.md``, and puts the table into ``docs/scale.md`` (between its
+``phases`` markers; ``tests/test_docs.py`` holds the two equal).
 """
 
 import argparse
@@ -33,6 +34,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
+SCALE_PAGE = ROOT / "docs" / "scale.md"
+#: The lines in ``docs/scale.md`` between which the table stands.
+MARKERS = ("<!-- phases: made by benchmarks/phases.py -->", "<!-- phases: end -->")
 EXAMPLE = ROOT / "examples" / "ward-pickled-oak.csv"
 #: Ngan et al. 2005's Cook-Torrance fit of MERL special-walnut-224 (as benchmarks/run.py's section (a)).
 WALNUT = {"kd": [0.0187, 0.0145, 0.00961], "ks": [0.3209, 0.2725, 0.1821], "m": 0.258, "f0": 0.0688}
@@ -300,6 +304,10 @@ def main() -> None:
     (RESULTS / "phases.json").write_text(json.dumps(results, indent=1) + "\n")
     text = table(results)
     (RESULTS / "phases.md").write_text(text + "\n")
+    page = SCALE_PAGE.read_text()
+    before, _, rest = page.partition(MARKERS[0] + "\n")
+    _, _, after = rest.partition(MARKERS[1])
+    SCALE_PAGE.write_text(f"{before}{MARKERS[0]}\n{text}\n{MARKERS[1]}{after}")
     print(text)
 
 

@@ -92,3 +92,10 @@ def test_the_guides_signatures_are_the_codes(name, arguments):
         code_default = parameters[key].default
         if code_default is not inspect.Parameter.empty and repr(code_default) != "<factory>":
             assert default.replace('"', "'") == repr(code_default), f"{name}: {key}'s default"
+
+
+def test_the_time_table_of_a_single_fit_is_the_benchmarks():
+    """docs/scale.md's table of where a fit's time goes is the last ``make bench-phases`` (which writes both)."""
+    page = (ROOT / "docs" / "scale.md").read_text()
+    table = page.split("<!-- phases: made by benchmarks/phases.py -->\n")[1].split("<!-- phases: end -->")[0]
+    assert table == (ROOT / "benchmarks" / "results" / "phases.md").read_text()
