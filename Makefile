@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads lint format docs examples clean
+.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -51,6 +51,20 @@ test-lowest: $(STAMP) $(VALIDATOR)
 	$(BIN)/uv build --quiet --sdist --wheel --out-dir $(LOWEST)/dist
 	$(BIN)/python tests/dist_contents.py $(LOWEST)/dist
 	$(LOWEST)/bin/python -m pytest -n 2 -q $(LOWEST_TESTS)
+
+# `pip install <clone>` as a user does it (issue 30): a third venv, the package installed from the clone as a wheel (not
+# editable) with the pinned versions, then `python -m brdffit --version` and a fit of the example from another folder,
+# which must not see the clone's sources (~1 minute; needs the package index or uv's cache). CI runs it.
+INSTALLED := .venv-installed
+test-install: $(STAMP)
+	$(BIN)/python -m pip install --quiet 'uv>=0.5'
+	rm -rf $(INSTALLED)
+	$(BIN)/uv venv --quiet --python $(BIN)/python $(INSTALLED)
+	$(BIN)/uv pip install --quiet --python $(INSTALLED)/bin/python -c constraints.txt .
+	cd $(INSTALLED) && bin/python -c "import brdffit, sys; assert 'site-packages' in brdffit.__file__, brdffit.__file__"
+	cd $(INSTALLED) && bin/python -m brdffit --version
+	cd $(INSTALLED) && BRDFFIT_CACHE_DIR=cache bin/brdffit fit ../examples/ward-pickled-oak.csv --model ward -o ward.json
+	cd $(INSTALLED) && bin/python -c "import json; print('installed fit, cost', json.load(open('ward.json'))['fit']['cost'])"
 
 test-heavy: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q -m heavy

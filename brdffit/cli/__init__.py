@@ -218,12 +218,19 @@ def run() -> None:
     _exit(status)
 
 
+#: Modules whose presence means the interpreter's teardown must run: Dask's client and cluster, and the tools that
+#: write their findings at exit (``python -m cProfile``, ``coverage run``, debuggers, other profilers).
+EXIT_WATCHERS = ("distributed", "cProfile", "profile", "coverage", "pdb", "debugpy", "pydevd", "pyinstrument", "yappi")
+
+
 def _exit(status: int) -> None:
     """Exit with ``status``, without the interpreter's teardown once JAX is loaded: tearing down its backend took
     0.2 s of a warm 1.1 s ``brdffit fit`` (issue 32). By now every file is written and closed; what the teardown would
     still do is flush logging and the standard streams (done here), free memory the process gives back anyway, and
-    join idle worker threads. Where Dask was used (``--scheduler``, ``--workers``) the teardown runs as usual."""
-    if "jax" not in sys.modules or "distributed" in sys.modules:
+    join idle worker threads. The teardown runs as usual where Dask was used (``--scheduler``, ``--workers``) and
+    under a tool that writes what it found on exit (a profiler, coverage, a debugger: :data:`EXIT_WATCHERS`)."""
+    watched = sys.gettrace() is not None or sys.getprofile() is not None
+    if "jax" not in sys.modules or watched or any(name in sys.modules for name in EXIT_WATCHERS):
         sys.exit(status)
     import logging
 

@@ -126,3 +126,8 @@ def test_a_command_that_ran_jax_exits_at_once_with_its_output_whole(tmp_path):
     )
     lines = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=ROOT, check=True)
     assert lines.stdout.split("\n")[:2] == ["[3] 3", "[] 4"]
+    # under a profiler the teardown runs, so that it writes its findings
+    profile = tmp_path / "fit.prof"
+    profiled = [sys.executable, "-m", "cProfile", "-o", str(profile), "-m", "brdffit", *fit[3:], "-o", "r.json"]
+    assert subprocess.run(profiled, capture_output=True, cwd=tmp_path, timeout=300).returncode == 0
+    assert profile.stat().st_size > 0
