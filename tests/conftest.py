@@ -15,6 +15,8 @@ import jax
 import numpy as np
 import pytest
 
+from brdffit._programs import stored as stored_programs
+
 jax.config.update("jax_enable_x64", True)
 
 # The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own, one for each
@@ -55,6 +57,7 @@ def _compiled_programs_dropped_before_the_mappings_run_out():
     count = memory_mappings()
     if count is not None and count > MAPPINGS_BEFORE_CLEARING:
         jax.clear_caches()
+        stored_programs.forget_loaded()  # the executables of stored programs, which clear_caches does not hold
         gc.collect()
 
 

@@ -134,6 +134,27 @@ def test_an_executable_that_is_not_ours_is_removed_with_one_warning(programs, fr
     assert stored.read_bytes() != bytes(content)  # removed, and stored again from the fresh compile
 
 
+@needs_cpu_features
+def test_a_loaded_executable_that_fails_when_run_is_discarded_even_after_a_precompile(
+    programs, fresh_compiles, monkeypatch
+):
+    """A background precompile (``compile_in_background``) of a loaded executable compiles nothing: it must not
+    count as proof that the executable runs, or the first call's failure would reach the user, in every process."""
+    x = np.linspace(0.0, 1.0, 5)
+    scaled_sin(np.asarray(2.0), x)
+    (stored,) = executable_files(programs)
+    _later_process(monkeypatch)
+    wrong = jax.jit(lambda a, b: a).lower(np.ones(3), np.ones(3)).compile()  # for other shapes: fails when called
+    real_read, reads = executables._read, []
+    monkeypatch.setattr(
+        executables, "_read", lambda *args: reads.append(1) or (wrong if len(reads) == 1 else real_read(*args))
+    )
+    scaled_sin.precompile(np.asarray(2.0), x)
+    with pytest.warns(InputWarning, match=r"the stored program .* failed \(.*\); it is compiled again and replaced"):
+        assert float(scaled_sin(np.asarray(2.0), x)) == pytest.approx(2.0 * np.sum(np.sin(x)), rel=1e-15)
+    assert executable_files(programs) == [stored]  # removed with its program, and stored again
+
+
 def test_the_machine_names_the_cpu_and_xla_flags(monkeypatch):
     executables.machine.cache_clear()
     try:

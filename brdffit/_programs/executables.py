@@ -55,7 +55,7 @@ def compiled_program(
         except FileNotFoundError:
             pass
         except Exception as error:  # planted, flipped bytes, cut short, another jaxlib's: never run; compiled again
-            path.unlink(missing_ok=True)
+            _remove(path)
             warn(InputWarning(f"the stored executable {path} is not used ({error}); it is removed and compiled again"))
     jitted = jax.jit(_named_call(exported, name), compiler_options=options())
     _listen()
@@ -66,8 +66,12 @@ def compiled_program(
         return jitted
     hits_after, misses_after = _cache_events()
     compiled_now = hits_after == hits and misses_after > misses
-    calls = set(_CUSTOM_CALL.findall(compiled.as_text() or ""))
-    if path is not None and key is not None and compiled_now and calls <= _lapack_calls():
+    try:
+        text = compiled.as_text()  # None where the backend cannot say: then its custom calls are not known
+    except Exception:
+        text = None
+    calls = set(_CUSTOM_CALL.findall(text or ""))
+    if path is not None and key is not None and compiled_now and text and calls <= _lapack_calls():
         from jax.experimental.serialize_executable import serialize
 
         try:
@@ -122,7 +126,15 @@ def discard(folder: Path, name: str) -> None:
     """Remove the executable of the stored program ``name`` on this machine (it failed, or its program did)."""
     machine_name = machine()
     if machine_name is not None:
-        (folder / f"{_digest(name, machine_name)}{SUFFIX}").unlink(missing_ok=True)
+        _remove(folder / f"{_digest(name, machine_name)}{SUFFIX}")
+
+
+def _remove(path: Path) -> None:
+    """Remove ``path`` if it can be (a cache that cannot be written keeps it; it is never read unless signed)."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def _read(path: Path, key: bytes, in_tree, out_tree):
@@ -166,18 +178,22 @@ def _ready_lapack() -> None:
 
 @cache
 def machine() -> str | None:
-    """What an executable compiled here depends on besides its program: the CPU's architecture and features (the
-    ``flags`` line of ``/proc/cpuinfo``), ``XLA_FLAGS`` and the backend's version. None where the features cannot be
-    read: executables are then neither stored nor read."""
+    """What an executable compiled here depends on besides its program: the CPU's architecture, model and features
+    (``/proc/cpuinfo``), ``XLA_FLAGS``, the backend's version and its number of devices. None where the features
+    cannot be read: executables are then neither stored nor read."""
     try:
         text = Path("/proc/cpuinfo").read_text(errors="replace")
     except OSError:
         return None
-    features = next((line for line in text.splitlines() if line.startswith(("flags", "Features"))), None)
+    lines = text.splitlines()
+    features = next((line for line in lines if line.startswith(("flags", "Features"))), None)
     if features is None:
         return None
-    client = jax.devices()[0].client
-    parts = [platform.machine(), features, os.environ.get("XLA_FLAGS", ""), str(client.platform_version)]
+    model = next((line for line in lines if line.startswith(("model name", "CPU part"))), "")
+    devices = jax.devices()
+    client = devices[0].client
+    parts = [platform.machine(), model, features, os.environ.get("XLA_FLAGS", ""), str(client.platform_version)]
+    parts.append(f"{len(devices)} devices")
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 

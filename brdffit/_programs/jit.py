@@ -8,6 +8,7 @@ cache is on (``stored.py``), and lets only one thread compile each signature (``
 
 import functools
 import threading
+import weakref
 from collections.abc import Callable
 from typing import Any, Protocol, cast
 
@@ -118,10 +119,11 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
             return None
         return stored.stored_program(identity, top_level, args, static_argnums, compiler_options)
 
-    def with_stored(args, kwargs, key, use, otherwise):
+    def with_stored(args, kwargs, key, use, otherwise, runs: bool = True):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
         program that fails the first time it is compiled or run in this process (a file this cache signed, but that
-        this JAX cannot read) is discarded with one warning (``stored.discard``) and exported again."""
+        this JAX cannot read) is discarded with one warning (``stored.discard``) and exported again. ``runs``: whether
+        ``use`` runs the program (else it only compiles it, which proves nothing of an executable loaded ready)."""
         program = stored_for(args, kwargs)
         if program is None:
             return otherwise()
@@ -130,17 +132,21 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         try:
             result = use(program)
         except Exception as error:
+            assert identity is not None  # a stored program is only ever found for a function with an identity
             stored.discard(identity, args, static_argnums, error)
             program = stored_for(args, kwargs)
             if program is None:
                 return otherwise()
             result = use(program)
-        proven.add(program)
+        if runs or not isinstance(program, jax.stages.Compiled):
+            proven.add(program)
         return result
 
     first_calls = FirstCalls()
     compiled: set = set()  # the call keys whose programs have run or been compiled in this process
-    proven: set = set()  # the stored programs that have run or compiled in this process: no failure to expect
+    # the stored programs that have run or compiled in this process: no failure to expect (held weakly: forgetting
+    # the loaded programs, ``stored.forget_loaded``, frees their executables)
+    proven: weakref.WeakSet = weakref.WeakSet()
 
     @functools.wraps(fun)
     def call(*args, **kwargs):
@@ -172,6 +178,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
                 key,
                 lambda program: _compile(program, stored.dynamic_arguments(args, static_argnums)),
                 lambda: first_calls.run(key, lambda: top_level().lower(*args, **kwargs).compile()),
+                runs=False,
             )
             compiled.add(key)
 

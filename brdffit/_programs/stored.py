@@ -124,6 +124,13 @@ def stored_program(
         return program
 
 
+def forget_loaded() -> None:
+    """Forget the programs loaded in this process, so that their executables are freed (with ``jax.clear_caches``,
+    which frees what ``jax.jit`` holds); a later call loads its program again."""
+    with _lock:
+        _loaded.clear()
+
+
 def discard(identity: list, args: Sequence, static_argnums: Sequence[int], error: Exception) -> None:
     """Forget the stored program for ``identity`` called with ``args``, which failed to compile or run (``error``):
     its file is removed and the next call exports it again; said in one :class:`~brdffit.errors.InputWarning`."""
@@ -218,7 +225,8 @@ def _load_or_export(
     path = folder / f"{signature}{SUFFIX}"
     key = secret(folder)
     try:
-        return _read(path, signature, key), _program_name(signature, path.read_bytes())
+        content = path.read_bytes()
+        return _read(content, signature, key), _program_name(signature, content)
     except FileNotFoundError:
         pass
     except Exception as error:  # planted, flipped bytes, cut short by a crash: never run; exported again
@@ -250,10 +258,10 @@ def _program_name(signature: str, content: bytes) -> str:
     return hashlib.sha256(signature.encode() + b"\n" + content).hexdigest()
 
 
-def _read(path: Path, signature: str, key: bytes | None):
-    """The ``Exported`` in ``path``, once its HMAC proves that this cache wrote it for ``signature``; raises
-    :class:`UntrustedProgram` otherwise (and ``FileNotFoundError`` when there is none)."""
-    mac, _, body = path.read_bytes().partition(b"\n")
+def _read(content: bytes, signature: str, key: bytes | None):
+    """The ``Exported`` in a program file's ``content``, once its HMAC proves that this cache wrote it for
+    ``signature``; raises :class:`UntrustedProgram` otherwise."""
+    mac, _, body = content.partition(b"\n")
     if key is None or not hmac.compare_digest(mac, signed(key, signature, body)):
         raise UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
     header, _, payload = body.partition(b"\n")

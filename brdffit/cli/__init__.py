@@ -220,18 +220,33 @@ def run() -> None:
 
 #: Modules whose presence means the interpreter's teardown must run: Dask's client and cluster, and the tools that
 #: write their findings at exit (``python -m cProfile``, ``coverage run``, debuggers, other profilers).
-EXIT_WATCHERS = ("distributed", "cProfile", "profile", "coverage", "pdb", "debugpy", "pydevd", "pyinstrument", "yappi")
+EXIT_WATCHERS = (
+    "distributed",
+    "cProfile",
+    "profile",
+    "trace",
+    "coverage",
+    "pdb",
+    "debugpy",
+    "pydevd",
+    "pyinstrument",
+    "yappi",
+    "memray",
+    "scalene",
+    "line_profiler",
+)
 
 
 def _exit(status: int) -> None:
     """Exit with ``status``, without the interpreter's teardown once JAX is loaded: tearing down its backend took
     0.2 s of a warm 1.1 s ``brdffit fit`` (issue 32). By now every file is written and closed; what the teardown would
-    still do is flush logging and the standard streams (done here), free memory the process gives back anyway, and
-    join idle worker threads. The teardown runs as usual where Dask was used (``--scheduler``, ``--workers``) and
-    under a tool that writes what it found on exit (a profiler, coverage, a debugger: :data:`EXIT_WATCHERS`)."""
-    watched = sys.gettrace() is not None or sys.getprofile() is not None
-    if "jax" not in sys.modules or watched or any(name in sys.modules for name in EXIT_WATCHERS):
+    still do is flush logging and the standard streams (done here, C's too), free memory the process gives back anyway,
+    and join idle threads. The teardown runs as usual where any other thread is still alive (a background compile
+    writing the cache), where Dask was used (``--scheduler``, ``--workers``), under a tool that writes what it found on
+    exit (a profiler, coverage, a debugger: :data:`EXIT_WATCHERS`, ``sys.monitoring``) and with ``python -i``."""
+    if "jax" not in sys.modules or _exit_is_watched() or threading.active_count() > 1:
         sys.exit(status)
+    import ctypes
     import logging
 
     logging.shutdown()
@@ -240,7 +255,20 @@ def _exit(status: int) -> None:
             stream.flush()
         except (OSError, ValueError):  # a reader gone, a stream closed: nothing more can reach it
             pass
+    try:
+        ctypes.CDLL(None).fflush(None)  # what a C library (Mitsuba's) left in its buffers
+    except (OSError, AttributeError):
+        pass
     os._exit(status)
+
+
+def _exit_is_watched() -> bool:
+    """Whether something expects the interpreter's teardown: a tracer or profiler, a module of
+    :data:`EXIT_WATCHERS`, a ``sys.monitoring`` tool (Python 3.12+), or ``python -i``."""
+    monitoring = getattr(sys, "monitoring", None)
+    tools = monitoring is not None and any(monitoring.get_tool(tool) is not None for tool in range(6))
+    traced = sys.gettrace() is not None or sys.getprofile() is not None
+    return traced or tools or bool(sys.flags.inspect) or any(name in sys.modules for name in EXIT_WATCHERS)
 
 
 def _warn_in_one_line() -> None:

@@ -49,7 +49,10 @@ def stored_pairs(geometry: tuple, general: bool) -> tuple[np.ndarray, np.ndarray
             if len(indices) and (indices.min() < 0 or indices.max() >= n_samples):
                 raise ValueError(f"its indices lie outside the {n_samples} samples")
     except Exception as error:
-        path.unlink(missing_ok=True)
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:  # a cache that cannot be written keeps it; it is never read unless signed
+            pass
         warn(InputWarning(f"the stored pairs {path} are not used ({error}); they are looked up again"))
         return None
     return first, second, within
@@ -79,6 +82,10 @@ def _place(geometry: tuple, general: bool) -> tuple[Path | None, bytes | None]:
 
 @cache
 def _source() -> bytes:
-    """What a pairing depends on besides its directions: the code that pairs and stores them."""
+    """What a pairing depends on besides its directions: the code that pairs and stores them, and the versions of
+    NumPy (its seeded choice of queries) and SciPy (its k-d tree)."""
+    import scipy
+
     here = Path(__file__).parent
-    return hashlib.sha256((here / "reciprocity.py").read_bytes() + Path(__file__).read_bytes()).hexdigest().encode()
+    code = (here / "reciprocity.py").read_bytes() + Path(__file__).read_bytes()
+    return hashlib.sha256(code + f"{np.__version__} {scipy.__version__}".encode()).hexdigest().encode()
