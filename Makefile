@@ -33,12 +33,13 @@ test: $(STAMP) $(VALIDATOR)
 # from the clone as a wheel), `python -m brdffit` and a fit of the example from another folder, the wheel and the sdist
 # built and checked for LICENSE, py.typed and (the sdist) the tests (tests/dist_contents.py), and the tests of
 # LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver,
-# the stored programs, pandas and colour-science, Dask, the command line's streams and extras (~10 minutes on 2
+# the stored programs and executables (JAX's private LAPACK set-up) and stored pairs, pandas and colour-science, Dask, the command line's streams and extras (~10 minutes on 2
 # cores). Needs the package index; CI runs it after `make test`.
 LOWEST := .venv-lowest
 LOWEST_TESTS := tests/physics tests/export tests/uncertainty tests/fitting/test_fit.py tests/fitting/test_solver.py \
 	tests/data/test_formats.py tests/data/test_spectral.py tests/cli/test_streams.py tests/cli/test_extras.py \
-	tests/test_cluster.py tests/test_programs.py tests/test_jit.py tests/test_float64.py tests/test_startup.py
+	tests/test_cluster.py tests/test_programs.py tests/test_executables.py tests/data/test_stored_pairs.py \
+	tests/test_jit.py tests/test_float64.py tests/test_startup.py
 test-lowest: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pip install --quiet 'uv>=0.5'
 	rm -rf $(LOWEST)
