@@ -32,9 +32,9 @@ test: $(STAMP) $(VALIDATOR)
 # resolved by uv with --resolution lowest-direct (every direct dependency at its lower limit, the package installed
 # from the clone as a wheel), `python -m brdffit` and a fit of the example from another folder, the wheel and the sdist
 # built and checked for LICENSE, py.typed and (the sdist) the tests (tests/dist_contents.py), and the tests of
-# LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver,
-# the stored programs and executables (JAX's private LAPACK set-up) and stored pairs, pandas and colour-science, Dask, the command line's streams and extras (~10 minutes on 2
-# cores). Needs the package index; CI runs it after `make test`.
+# LOWEST_TESTS: the models, the exports and Mitsuba, the uncertainty and emcee, the solver, the stored programs and
+# executables (JAX's private LAPACK set-up) and stored pairs, pandas and colour-science, Dask, the command line's
+# streams and extras (~10 minutes on 2 cores). Needs the package index; CI runs it after `make test`.
 LOWEST := .venv-lowest
 LOWEST_TESTS := tests/physics tests/export tests/uncertainty tests/fitting/test_fit.py tests/fitting/test_solver.py \
 	tests/data/test_formats.py tests/data/test_spectral.py tests/cli/test_streams.py tests/cli/test_extras.py \
