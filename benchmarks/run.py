@@ -16,7 +16,8 @@ Sections (issue 3):
     and fit_batch on its default path.
 (c) ``brdffit fit`` of the shipped 10k-sample example, process start to result written.
 (d) Peak resident memory of the MERL-size Cook-Torrance fit (the process that loads the samples and fits).
-(e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step).
+(e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step), and
+    the pass's own lower bound: the bytes of its arrays at the memory's streaming rate, measured in the run.
 (f) MCMC (issue 4): emcee, 32 walkers × 2000 steps on the 10k-sample example, compile included.
 (g) Reading a full MERL file (issue 5): 1,458,000 bins to direction pairs.
 (h) ``brdffit compare`` of 4 models × 5 folds on the 10k-sample example (issue 12) against the four plain
@@ -508,10 +509,17 @@ def table(results: dict) -> str:
         for name, section in merl.items():
             step = section["per_step"]
             per_step = step["solve_seconds"] / step["steps"]
-            lines.append(
+            line = (
                 f"    {name}: {1000 * per_step:.0f} ms / {1000 * step['pass_seconds']:.0f} ms"
                 f" = {per_step / step['pass_seconds']:.2f}× ({step['steps']} steps)"
             )
+            if "bound_seconds" in step:  # worker.pass_bound: XLA's bytes and flops at this machine's rates
+                line += (
+                    f"; the pass's bytes at the memory's rate {1000 * step['bound_seconds']:.0f} ms"
+                    f" ({step['pass_bytes'] / 1e6:.0f} MB at {step['bandwidth_bytes_per_second'] / 1e9:.1f} GB/s):"
+                    f" a step is {per_step / step['bound_seconds']:.1f}× that bound"
+                )
+            lines.append(line)
     posterior = results.get("mcmc")
     if posterior:
         lines.append(

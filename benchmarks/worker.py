@@ -154,7 +154,22 @@ def steps(args) -> dict:
     pass_seconds, _ = median_seconds(lambda: sums(theta, problem), 7)
     solve_seconds, output = median_seconds(lambda: solve(theta, problem), 3)
     n_steps = int(output[2])
-    return {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps}
+    return {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps} | pass_bound(
+        problem, median_seconds
+    )
+
+
+def pass_bound(problem, median_seconds) -> dict:
+    """(e)'s lower bound of one normal-equation pass on this machine: the bytes it must read (every array of the
+    problem, once) at the memory's streaming rate, measured here by a 256 MB numpy sum. (XLA's own count,
+    ``cost_analysis``, counts a loop's body once, not once per chunk of samples: no bound on the arithmetic here.)"""
+    import jax
+
+    bytes_read = float(sum(np.asarray(leaf).nbytes for leaf in jax.tree.leaves(problem)))
+    stream = np.ones(32 * 2**20)  # 256 MB
+    stream_seconds, _ = median_seconds(lambda: stream.sum(), 5)
+    bandwidth = stream.nbytes / stream_seconds
+    return {"pass_bytes": bytes_read, "bandwidth_bytes_per_second": bandwidth, "bound_seconds": bytes_read / bandwidth}
 
 
 #: Seeded realistic parameter ranges of the batch benchmarks' materials.
