@@ -18,7 +18,6 @@ load is said in one warning and compiled again, one that fails to run is discard
 """
 
 import hashlib
-import hmac
 import json
 import os
 import platform
@@ -55,7 +54,7 @@ def compiled_program(
         except FileNotFoundError:
             pass
         except Exception as error:  # planted, flipped bytes, cut short, another jaxlib's: never run; compiled again
-            _remove(path)
+            signing.remove_quietly(path)
             warn(InputWarning(f"the stored executable {path} is not used ({error}); it is removed and compiled again"))
     jitted = jax.jit(_named_call(exported, name), compiler_options=options())
     _listen()
@@ -79,7 +78,7 @@ def compiled_program(
         except Exception:  # a backend that cannot serialize executables: this process runs it all the same
             return compiled
         body = json.dumps({"custom_calls": sorted(calls)}).encode() + b"\n" + payload
-        signing.write_atomically(path, signing.signed(key, path.stem, body) + b"\n" + body)
+        signing.write_atomically(path, signing.signed_file(key, path.stem, body))
     return compiled
 
 
@@ -126,24 +125,13 @@ def discard(folder: Path, name: str) -> None:
     """Remove the executable of the stored program ``name`` on this machine (it failed, or its program did)."""
     machine_name = machine()
     if machine_name is not None:
-        _remove(folder / f"{_digest(name, machine_name)}{SUFFIX}")
-
-
-def _remove(path: Path) -> None:
-    """Remove ``path`` if it can be (a cache that cannot be written keeps it; it is never read unless signed)."""
-    try:
-        path.unlink(missing_ok=True)
-    except OSError:
-        pass
+        signing.remove_quietly(folder / f"{_digest(name, machine_name)}{SUFFIX}")
 
 
 def _read(path: Path, key: bytes, in_tree, out_tree):
     """The executable in ``path``, loaded, once its HMAC proves that this cache wrote it under this name; raises
     ``signing.UntrustedProgram`` otherwise (and ``FileNotFoundError`` when there is none)."""
-    mac, _, body = path.read_bytes().partition(b"\n")
-    if not hmac.compare_digest(mac, signing.signed(key, path.stem, body)):
-        raise signing.UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
-    header, _, payload = body.partition(b"\n")
+    header, _, payload = signing.verified_body(path.read_bytes(), path.stem, key).partition(b"\n")
     calls = set(json.loads(header)["custom_calls"])
     if not calls <= _lapack_calls():
         raise signing.UntrustedProgram(f"it calls {sorted(calls - _lapack_calls())}, which brdffit cannot make ready")

@@ -1,10 +1,10 @@
 """What a stored file must carry to be read: the cache's secret key, and the HMAC-SHA256 of each file under it.
 
-The folder of stored programs (``stored.py``) and executables (``executables.py``) is untrusted input (issue 29,
-item 8): each file begins with an HMAC-SHA256 of its name and content under a key that only this cache knows
-(:data:`KEY_FILE`, 32 random bytes, mode 0600, made by the first process that stores one). A file that fails the
-check is never deserialized, never run (:class:`UntrustedProgram`). Files are written atomically, so a reader never
-sees half of one.
+The folder of stored programs (``stored.py``), executables (``executables.py``) and pairs (``data/stored_pairs.py``)
+is untrusted input (issue 29, item 8): each file begins with an HMAC-SHA256 of its name and content under a key that
+only this cache knows (:data:`KEY_FILE`, 32 random bytes, mode 0600, made by the first process that stores one):
+:func:`signed_file` writes it, :func:`verified_body` checks it. A file that fails the check is never deserialized,
+never run (:class:`UntrustedProgram`). Files are written atomically, so a reader never sees half of one.
 """
 
 import hashlib
@@ -29,6 +29,28 @@ class UntrustedProgram(Exception):
 def signed(key: bytes, signature: str, body: bytes) -> bytes:
     """The HMAC-SHA256 (hex) of a program's ``body`` stored for ``signature`` (a file moved to another name fails)."""
     return hmac.new(key, signature.encode() + b"\n" + body, hashlib.sha256).hexdigest().encode()
+
+
+def signed_file(key: bytes, name: str, body: bytes) -> bytes:
+    """A stored file's content: the HMAC of ``body`` under ``name`` (:func:`signed`) on one line, then ``body``."""
+    return signed(key, name, body) + b"\n" + body
+
+
+def verified_body(content: bytes, name: str, key: bytes | None) -> bytes:
+    """The body of a stored file's ``content`` (:func:`signed_file`), once its HMAC proves that this cache (``key``)
+    wrote it under ``name``; raises :class:`UntrustedProgram` otherwise."""
+    mac, _, body = content.partition(b"\n")
+    if key is None or not hmac.compare_digest(mac, signed(key, name, body)):
+        raise UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
+    return body
+
+
+def remove_quietly(path: Path) -> None:
+    """Remove a stored file if it can be (a cache that cannot be written keeps it; it is never read unless signed)."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def secret(folder: Path) -> bytes | None:

@@ -27,7 +27,6 @@ that fails the first time it is compiled or run is discarded (:func:`discard`, f
 
 import enum
 import hashlib
-import hmac
 import importlib
 import json
 import sys
@@ -44,7 +43,7 @@ from ..errors import InputWarning, warn
 from . import executables
 from .executables import shapes_of
 from .keys import key_of
-from .signing import UntrustedProgram, secret, signed, write_atomically
+from .signing import UntrustedProgram, secret, signed_file, verified_body, write_atomically
 
 #: A stored program's file: its HMAC (hex) on one line, one line of JSON (the named tuples its trees hold), and the
 #: serialized program.
@@ -246,7 +245,7 @@ def _load_or_export(
     except Exception:  # jax.export refuses it (a callback, a custom call it does not know): compile it as usual
         return None, signature
     body = json.dumps({"named_tuples": [_type_name(kind) for kind in types]}).encode() + b"\n" + bytes(payload)
-    content = b"" if key is None else signed(key, signature, body) + b"\n" + body
+    content = b"" if key is None else signed_file(key, signature, body)
     if key is not None:  # no key (a cache that cannot be written): nothing is stored
         write_atomically(path, content)
     return exported, _program_name(signature, content)
@@ -261,10 +260,7 @@ def _program_name(signature: str, content: bytes) -> str:
 def _read(content: bytes, signature: str, key: bytes | None):
     """The ``Exported`` in a program file's ``content``, once its HMAC proves that this cache wrote it for
     ``signature``; raises :class:`UntrustedProgram` otherwise."""
-    mac, _, body = content.partition(b"\n")
-    if key is None or not hmac.compare_digest(mac, signed(key, signature, body)):
-        raise UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
-    header, _, payload = body.partition(b"\n")
+    header, _, payload = verified_body(content, signature, key).partition(b"\n")
     for name in json.loads(header)["named_tuples"]:
         _register(_named_tuple(name))
     return jax.export.deserialize(bytearray(payload))

@@ -11,7 +11,6 @@ else is said in one warning and paired again.
 """
 
 import hashlib
-import hmac
 import io
 from functools import cache
 from pathlib import Path
@@ -34,12 +33,11 @@ def stored_pairs(geometry: tuple, general: bool) -> tuple[np.ndarray, np.ndarray
     if path is None or key is None:
         return None
     try:
-        mac, _, body = path.read_bytes().partition(b"\n")
+        content = path.read_bytes()
     except OSError:
         return None
     try:
-        if not hmac.compare_digest(mac, signing.signed(key, path.stem, body)):
-            raise signing.UntrustedProgram("not signed by this cache: written elsewhere, or changed since")
+        body = signing.verified_body(content, path.stem, key)
         with np.load(io.BytesIO(body), allow_pickle=False) as arrays:
             first, second, within = arrays["first"], arrays["second"], float(arrays["within"])
         n_samples = geometry[1]
@@ -49,10 +47,7 @@ def stored_pairs(geometry: tuple, general: bool) -> tuple[np.ndarray, np.ndarray
             if len(indices) and (indices.min() < 0 or indices.max() >= n_samples):
                 raise ValueError(f"its indices lie outside the {n_samples} samples")
     except Exception as error:
-        try:
-            path.unlink(missing_ok=True)
-        except OSError:  # a cache that cannot be written keeps it; it is never read unless signed
-            pass
+        signing.remove_quietly(path)
         warn(InputWarning(f"the stored pairs {path} are not used ({error}); they are looked up again"))
         return None
     return first, second, within
@@ -67,7 +62,7 @@ def store_pairs(geometry: tuple, general: bool, pairs: tuple[np.ndarray, np.ndar
     first, second, within = pairs
     np.savez(stream, first=np.asarray(first, np.int64), second=np.asarray(second, np.int64), within=within)
     body = stream.getvalue()
-    signing.write_atomically(path, signing.signed(key, path.stem, body) + b"\n" + body)
+    signing.write_atomically(path, signing.signed_file(key, path.stem, body))
 
 
 def _place(geometry: tuple, general: bool) -> tuple[Path | None, bytes | None]:
