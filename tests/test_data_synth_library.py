@@ -46,7 +46,12 @@ def test_analytic_albedos_are_plausible():
         else:
             specular = np.asarray(params.get("rho_s", params.get("ks")))
         fresnel = material.parameters["options"].get("fresnel")
-        if fresnel in (None, "conductor") or (fresnel == "schlick" and params["f0"] > 0.3):
+        if fresnel == "conductor":  # a metal's colour is its index's: ks 1, the lobe's albedo at most F(0°)
+            eta, k = np.asarray(params["eta"]), np.asarray(params["k"])
+            assert eta.shape == k.shape == (3,) and np.all(specular == 1.0), material
+            normal_reflectance = ((eta - 1) ** 2 + k**2) / ((eta + 1) ** 2 + k**2)
+            assert np.all(diffuse + normal_reflectance <= 1.0 + 1e-3), material
+        elif fresnel is None or (fresnel == "schlick" and params["f0"] > 0.3):
             assert np.all(diffuse + specular <= 0.9 + 1e-3), material  # the lobe's albedo is about its rho_s, ks
         else:
             assert np.all(diffuse <= 0.8 + 1e-4), material  # dielectric Fresnel: the lobe's albedo is ks·F ≤ 0.1

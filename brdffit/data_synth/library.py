@@ -36,6 +36,7 @@ import numpy as np
 from brdffit._files import write_text_atomic
 from brdffit.data.merl import FILE_BYTES, HORIZON, N_BINS, bin_directions, write_merl_table
 from brdffit.physics.evaluate import evaluate
+from brdffit.physics.metals import METALS as METALS_BY_SYMBOL
 
 SOURCES = ("brdffit", "mitsuba")
 MANIFEST = "library.json"
@@ -49,6 +50,10 @@ MAX_ALBEDO = 0.9
 ALPHA_RANGE = (0.03, 0.6)
 #: Mitsuba's ``material`` presets for ``roughconductor`` (measured spectral η, k, integrated to RGB by Mitsuba).
 METALS = ("Au", "Cu", "Al", "Ag", "Cr", "W")
+#: The measured metals (``physics/metals.py``) brdffit's own conductors are drawn near, and how far (a fraction) each
+#: channel's ``eta`` and ``k`` may lie from the table's.
+MEASURED_METALS = ("Au", "Ag", "Cu", "Al", "Cr", "Ni", "Ti", "Fe")
+INDEX_SPREAD = 0.15
 #: Share of the Mitsuba materials that are ``principled``; the rest is split between conductors and plastics.
 PRINCIPLED_SHARE = 0.45
 
@@ -259,14 +264,20 @@ def _cook_torrance_dielectric(rng: np.random.Generator) -> tuple[dict, dict]:
 
 
 def _cook_torrance_conductor(rng: np.random.Generator) -> tuple[dict, dict]:
-    """A metal: exact conductor Fresnel with η in [0.1, 2.5] and k in [1.5, 8] (the range of common metals),
-    coloured ``ks`` in [0.4, 0.85], a little grey ``kd`` (≤ 0.05: dust, oxide)."""
+    """A metal as a renderer holds one: exact conductor Fresnel with a complex index per channel, ``ks`` 1 (the
+    metal's colour is its index's), the RGB ``eta`` and ``k`` of one of :data:`MEASURED_METALS` each scaled by a
+    factor in [1 − :data:`INDEX_SPREAD`, 1 + :data:`INDEX_SPREAD`] (an alloy, an oxide film: not the table's value a
+    fit starts from), and a little grey ``kd`` (dust, ≤ 0.05 and ≤ what the normal-incidence reflectance leaves)."""
+    metal = METALS_BY_SYMBOL[MEASURED_METALS[int(rng.integers(len(MEASURED_METALS)))]]
+    eta = np.asarray(metal.eta_rgb) * rng.uniform(1.0 - INDEX_SPREAD, 1.0 + INDEX_SPREAD, 3)
+    k = np.asarray(metal.k_rgb) * rng.uniform(1.0 - INDEX_SPREAD, 1.0 + INDEX_SPREAD, 3)
+    normal_reflectance = ((eta - 1.0) ** 2 + k**2) / ((eta + 1.0) ** 2 + k**2)
     params = {
-        "kd": _rgb(_grey(rng, 0.0, 0.05)),
-        "ks": _rgb(_colour(rng, 0.4, 0.85)),
+        "kd": _rgb(_grey(rng, 0.0, min(0.05, 1.0 - float(normal_reflectance.max())))),
+        "ks": _rgb(np.ones(3)),
         "m": _alpha(rng),
-        "eta": _number(rng.uniform(0.1, 2.5)),
-        "k": _number(rng.uniform(1.5, 8.0)),
+        "eta": _rgb(eta),
+        "k": _rgb(k),
     }
     return params, _microfacet_options(rng, "conductor")
 

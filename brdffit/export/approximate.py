@@ -142,8 +142,9 @@ class Approximation:
     """How far an approximating BRDF lies from the fitted one: ``rmse`` over :func:`error_grid` (1/sr), the same as
     a fraction of the fitted BRDF's own rms there (``relative_rmse``: the shape's error, which albedos cannot see,
     e.g. a retro-reflective lobe turned forward), and the worst relative difference of their directional albedos
-    (``albedo_error``, a fraction) over the incidences and channels, at ``albedo_incidence`` (degrees) in channel
-    ``albedo_channel``; ``largest``: where on the grid the two differ most (``theta_i``, ``phi_i``, ``theta_o``,
+    (``albedo_error``, a fraction) over the incidences, light azimuths and channels, at ``albedo_incidence`` and
+    ``albedo_phi_i`` (degrees; the light's azimuth is 0 but for an anisotropic fit's) in channel ``albedo_channel``;
+    ``largest``: where on the grid the two differ most (``theta_i``, ``phi_i``, ``theta_o``,
     ``phi_o`` in degrees; the ``channel``; the ``fit``'s and the ``approximation``'s values, 1/sr)."""
 
     rmse: float
@@ -152,6 +153,7 @@ class Approximation:
     albedo_channel: str
     relative_rmse: float = float("nan")
     largest: dict[str, Any] | None = None
+    albedo_phi_i: float = 0.0
 
     def to_dict(self) -> dict:
         return {
@@ -159,6 +161,7 @@ class Approximation:
             "relative_rmse": self.relative_rmse,
             "albedo_error": self.albedo_error,
             "albedo_incidence": self.albedo_incidence,
+            "albedo_phi_i": self.albedo_phi_i,
             "albedo_channel": self.albedo_channel,
             "largest_difference": self.largest,
         }
@@ -189,7 +192,8 @@ class Approximation:
             f"rmse {self.rmse:.3g} 1/sr ({self.relative_rmse:.1%} of the BRDF's rms) over the hemisphere and the plane"
             " of incidence,"
             f" directional albedo within {self.albedo_error:.2%} (worst at θi = {self.albedo_incidence:g}°,"
-            f" channel {self.albedo_channel})"
+            + (f" φi = {self.albedo_phi_i:g}°," if self.albedo_phi_i else "")
+            + f" channel {self.albedo_channel})"
         )
 
 
@@ -200,7 +204,7 @@ class Reference:
     (``coarse``, :data:`COARSE_GRID`), half of each where it is mirror-symmetric (``symmetric``,
     :func:`mirror_symmetric`), with the light at ``turns`` azimuths (1, or :data:`ANISOTROPIC_TURNS` where it is not
     :func:`isotropic`, the coarse grid at half of them); its values on :func:`error_grid` (``values``, (N, C) 1/sr)
-    and its directional albedos (``albedos``, (incidences, C))."""
+    and its directional albedos with the light at each of those azimuths (``albedos``, (turns, incidences, C))."""
 
     result: FitResult
     symmetric: bool
@@ -229,7 +233,7 @@ def reference(result: FitResult) -> Reference:
     fine = tabulated(result, FIT_GRID, symmetric, turns)
     coarse = tabulated(result, COARSE_GRID, symmetric, max(1, turns // 2))
     values = np.asarray(result.predict(*error_grid(turns)))
-    return Reference(result, symmetric, fine, coarse, values, _albedos(result.predict), turns)
+    return Reference(result, symmetric, fine, coarse, values, _albedos(result.predict, turns), turns)
 
 
 def tabulated(
@@ -251,9 +255,9 @@ def approximation_error(
     rmse = float(np.sqrt(np.mean((approximated - fitted) ** 2)))
     relative = rmse / max(float(np.sqrt(np.mean(fitted**2))), 1e-300)
     original = known.albedos
-    approximate = _albedos(brdf)
+    approximate = _albedos(brdf, known.turns)
     albedo = np.abs(approximate - original) / np.maximum(original, 1e-12)
-    worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)
+    worst = np.unravel_index(int(np.argmax(albedo)), albedo.shape)  # (turn, incidence, channel)
     pair, channel = np.unravel_index(int(np.argmax(np.abs(approximated - fitted))), fitted.shape)
     (theta_i, phi_i), (theta_o, phi_o) = (np.degrees(direction_to_spherical(w[pair])) for w in (wi, wo))
     largest: dict[str, Any] = {
@@ -266,7 +270,13 @@ def approximation_error(
         "approximation": float(approximated[pair, channel]),
     }
     return Approximation(
-        rmse, float(albedo[worst]), float(ALBEDO_INCIDENCE[worst[0]]), str(result.channels[worst[1]]), relative, largest
+        rmse,
+        float(albedo[worst]),
+        float(ALBEDO_INCIDENCE[worst[1]]),
+        str(result.channels[worst[2]]),
+        relative,
+        largest,
+        albedo_phi_i=float(worst[0]) * 180.0 / known.turns,
     )
 
 
@@ -275,7 +285,7 @@ def reference_values(result: FitResult) -> Reference:
     and its albedos."""
     turns = light_turns(result)
     values = np.asarray(result.predict(*error_grid(turns)))
-    return Reference(result, False, None, None, values, _albedos(result.predict), turns)
+    return Reference(result, False, None, None, values, _albedos(result.predict, turns), turns)
 
 
 def grid_rmse(known: Reference, brdf: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> float:
@@ -344,7 +354,9 @@ def _freed(model: Model, holding: Holding) -> Holding:
     return Holding(fixed=freed | dict(holding.fixed), bounds=holding.bounds)
 
 
-def _albedos(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], n: int = 128) -> np.ndarray:
-    """Directional albedos (incidences, C) of ``brdf`` by the fit caveats' quadrature (``caveats.py``)."""
-    wi, wo = albedo_directions(n)
-    return albedo_quadrature(np.asarray(brdf(wi, wo)), n)[0]
+def _albedos(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], turns: int = 1, n: int = 128) -> np.ndarray:
+    """Directional albedos (turns, incidences, C) of ``brdf`` by the fit caveats' quadrature (``caveats.py``), with
+    the light at ``turns`` azimuths (:func:`turned`: an anisotropic BRDF's albedo depends on the light's azimuth)."""
+    wi, wo = turned(albedo_directions(n), turns)
+    values = np.asarray(brdf(wi, wo))
+    return np.stack([albedo_quadrature(block, n)[0] for block in np.split(values, turns)])

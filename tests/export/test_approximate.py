@@ -11,6 +11,7 @@ from brdffit.export.approximate import (
     COARSE_GRID,
     FIT_GRID,
     GRID,
+    approximation_error,
     dense_grid,
     error_grid,
     fitting_grid,
@@ -89,6 +90,17 @@ def test_anisotropy_is_detected():
     assert isotropic(WARD.predict) and not isotropic(TURNED.predict) and not isotropic(aligned.predict)
     assert mirror_symmetric(aligned.predict)
     assert reference(WARD).turns == 1 and reference(aligned).turns == ANISOTROPIC_TURNS
+
+
+def test_an_anisotropic_fits_albedo_is_compared_with_the_light_at_each_azimuth():
+    """An approximation that is brighter by 20%·sin²θi·sin²φi (the light's y component squared) than an anisotropic
+    fit reflects as much light with the light at azimuth 0, and 20%·sin²80° = 19.4% more at 80° from azimuth 90°: the
+    albedo error finds it there (a quadrature of the same values, so to rounding)."""
+    brighter = approximation_error(TURNED, lambda wi, wo: TURNED.predict(wi, wo) * (1.0 + 0.2 * wi[:, 1:2] ** 2))
+    assert brighter.albedo_error == pytest.approx(0.2 * np.sin(np.radians(80.0)) ** 2, rel=1e-9)
+    assert (brighter.albedo_incidence, brighter.albedo_phi_i) == (80.0, 90.0)
+    assert "φi = 90°" in brighter.line() and brighter.to_dict()["albedo_phi_i"] == 90.0
+    assert approximation_error(WARD, WARD.predict).albedo_phi_i == 0.0
 
 
 def test_an_anisotropic_fit_is_exported_anisotropic_with_its_tangent():
