@@ -16,6 +16,7 @@ from .arguments import (
     add_loading_options,
     add_mcmc_options,
     add_model_options,
+    cluster_client,
     holding_arguments,
     json_argument,
     json_file,
@@ -25,7 +26,6 @@ from .arguments import (
     output_file,
     read_options,
 )
-from .cluster import cluster_client
 from .files import Files, write_to_standard_output
 
 
