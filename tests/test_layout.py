@@ -46,6 +46,7 @@ LAYERS = {
     "brdffit.api": 5,
     "brdffit.views": 5,
     "brdffit.export": 5,
+    "brdffit.svbrdf": 5,  # spatially varying materials: captures fitted texel by texel into maps
     "brdffit.data_synth": 5,  # synthetic measurements: a model evaluated on a geometry, packaged as samples
     "brdffit.cli": 6,
 }

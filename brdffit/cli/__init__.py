@@ -45,6 +45,7 @@ COMMANDS = {
     "convert": "convert samples between formats, or tabulate a fit result as a MERL file",
     "info": "what a samples file holds: count, channels, angular coverage (or what a basis file holds)",
     "basis": "learn a data-driven basis from a library of MERL tables, and choose the directions to measure",
+    "svbrdf": "a spatially varying material: fit a capture's photographs texel by texel into maps, and relight them",
 }
 
 
@@ -80,6 +81,7 @@ EXAMPLES = {
     "synth": (
         "brdffit synth --model ward --params oak.json --noise 0.01 --seed 1 -o noisy.csv",
         "brdffit synth --model lambert --params '{\"rho_d\": [0.5]}' --geometry in-plane -o grey.csv",
+        "brdffit synth capture capture/ --model ward --texels 64,64 --images 32 --noise 0.01",
     ),
     "models": ("brdffit models", "brdffit models | grep -A3 '^cook-torrance'"),
     "convert": (
@@ -91,6 +93,11 @@ EXAMPLES = {
     "basis": (
         "brdffit basis build merl/ -o basis.npz --components 16",
         "brdffit basis directions basis.npz -n 20 -o directions.csv",
+    ),
+    "svbrdf": (
+        "brdffit svbrdf fit examples/tiles-capture --model ward -o tiles-maps/",
+        "brdffit svbrdf fit capture/ --model cook-torrance --uncertainty laplace --resume -o maps/",
+        "brdffit svbrdf render tiles-maps/ --light 0,-150,250 --camera 0,0,400 -o relit.exr",
     ),
 }
 

@@ -32,7 +32,9 @@ FLAGS = {
 
 #: The metavars of arguments that name a file (shell completion completes file names there;
 #: ``tests/cli/test_collisions.py`` checks each such argument is declared among its command's files).
-FILE_METAVARS = frozenset({"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN", "OUT", "BASIS", "LIB"})
+FILE_METAVARS = frozenset(
+    {"SAMPLES", "FILE", "PARAMS", "CSV", "DATA", "RESULT.json", "IN", "OUT", "BASIS", "LIB", "CAPTURE", "MAPS", "IMAGE"}
+)
 
 
 def flag(name: str) -> str:

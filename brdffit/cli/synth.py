@@ -1,7 +1,9 @@
-"""``brdffit synth``: synthetic samples of a model on a measurement geometry, with noise (``data_synth``)."""
+"""``brdffit synth``: synthetic samples of a model on a measurement geometry, with noise (``data_synth``); ``brdffit
+synth capture OUT/``: a synthetic capture of a spatially varying material (``data_synth/capture.py``)."""
 
 import argparse
 import inspect
+from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
@@ -14,7 +16,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
     add_model_options(parser, None)
     parser.add_argument(
-        "--params", required=True, metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON"
+        "--params", metavar="PARAMS", help="parameters: JSON file (a result file works) or inline JSON (required)"
     )
     parser.add_argument("--geometry", metavar="NAME", help=f"{', '.join(GEOMETRIES)} (default hemisphere)")
     parser.add_argument(
@@ -52,11 +54,48 @@ def configure(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--sigma-column", action="store_true", help="write the noise's 1-σ as sigma columns")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noise and of random geometries (default 0)")
-    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="samples file to write")
+    parser.add_argument("-o", "--output", metavar="FILE", help="samples file to write (required)")
+    actions = parser.add_subparsers(title="actions", metavar="[capture]", dest="action")
+    capture = actions.add_parser(
+        "capture",
+        help="a capture of a spatially varying material made from known maps (brdffit svbrdf fit reads it)",
+        allow_abbrev=False,
+    )
+    capture.add_argument("folder", metavar="OUT", help="folder to write capture.json, the images and truth.npz into")
+    add_model_options(capture, "ward")
+    capture.add_argument(
+        "--params",
+        action="append",
+        metavar="PARAMS",
+        help="the two materials the maps blend, given twice (JSON files or inline JSON; default: the model's built-in"
+        " pair, for lambert, ward and cook-torrance)",
+    )
+    capture.add_argument("--texels", default="32,32", metavar="ROWS,COLUMNS", help="the texel grid (default 32,32)")
+    capture.add_argument(
+        "--size", type=float, default=100.0, metavar="MM", help="the square sample's side (default 100)"
+    )
+    capture.add_argument("--images", type=int, default=32, metavar="N", help="photographs, one light each (default 32)")
+    capture.add_argument("--noise", type=float, default=0.01, metavar="LEVEL", help="multiplicative (default 0.01)")
+    capture.add_argument("--seed", type=int, default=0, help="seed of the noise (default 0)")
+    capture.add_argument("--format", default="exr", metavar="FORMAT", help="the images' format: exr (default) or npy")
 
 
 def files(args: argparse.Namespace) -> Files:
-    """What ``synth`` reads (``--params``, ``--directions``, the basis the model names) and writes (``-o``)."""
+    """What ``synth`` reads (``--params``, ``--directions``, the basis the model names) and writes (``-o``); what
+    ``synth capture`` reads (``--params``) and writes (``capture.json`` and ``truth.npz`` in OUT)."""
+    if args.action == "capture":
+        folder = Path(args.folder)
+        return Files.of(
+            inputs={
+                "--params": [json_file(value) for value in args.params or []],
+                "--basis": model_files(model_options(args)),
+            },
+            outputs={"OUT": [args.folder, folder / "capture.json", folder / "truth.npz"]},
+        )
+    if args.params is None or args.output is None:
+        raise BrdfInputError(
+            f"{'--params' if args.params is None else '-o'} is required (or: brdffit synth capture OUT)"
+        )
     model, _, _ = _model_and_params(args)
     return Files.of(
         inputs={
@@ -69,6 +108,8 @@ def files(args: argparse.Namespace) -> Files:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.action == "capture":
+        return _capture(args)
     from brdffit.data_synth import GEOMETRIES, synthesize
 
     from .._programs.cache import enable_compilation_cache
@@ -119,6 +160,39 @@ def run(args: argparse.Namespace) -> int:
     save_samples(samples, output)
     shown = "-" if args.output == "-" else output
     print(f"wrote {samples.n_samples} samples × {samples.n_channels} channel(s) of {model.name} to {shown}")
+    return EXIT_OK
+
+
+def _capture(args: argparse.Namespace) -> int:
+    from brdffit.data_synth.capture import FORMATS, synth_capture
+
+    from .._programs.cache import enable_compilation_cache
+
+    enable_compilation_cache()
+    try:
+        shape = tuple(int(part) for part in args.texels.split(","))
+    except ValueError:
+        shape = ()
+    if len(shape) != 2 or min(shape) < 1:
+        raise BrdfInputError(f"--texels {args.texels}: give ROWS,COLUMNS, two whole numbers ≥ 1")
+    if args.format not in FORMATS:
+        raise BrdfInputError(f"--format {args.format}: use {' or '.join(FORMATS)}")
+    if args.images < 1 or not args.size > 0 or not args.noise >= 0:
+        raise BrdfInputError("--images must be ≥ 1, --size > 0 and --noise ≥ 0")
+    given = args.params or []
+    if len(given) not in (0, 2):
+        raise BrdfInputError(f"--params given {len(given)} time(s): give the two materials the maps blend, or none")
+    materials = [json_argument(value, "--params") for value in given] or [None, None]
+    folder = Path(args.folder)
+    if folder.exists() and not folder.is_dir():
+        raise BrdfInputError(f"OUT {args.folder}: is a file; give a folder")
+    options = {name: value for name, value in model_options(args).items() if value is not None}
+    synth_capture(
+        folder, args.model, *materials, shape=shape, size_mm=args.size, n_images=args.images, noise=args.noise,
+        seed=args.seed, image_format=args.format, **options,
+    )  # fmt: skip
+    print(f"wrote {args.folder}/: a capture of {shape[0]} × {shape[1]} texels, {args.images} {args.format} images"
+          f" of {args.model} maps, and their truth (truth.npz)")  # fmt: skip
     return EXIT_OK
 
 

@@ -12,12 +12,13 @@ from paths import EXAMPLE, EXAMPLE_PARAMS
 from brdffit import fit
 from brdffit.cli import COMMANDS, build_parser, main
 from brdffit.cli.arguments import FILE_METAVARS
+from brdffit.data_synth.capture import synth_capture
 
 #: Metavars of every other argument (a number, a name, a list of names or values, an address).
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
     "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL", "NAME[,…]", "true|false",
-    "ETA", "SHELL",
+    "ETA", "SHELL", "X,Y,Z", "E", "I[,I…]", "ROWS,COLUMNS", "MM",
 }  # fmt: skip
 
 
@@ -48,6 +49,7 @@ def folder(tmp_path, result, basis_file):  # noqa: F811
     (tmp_path / "directions.csv").write_text("theta_i,phi_i,theta_o,phi_o\n10,0,20,180\n")
     shutil.copy(basis_file, tmp_path / "b.npz")
     (tmp_path / "table.binary").write_bytes(b"not a table")
+    synth_capture(tmp_path / "cap", "lambert", shape=(2, 2), n_images=2)
     return tmp_path
 
 
@@ -101,6 +103,9 @@ COLLISIONS = [
     (["convert", "oak.csv", "oak.csv"], "OUT oak.csv: is the input oak.csv (IN)"),
     (["basis", "build", "table.binary", "-o", "table.binary"], "is the input table.binary (LIB)"),
     (["basis", "directions", "b.npz", "-o", "b.npz"], "is the input b.npz (BASIS)"),
+    (["svbrdf", "fit", "cap", "-o", "cap"], "is the input cap (CAPTURE)"),
+    (["svbrdf", "fit", "cap/capture.json", "-o", "cap"], "is the input cap (CAPTURE)"),
+    (["svbrdf", "fit", "cap", "-o", "cap/img_000.npy"], "is the input cap/img_000.npy (CAPTURE)"),
 ]
 
 
@@ -158,6 +163,12 @@ EVERY_FILE = {
     ("models",): ["models"],
     ("basis", "build"): ["basis", "build", "table.binary", "-o", "b2.npz"],
     ("basis", "directions"): ["basis", "directions", "b.npz", "-o", "d.csv"],
+    ("svbrdf", "fit"): ["svbrdf", "fit", "cap", "--model", "pca", "--basis", "b.npz", "-o", "maps"],
+    ("svbrdf", "render"): ["svbrdf", "render", "cap", "--light", "0,0,1", "--camera", "0,0,1", "-o", "r.exr"],
+    ("synth", "capture"): [
+        *["synth", "capture", "cap2", "--params", "start.json", "--params", "s.npz", "--model", "pca"],
+        *["--basis", "b.npz"],
+    ],
 }
 
 

@@ -1,0 +1,155 @@
+"""Synthetic captures of spatially varying materials, made from known maps: for tests, examples and benchmarks.
+
+A material's maps blend two parameter sets, ``first`` and ``second``, by a smooth field ``t(x, y)`` in [0, 1] (a sum
+of two slanted waves; a roughness, exponent or index blends in its logarithm, an albedo linearly), so every texel
+is a plausible material and neighbours differ a little. The sample is photographed by a camera overhead under
+``n_images`` point lights on a dome (a Fibonacci spiral over zenith angles :data:`LIGHT_ZENITHS`, the first light
+near the camera's mirror direction of the sample's centre) at :data:`LIGHT_DISTANCE_MM`; each photograph's
+radiance ``L = f · I · cos θi / d²`` (``brdffit/svbrdf/texels.py``'s geometry) gets seeded multiplicative noise.
+
+::
+
+    truth = synth_capture("capture/", "ward", shape=(64, 64), n_images=32, noise=0.01, seed=0)
+
+writes ``capture/capture.json``, the photographs (``img_000.npy`` …, or ``.exr``) and ``capture/truth.npz`` (the
+maps' true parameters, named as a maps folder's ``params.npz``), and returns the true maps.
+"""
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brdffit._files import write_text_atomic
+from brdffit.errors import BrdfInputError
+from brdffit.physics.models.registry import model_for
+from brdffit.svbrdf.capture import CAPTURE_FILE, VERSION, texel_centres
+from brdffit.svbrdf.images import write_exr
+from brdffit.svbrdf.maps import flat_params
+from brdffit.svbrdf.relight import stacked_params, texel_brdf
+
+#: Two materials per model that a capture's maps blend, where the user gives none.
+MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
+    "lambert": ({"rho_d": [0.6, 0.35, 0.2]}, {"rho_d": [0.15, 0.3, 0.55]}),
+    "ward": (
+        {"rho_d": [0.45, 0.3, 0.2], "rho_s": [0.06, 0.06, 0.06], "alpha": 0.12},
+        {"rho_d": [0.12, 0.22, 0.35], "rho_s": [0.15, 0.15, 0.15], "alpha": 0.3},
+    ),
+    "cook-torrance": (
+        {"kd": [0.45, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "m": 0.15, "f0": 0.04},
+        {"kd": [0.12, 0.22, 0.35], "ks": [0.9, 0.9, 0.9], "m": 0.35, "f0": 0.06},
+    ),
+}
+#: Parameters blended in their logarithm (scales: a roughness, an exponent, an index).
+LOG_BLENDED = ("alpha", "alpha_x", "alpha_y", "alpha_u", "alpha_v", "m", "n", "roughness", "eta", "k")
+#: The lights' dome: distance from the sample's centre (mm) and the range of zenith angles (degrees).
+LIGHT_DISTANCE_MM = 300.0
+LIGHT_ZENITHS = (2.0, 70.0)
+#: The camera's height above the sample's centre (mm).
+CAMERA_HEIGHT_MM = 400.0
+FORMATS = ("npy", "exr")
+
+
+def blend_field(shape: tuple[int, int]) -> np.ndarray:
+    """The smooth field ``t`` (H, W) in [0, 1] a synthetic capture blends its two materials by."""
+    rows, columns = shape
+    v, u = np.meshgrid((np.arange(rows) + 0.5) / rows, (np.arange(columns) + 0.5) / columns, indexing="ij")
+    wave = np.sin(2.0 * np.pi * (0.8 * u + 0.3 * v)) + 0.6 * np.cos(2.0 * np.pi * (0.4 * u - 0.9 * v) + 0.7)
+    return (wave + 1.6) / 3.2
+
+
+def blended_maps(model: str, first: dict[str, Any], second: dict[str, Any], shape: tuple[int, int]):
+    """The true maps (name → (H, W) or (H, W, C), as :func:`brdffit.svbrdf.maps.flat_params` names them) of
+    ``first`` blended into ``second`` by :func:`blend_field`."""
+    t = blend_field(shape)
+    a, b = flat_params(first), flat_params(second)
+    if a.keys() != b.keys():
+        raise BrdfInputError(f"the two materials of a {model} capture name different parameters: {sorted(a)}")
+    maps = {}
+    for name in a:
+        low, high = np.asarray(a[name], dtype=float), np.asarray(b[name], dtype=float)
+        weight = t.reshape(*shape, *([1] * low.ndim))
+        if name in LOG_BLENDED and np.all(low > 0) and np.all(high > 0):
+            maps[name] = np.exp(np.log(low) + (np.log(high) - np.log(low)) * weight)
+        else:
+            maps[name] = low + (high - low) * weight
+    return maps
+
+
+def light_positions(n_images: int) -> np.ndarray:
+    """The lights (n_images, 3) in mm: a Fibonacci spiral over the dome's zenith angles (module docstring)."""
+    index = np.arange(n_images)
+    low, high = np.cos(np.radians(LIGHT_ZENITHS[1])), np.cos(np.radians(LIGHT_ZENITHS[0]))
+    cos_zenith = high - (high - low) * (index + 0.5) / n_images
+    azimuth = index * np.pi * (3.0 - np.sqrt(5.0))
+    sin_zenith = np.sqrt(1.0 - cos_zenith**2)
+    unit = np.stack([sin_zenith * np.cos(azimuth), sin_zenith * np.sin(azimuth), cos_zenith], axis=-1)
+    return LIGHT_DISTANCE_MM * unit
+
+
+def synth_capture(
+    folder: str | os.PathLike,
+    model: str = "ward",
+    first: dict[str, Any] | None = None,
+    second: dict[str, Any] | None = None,
+    *,
+    shape: tuple[int, int] = (32, 32),
+    size_mm: float = 100.0,
+    n_images: int = 32,
+    noise: float = 0.01,
+    seed: int = 0,
+    image_format: str = "npy",
+    **model_options: Any,
+) -> dict[str, np.ndarray]:
+    """Write a capture of ``model``'s maps blending ``first`` and ``second`` (default :data:`MATERIALS`) into
+    ``folder`` (module docstring): ``shape`` texels over a ``size_mm`` square, ``n_images`` photographs with
+    multiplicative noise ``noise`` (0.01 is 1%, seeded by ``seed``), as ``image_format`` (``npy`` or ``exr``);
+    returns the true maps, also written to ``truth.npz``."""
+    if first is None or second is None:
+        if model not in MATERIALS:
+            raise BrdfInputError(f"give the two materials of a {model} capture; built in: {', '.join(MATERIALS)}")
+        first, second = MATERIALS[model]
+    if image_format not in FORMATS:
+        raise BrdfInputError(f"image format {image_format!r}; use {' or '.join(FORMATS)}")
+    built = model_for(model, first, **model_options)
+    maps = blended_maps(model, first, second, shape)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    centres = texel_centres(size_mm, size_mm, shape)
+    camera = np.array([0.0, 0.0, CAMERA_HEIGHT_MM])
+    wo = (camera - centres) / np.linalg.norm(camera - centres, axis=-1, keepdims=True)
+    flat = {name: values.reshape(-1, *values.shape[2:]) for name, values in maps.items()}
+    stacked = stacked_params(built, flat, np.arange(len(centres)))
+    rng = np.random.default_rng(seed)
+    images = []
+    for index, light in enumerate(light_positions(n_images)):
+        to_light = light - centres
+        squared = np.sum(to_light**2, axis=-1)
+        wi = to_light / np.sqrt(squared)[:, None]
+        values = texel_brdf(built, stacked, wi, wo)
+        radiance = values * (wi[:, 2] / squared)[:, None]
+        radiance *= 1.0 + noise * rng.standard_normal(radiance.shape)
+        image = np.maximum(radiance, 0.0).reshape(*shape, -1).astype(np.float32)
+        name = f"img_{index:03d}.{image_format}"
+        if image_format == "npy":
+            np.save(folder / name, image)
+        else:
+            write_exr(folder / name, image)
+        images.append(
+            {
+                "file": name,
+                "light": {"position_mm": light.tolist(), "intensity": [1.0] * image.shape[-1]},
+                "camera": {"position_mm": camera.tolist()},
+            }
+        )
+    capture = {
+        "brdffit_capture": VERSION,
+        "plane": {"width_mm": size_mm, "height_mm": size_mm, "texels": list(shape)},
+        "images": images,
+    }
+    with open(folder / "truth.npz", "wb") as stream:
+        np.savez(stream, **maps)
+    write_text_atomic(folder / CAPTURE_FILE, json.dumps(capture, indent=1) + "\n")
+    return maps

@@ -1,0 +1,131 @@
+"""The images of a capture and of its maps, read and written: OpenEXR, 16-bit PNG and TIFF, NumPy ``.npy``.
+
+Read (:func:`read_image`): an image is an (H, W) or (H, W, C) array of linear values as float64.
+
+* ``.exr`` (OpenEXR, any pixel type): its ``RGB``/``RGBA`` (or ``R``, ``G``, ``B``) channels, or its single channel
+  (``Y``, or any one);
+* ``.npy``: the array as it is (float or integer);
+* ``.png``, ``.tif``, ``.tiff``: 16-bit greyscale or RGB (an alpha channel is left out), whose 65,535 stands for the
+  capture's ``scale`` (default 1); read by pypng and tifffile (the ``svbrdf`` extra); an 8-bit image is refused,
+  being sRGB-encoded and too coarse for a fit.
+
+Written (atomically): :func:`write_exr` (float32, lossless ZIP compression, linear) and :func:`write_png` (8-bit,
+a preview).
+"""
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._files import atomic_path, reading
+from ..errors import BrdfInputError, needs
+
+#: The suffixes :func:`read_image` reads.
+IMAGE_SUFFIXES = (".exr", ".npy", ".png", ".tif", ".tiff")
+#: What a 16-bit image's largest value stands for, before the capture's ``scale``.
+SIXTEEN_BITS = 65535.0
+
+
+def read_image(path: str | os.PathLike, scale: float = 1.0) -> np.ndarray:
+    """The image at ``path`` as float64, (H, W) or (H, W, C) (module docstring); ``scale``: the value of a 16-bit
+    image's 65,535."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in IMAGE_SUFFIXES:
+        raise BrdfInputError(f"{path}: not an image brdffit reads; use {', '.join(IMAGE_SUFFIXES)}")
+    with reading(path, "an image"):
+        if suffix == ".npy":
+            image = _npy(path)
+        elif suffix == ".exr":
+            image = _exr(path)
+        else:
+            image = _sixteen_bit(path) * (scale / SIXTEEN_BITS)
+    if image.ndim not in (2, 3) or image.size == 0:
+        raise BrdfInputError(f"{path}: an image of shape {image.shape}; expected (rows, columns[, channels])")
+    return image
+
+
+def _npy(path: Path) -> np.ndarray:
+    try:
+        array = np.load(path, allow_pickle=False)
+    except ValueError as error:
+        raise BrdfInputError(f"{path}: not a NumPy array file ({error})") from None
+    if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
+        raise BrdfInputError(f"{path}: values of type {array.dtype}; expected numbers")
+    return np.asarray(array, dtype=float)
+
+
+def _exr(path: Path) -> np.ndarray:
+    import OpenEXR as openexr
+
+    try:
+        with openexr.File(str(path)) as file:
+            channels = {name: channel.pixels for name, channel in file.channels().items()}
+    except Exception as error:  # OpenEXR raises RuntimeError, or its own, for any file it cannot read
+        raise BrdfInputError(f"{path}: not an OpenEXR image ({str(error).splitlines()[0]})") from None
+    for name in ("RGB", "RGBA"):
+        if name in channels:
+            return np.asarray(channels[name][..., :3], dtype=float)
+    if {"R", "G", "B"} <= channels.keys():
+        return np.stack([np.asarray(channels[name], dtype=float) for name in "RGB"], axis=-1)
+    if len(channels) == 1 or "Y" in channels:
+        return np.asarray(channels.get("Y", next(iter(channels.values()))), dtype=float)
+    raise BrdfInputError(f"{path}: channels {', '.join(sorted(channels))}; expected RGB, R, G and B, or one (Y)")
+
+
+def _sixteen_bit(path: Path) -> np.ndarray:
+    """A 16-bit PNG (read by pypng: Pillow reads a 16-bit RGB PNG as 8-bit) or TIFF (read by tifffile), greyscale or
+    RGB, as an array of its integer values (as float); any other depth is refused."""
+    if path.suffix.lower() == ".png":
+        png = needs("png", "svbrdf", "16-bit PNG images")
+        try:
+            width, height, rows, info = png.Reader(filename=str(path)).asDirect()
+            image = np.vstack([np.asarray(row, dtype=float) for row in rows]).reshape(height, width, info["planes"])
+        except png.Error as error:
+            raise BrdfInputError(f"{path}: not a PNG image ({error})") from None
+        depth, image = info["bitdepth"], image[..., : 3 if info["planes"] >= 3 else 1]
+    else:
+        tifffile = needs("tifffile", "svbrdf", "TIFF images")
+        try:
+            array = tifffile.imread(path)
+        except (ValueError, tifffile.TiffFileError) as error:
+            raise BrdfInputError(f"{path}: not a TIFF image ({error})") from None
+        depth = array.dtype.itemsize * 8 if array.dtype.kind == "u" else array.dtype.str
+        image = np.asarray(array, dtype=float)
+        image = image[..., :3] if image.ndim == 3 and image.shape[-1] >= 3 else image
+    if depth != 16:
+        raise BrdfInputError(
+            f"{path}: a {depth}-bit image; a capture's PNG and TIFF images must be 16-bit integers (linear values),"
+            " or use .exr or .npy"
+        )
+    return image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image
+
+
+def write_exr(path: str | os.PathLike, image: np.ndarray) -> None:
+    """``image`` ((H, W) or (H, W, 3)) as a float32 OpenEXR file (lossless ZIP), atomically."""
+    import OpenEXR as openexr
+
+    pixels = np.ascontiguousarray(image, dtype=np.float32)
+    name = "RGB" if pixels.ndim == 3 and pixels.shape[-1] == 3 else "Y"
+    if name == "Y" and pixels.ndim == 3:
+        raise ValueError(f"an image of {pixels.shape[-1]} channels: OpenEXR maps here are one or three")
+    header = {"compression": openexr.ZIP_COMPRESSION, "type": openexr.scanlineimage}
+    with atomic_path(path) as temporary, openexr.File(header, {name: pixels}) as file:
+        file.write(str(temporary))
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
+    """``image`` ((H, W) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG, atomically."""
+    from PIL import Image
+
+    pixels = np.round(np.clip(np.nan_to_num(image, nan=0.0), 0.0, 1.0) * 255.0).astype(np.uint8)
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
+
+
+def srgb_encoded(linear: np.ndarray) -> np.ndarray:
+    """Linear values in [0, 1] encoded as sRGB (IEC 61966-2-1): ``12.92 v`` up to 0.0031308, ``1.055 v^(1/2.4) −
+    0.055`` above; clipped to [0, 1] first."""
+    v = np.clip(linear, 0.0, 1.0)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1.0 / 2.4) - 0.055)

@@ -1,0 +1,201 @@
+"""The fitted maps of a spatially varying material: ``params.npz``, ``maps.json`` and textures, written and read.
+
+A maps folder holds:
+
+* ``params.npz``: one array per parameter, named as in a result file (a Lafortune lobe's as ``lobe0_n``, …), (H, W) for
+  a parameter shared by the channels and (H, W, C) for one per channel; ``cost`` and ``rmse`` (H, W; the fit's, as a
+  result file's), ``converged`` (H, W, bool), ``n_samples`` (H, W: the samples each texel's fit used; 0 where it was not
+  fitted), ``n_caveats`` (H, W: how many caveats its fit and its uncertainty have, as a result's warnings) and, with
+  ``uncertainty="laplace"``, ``<parameter>_stderr`` for each parameter (the Laplace standard error, same shape). A texel
+  that was not fitted (masked out, or with fewer samples than its model has parameters) holds NaN;
+* ``maps.json``: what the arrays are: the model and its options, the loss, the channels, the texel grid and the
+  plane's size, the capture they came from, and counts (texels fitted, converged; the rmse's median);
+* ``textures/``: each parameter as a linear OpenEXR image (``<parameter>.exr``: one channel, or RGB) and an 8-bit
+  PNG preview (``<parameter>.png``: an albedo or colour sRGB-encoded, any other parameter linear over the map's own
+  range, its 1st to 99th percentile, which ``maps.json`` records as ``preview_range``).
+"""
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._files import atomic_path, parse_json, read_json_text, reading, write_text_atomic
+from ..errors import BrdfInputError
+from .images import srgb_encoded, write_exr, write_png
+
+PARAMS_FILE = "params.npz"
+MAPS_FILE = "maps.json"
+TEXTURES = "textures"
+VERSION = 1
+#: The per-texel arrays beside the parameters.
+FIT_ARRAYS = ("cost", "rmse", "converged", "n_samples", "n_caveats")
+#: A standard-error map's name: the parameter's with this after it.
+STDERR_SUFFIX = "_stderr"
+#: Parameters previewed as colours (sRGB-encoded): albedos and a glTF/principled base colour.
+COLOUR_PARAMETERS = ("rho_d", "rho_s", "kd", "ks", "base_color", "sheen_color")
+
+
+@dataclass
+class Maps:
+    """Maps of one model's parameters over a texel grid (module docstring): ``params`` and, with Laplace errors,
+    ``stderr`` (name → (H, W) or (H, W, C)), ``fit`` (:data:`FIT_ARRAYS` → (H, W)); ``model``, ``model_options``,
+    ``loss``, ``channels``; the plane's ``width_mm`` and ``height_mm``; ``capture``: the capture file's path;
+    ``caveat_examples``: the caveats of the first texel that has any (``n_caveats`` counts every texel's)."""
+
+    model: str
+    model_options: dict[str, Any]
+    loss: str
+    channels: tuple[str, ...]
+    params: dict[str, np.ndarray]
+    fit: dict[str, np.ndarray]
+    width_mm: float
+    height_mm: float
+    capture: str = ""
+    stderr: dict[str, np.ndarray] = field(default_factory=dict)
+    caveat_examples: list[str] = field(default_factory=list)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        rows, columns = self.fit["cost"].shape
+        return rows, columns
+
+    @property
+    def fitted(self) -> np.ndarray:
+        """Which texels were fitted (H, W)."""
+        return self.fit["n_samples"] > 0
+
+    def texel_params(self, row: int, column: int) -> dict[str, Any]:
+        """The parameters of texel (``row``, ``column``) as a result file's ``params`` (numbers and lists)."""
+        return nested_params({name: np.asarray(array[row, column]).tolist() for name, array in self.params.items()})
+
+    def caveats(self) -> str | None:
+        """One line on every texel's caveats: how many texels have any, and the first one's; None where none has."""
+        with_caveats = int(np.sum(self.fit["n_caveats"] > 0))
+        if not with_caveats:
+            return None
+        shown = "; ".join(self.caveat_examples[:2]) + ("; …" if len(self.caveat_examples) > 2 else "")
+        return (
+            f"{with_caveats:,} of {int(self.fitted.sum()):,} texels have caveats (n_caveats in params.npz maps them),"
+            f" e.g. {shown}"
+        )
+
+    def summary(self) -> dict[str, Any]:
+        """The counts ``maps.json`` holds: texels, fitted, converged, the median rmse of the fitted ones."""
+        fitted = self.fitted
+        return {
+            "texels": int(fitted.size),
+            "fitted": int(fitted.sum()),
+            "converged": int(np.sum(self.fit["converged"] & fitted)),
+            "median_rmse": float(np.median(self.fit["rmse"][fitted])) if fitted.any() else None,
+        }
+
+
+def flat_params(params: dict[str, Any]) -> dict[str, Any]:
+    """A result's ``params`` with a lobe list's entries as names of their own: ``lobes[0]["n"]`` as ``lobe0_n``."""
+    flat = {name: value for name, value in params.items() if name != "lobes"}
+    for index, lobe in enumerate(params.get("lobes", ())):
+        flat |= {f"lobe{index}_{name}": value for name, value in lobe.items()}
+    return flat
+
+
+def nested_params(flat: dict[str, Any]) -> dict[str, Any]:
+    """The inverse of :func:`flat_params`."""
+    lobes: dict[int, dict[str, Any]] = {}
+    params: dict[str, Any] = {}
+    for name, value in flat.items():
+        head, _, rest = name.partition("_")
+        if head.startswith("lobe") and head[4:].isdigit() and rest:
+            lobes.setdefault(int(head[4:]), {})[rest] = value
+        else:
+            params[name] = value
+    if lobes:
+        params["lobes"] = [lobes[index] for index in sorted(lobes)]
+    return params
+
+
+def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> list[Path]:
+    """``maps`` into ``folder`` (made if missing): ``params.npz``, ``maps.json`` and, with ``textures``, the
+    ``textures/`` images, each atomically; returns the paths written."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    arrays = dict(maps.params) | dict(maps.fit) | {f"{name}{STDERR_SUFFIX}": a for name, a in maps.stderr.items()}
+    params_path = folder / PARAMS_FILE
+    with atomic_path(params_path) as temporary, open(temporary, "wb") as stream:
+        np.savez_compressed(stream, **arrays)
+    written = [params_path]
+    ranges: dict[str, list[float]] = {}
+    if textures:
+        (folder / TEXTURES).mkdir(exist_ok=True)
+        for name, array in maps.params.items():
+            for suffix in (".exr", ".png"):
+                path = folder / TEXTURES / f"{name}{suffix}"
+                if suffix == ".exr":
+                    write_exr(path, array)
+                else:
+                    preview, ranges[name] = _preview(name, array)
+                    write_png(path, preview)
+                written.append(path)
+    description = {
+        "brdffit_maps": VERSION,
+        "model": maps.model,
+        "model_options": maps.model_options,
+        "loss": maps.loss,
+        "channels": list(maps.channels),
+        "texels": list(maps.shape),
+        "plane": {"width_mm": maps.width_mm, "height_mm": maps.height_mm},
+        "capture": maps.capture,
+        "parameters": list(maps.params),
+        "uncertainty": "laplace" if maps.stderr else None,
+        "preview_range": ranges,
+        "caveat_examples": maps.caveat_examples,
+        **maps.summary(),
+    }
+    write_text_atomic(folder / MAPS_FILE, json.dumps(description, indent=1) + "\n")
+    return [*written, folder / MAPS_FILE]
+
+
+def _preview(name: str, array: np.ndarray) -> tuple[np.ndarray, list[float]]:
+    """A parameter map as an image in [0, 1] and the values its 0 and 1 stand for (module docstring)."""
+    if name in COLOUR_PARAMETERS:
+        return srgb_encoded(array), [0.0, 1.0]
+    finite = array[np.isfinite(array)]
+    low, high = (float(np.percentile(finite, q)) for q in (1, 99)) if finite.size else (0.0, 1.0)
+    span = high - low if high > low else 1.0
+    return (array - low) / span, [low, high]
+
+
+def read_maps(folder: str | os.PathLike) -> Maps:
+    """The maps in ``folder`` (written by :func:`write_maps`)."""
+    folder = Path(folder)
+    described = folder / MAPS_FILE
+    with reading(described, "a maps description"):
+        text = read_json_text(described)
+    try:
+        description = parse_json(text)
+    except ValueError as error:
+        raise BrdfInputError(f"{described}: not a maps description ({error})") from None
+    if not isinstance(description, dict) or description.get("brdffit_maps") != VERSION:
+        raise BrdfInputError(f'{described}: not a brdffit maps description (no "brdffit_maps": {VERSION})')
+    with reading(folder / PARAMS_FILE, "a maps file"), np.load(folder / PARAMS_FILE, allow_pickle=False) as arrays:
+        loaded = {name: arrays[name] for name in arrays.files}
+    names = description["parameters"]
+    missing = [name for name in (*names, *FIT_ARRAYS) if name not in loaded]
+    if missing:
+        raise BrdfInputError(f"{folder / PARAMS_FILE}: no {missing[0]} array, which {MAPS_FILE} names")
+    return Maps(
+        description["model"],
+        description["model_options"],
+        description["loss"],
+        tuple(description["channels"]),
+        {name: loaded[name] for name in names},
+        {name: loaded[name] for name in FIT_ARRAYS},
+        description["plane"]["width_mm"],
+        description["plane"]["height_mm"],
+        description.get("capture", ""),
+        {name: loaded[f"{name}{STDERR_SUFFIX}"] for name in names if f"{name}{STDERR_SUFFIX}" in loaded},
+        list(description.get("caveat_examples", [])),
+    )

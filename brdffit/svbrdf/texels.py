@@ -1,0 +1,169 @@
+"""A capture's photographs as BRDF samples, one small dataset per texel.
+
+For texel centre ``p`` (mm, ``Capture.texel_centres``) and a photograph with its point light at ``l`` of radiant
+intensity ``I`` (per channel) and its camera at ``e``::
+
+    wi = (l − p)/|l − p|,   wo = (e − p)/|e − p|,   f = L · |l − p|² / (I · cos θi)
+
+(the irradiance of a point light is ``I·cos θi / d²``, and the BRDF is the radiance ``L`` it gives per irradiance;
+Nicodemus et al., *Geometrical considerations and nomenclature for reflectance*, NBS Monograph 160, 1977). With a
+normal map the directions are taken to the texel's own frame: its tangent-space normal ``n`` (``z > 0``), the
+tangent ``t`` the plane's ``x`` made perpendicular to ``n``, ``b = n × t``; ``cos θi`` is then ``wi · n``.
+
+A sample is dropped, not fitted, where the photograph is saturated (any channel at or above the capture's
+``saturation``), where its value is not finite (a rectified photograph outside the camera's view), where the light
+or the camera lies at or below the texel's own horizon (a normal map), and everywhere in a texel the mask leaves
+out. Negative values (noise below a camera's black level) are read as 0.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import map_coordinates
+
+from ..data.samples import Samples
+from ..errors import BrdfInputError
+from .capture import Capture
+from .images import read_image
+
+#: The smallest cosine of a light's or camera's angle to a texel's normal that is a sample (an 89.9° grazing angle):
+#: below it the cosine's rounding, not the light, decides the value.
+MIN_COSINE = np.cos(np.radians(89.9))
+
+
+@dataclass(frozen=True)
+class Photographs:
+    """The capture's photographs read, rectified onto its texel grid: ``radiance`` (K, H·W, C) float32 (NaN where a
+    sample is dropped), the ``mask`` (H·W,) and the normals (H·W, 3) or None."""
+
+    capture: Capture
+    radiance: np.ndarray
+    mask: np.ndarray
+    normals: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class TexelSamples:
+    """The samples of a run of texels (``texels``, (T,) flat indices, row by row): ``wi``, ``wo`` (T, K, 3) in each
+    texel's frame, ``values`` (T, K, C) BRDF in 1/sr, ``kept`` (T, K): which samples count."""
+
+    texels: np.ndarray
+    wi: np.ndarray
+    wo: np.ndarray
+    values: np.ndarray
+    kept: np.ndarray
+
+    def samples(self, index: int, channels: tuple[str, ...], source: str) -> Samples:
+        """The kept samples of the ``index``-th texel of the run as :class:`~brdffit.data.samples.Samples`: checked
+        here as a run (finite, non-negative, above the horizon), so built directly."""
+        keep = self.kept[index]
+        return Samples(self.wi[index, keep], self.wo[index, keep], self.values[index, keep], channels, source=source)
+
+
+def read_photographs(capture: Capture) -> Photographs:
+    """Every photograph of ``capture`` read and rectified, with its mask and normal map (module docstring); an image
+    of the wrong size or channel count is a one-line error naming it."""
+    height, width = capture.shape
+    n_channels = len(capture.channels)
+    radiance = np.empty((len(capture.shots), height * width, n_channels), dtype=np.float32)
+    centres = capture.texel_centres()
+    for index, shot in enumerate(capture.shots):
+        image = read_image(shot.file, capture.scale)
+        image = image[..., None] if image.ndim == 2 else image
+        if image.shape[-1] != n_channels:
+            raise BrdfInputError(f"{shot.file}: {image.shape[-1]} channels; the capture has {n_channels}")
+        if shot.matrix is None:
+            if image.shape[:2] != capture.shape:
+                raise BrdfInputError(
+                    f"{shot.file}: {image.shape[0]} × {image.shape[1]} pixels; the capture's plane has"
+                    f" {height} × {width} texels (give the camera's matrix for an unrectified photograph)"
+                )
+            flat = image.reshape(-1, n_channels)
+        else:
+            flat = rectified(image, shot.matrix, centres)
+        if capture.saturation is not None:
+            flat = np.where(np.any(flat >= capture.saturation, axis=-1, keepdims=True), np.nan, flat)
+        radiance[index] = np.maximum(flat, 0.0)  # NaN stays NaN: np.maximum propagates it
+    return Photographs(capture, radiance, _mask(capture), _normals(capture))
+
+
+def rectified(image: np.ndarray, matrix: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """The values (T, C) of a raw photograph ``image`` (rows, columns, C) at the texel ``centres`` (T, 3) mm that the
+    3 × 4 projection ``matrix`` maps to its pixels (OpenCV: ``u`` along a row, ``v`` down the columns, pixel centres
+    at whole numbers), bilinearly; NaN outside the photograph."""
+    homogeneous = np.hstack([centres, np.ones((len(centres), 1))]) @ matrix.T
+    u, v = homogeneous[:, 0] / homogeneous[:, 2], homogeneous[:, 1] / homogeneous[:, 2]
+    rows, columns = image.shape[:2]
+    inside = (homogeneous[:, 2] > 0) & (u >= 0) & (u <= columns - 1) & (v >= 0) & (v <= rows - 1)
+    values = np.stack(
+        [map_coordinates(image[..., c], [v, u], order=1, mode="nearest") for c in range(image.shape[-1])], axis=-1
+    )
+    values[~inside] = np.nan
+    return values
+
+
+def _mask(capture: Capture) -> np.ndarray:
+    if capture.mask is None:
+        return np.ones(capture.n_texels, dtype=bool)
+    mask = read_image(capture.mask)
+    mask = mask if mask.ndim == 2 else np.any(mask != 0, axis=-1)
+    if mask.shape != capture.shape:
+        raise BrdfInputError(
+            f"{capture.mask}: {mask.shape[0]} × {mask.shape[1]} pixels; the capture has {capture.shape}"
+        )
+    return (mask != 0).ravel()
+
+
+def _normals(capture: Capture) -> np.ndarray | None:
+    if capture.normal_map is None:
+        return None
+    normals = read_image(capture.normal_map)
+    if normals.shape != (*capture.shape, 3):
+        raise BrdfInputError(
+            f"{capture.normal_map}: shape {normals.shape}; a normal map is {capture.shape[0]} × {capture.shape[1]} × 3"
+        )
+    normals = normals.reshape(-1, 3)
+    length = np.linalg.norm(normals, axis=-1)
+    bad = ~(np.isfinite(length) & (length > 0) & (normals[:, 2] > 0))
+    if np.any(bad):
+        row, column = divmod(int(np.argmax(bad)), capture.shape[1])
+        raise BrdfInputError(f"{capture.normal_map}: texel ({row}, {column}): a normal must be finite with z > 0")
+    return normals / length[:, None]
+
+
+def texel_samples(photographs: Photographs, texels: np.ndarray) -> TexelSamples:
+    """The samples of ``texels`` (flat indices) of ``photographs`` (module docstring)."""
+    capture = photographs.capture
+    centres = capture.texel_centres()[texels]
+    lights = np.stack([shot.light_mm for shot in capture.shots])  # (K, 3)
+    cameras = np.stack([shot.camera_mm for shot in capture.shots])
+    intensity = np.stack([shot.intensity for shot in capture.shots])  # (K, C)
+    to_light = lights[None, :, :] - centres[:, None, :]  # (T, K, 3)
+    squared = np.sum(to_light**2, axis=-1)
+    wi = to_light / np.sqrt(squared)[..., None]
+    to_camera = cameras[None, :, :] - centres[:, None, :]
+    wo = to_camera / np.linalg.norm(to_camera, axis=-1, keepdims=True)
+    if photographs.normals is not None:
+        wi, wo = (_in_texel_frame(w, photographs.normals[texels]) for w in (wi, wo))
+    radiance = np.asarray(photographs.radiance[:, texels, :], dtype=float).transpose(1, 0, 2)  # (T, K, C)
+    cos_i = wi[..., 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        values = radiance * (squared / np.maximum(cos_i, MIN_COSINE))[..., None] / intensity[None, :, :]
+    kept = (
+        np.all(np.isfinite(values), axis=-1)
+        & (cos_i >= MIN_COSINE)
+        & (wo[..., 2] >= MIN_COSINE)
+        & photographs.mask[texels][:, None]
+    )
+    return TexelSamples(texels, wi, wo, np.where(kept[..., None], values, 0.0), kept)
+
+
+def _in_texel_frame(w: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Directions ``w`` (T, K, 3) in the frames of texels with ``normals`` (T, 3): tangent the plane's x made
+    perpendicular to the normal, bitangent ``n × t``, normal (module docstring)."""
+    x = np.array([1.0, 0.0, 0.0])
+    tangent = x - normals[:, 0:1] * normals
+    tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+    bitangent = np.cross(normals, tangent)
+    frame = np.stack([tangent, bitangent, normals], axis=1)  # (T, 3, 3): rows t, b, n
+    return np.einsum("tij,tkj->tki", frame, w)
