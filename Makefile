@@ -131,6 +131,7 @@ docs: $(STAMP)
 examples: $(STAMP)
 	$(BIN)/brdffit synth --model ward --params examples/ward-pickled-oak.params.json \
 		--geometry hemisphere --noise 0.01 --seed 1 -o examples/ward-pickled-oak.csv
+	$(BIN)/brdffit synth capture examples/ward-capture --texels 32,32 --images 24 --noise 0.01 --seed 0
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .ruff_cache *.egg-info

@@ -22,6 +22,8 @@ The public API::
     brdffit.write_directions(brdffit.choose_directions("basis.npz", 20).angles, "directions.csv")
     result = brdffit.fit("sparse.csv", model="pca", basis="basis.npz")
     brdffit.register_model("gauss", brdffit.ModelEntry(build))  # a model of one's own (docs/adding-a-model.md)
+    maps = brdffit.svbrdf.fit("capture/", model="ward", output="maps/")  # one fit per texel (docs/svbrdf.md)
+    image = brdffit.svbrdf.render(maps, light_mm=[0, -150, 250], camera_mm=[0, 0, 400])
 
 Names are imported on first use (PEP 562), so ``import brdffit`` does no work; the ``TYPE_CHECKING`` block
 below says the same to IDEs and type checkers. brdffit computes in float64 without switching float64 on
@@ -82,6 +84,7 @@ _EXPORTS = {
 
 if TYPE_CHECKING:
     from . import export as export
+    from . import svbrdf as svbrdf
     from ._programs.cache import enable_compilation_cache as enable_compilation_cache
     from .api import fit as fit
     from .api import fit_batch as fit_batch
@@ -130,7 +133,7 @@ if TYPE_CHECKING:
 
 
 #: Modules of the public API, also imported on first use (``export`` is also a function: ``export/__init__.py``).
-_MODULES = {"plots": ".views.plots", "export": ".export"}
+_MODULES = {"plots": ".views.plots", "export": ".export", "svbrdf": ".svbrdf"}
 
 
 def __getattr__(name: str):

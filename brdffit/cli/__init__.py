@@ -95,9 +95,9 @@ EXAMPLES = {
         "brdffit basis directions basis.npz -n 20 -o directions.csv",
     ),
     "svbrdf": (
-        "brdffit svbrdf fit examples/tiles-capture --model ward -o tiles-maps/",
+        "brdffit svbrdf fit examples/ward-capture --model ward -o maps/",
         "brdffit svbrdf fit capture/ --model cook-torrance --uncertainty laplace --resume -o maps/",
-        "brdffit svbrdf render tiles-maps/ --light 0,-150,250 --camera 0,0,400 -o relit.exr",
+        "brdffit svbrdf render maps/ --light 0,-150,250 --camera 0,0,400 -o relit.exr",
     ),
 }
 

@@ -108,8 +108,10 @@ def files(args: argparse.Namespace) -> Files:
     folder = Path(args.output)
     written = [args.output, folder / "params.npz", folder / "maps.json"]
     file = capture_file(args.capture)  # the capture's folder too: the maps are not written among the photographs
-    inputs = {"CAPTURE": [file.parent, file, *images], "--basis": model_files(model_options(args))}
-    return Files.of(inputs=inputs, outputs={"-o": written})
+    return Files.of(
+        inputs={"CAPTURE": [file.parent, file, *images], "--basis": model_files(model_options(args))},
+        outputs={"-o": written},
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -126,6 +128,7 @@ def _fit(args: argparse.Namespace) -> int:
     get_model(args.model, **options)
     output = _output_folder(args.output)
     capture = read_capture(args.capture)
+    held = holding_arguments(args)
     started = time.perf_counter()
     maps = fit(
         capture,
@@ -140,7 +143,8 @@ def _fit(args: argparse.Namespace) -> int:
         seed=args.seed,
         uncertainty=args.uncertainty,
         textures=not args.no_textures,
-        **holding_arguments(args),
+        fixed=held["fixed"],
+        bounds=held["bounds"],
         **options,
     )
     summary = maps.summary()
@@ -149,7 +153,7 @@ def _fit(args: argparse.Namespace) -> int:
     print(
         f"wrote {output}/: {maps.model} maps of {rows} × {columns} texels from {len(capture.shots)} images"
         f" ({summary['fitted']:,} fitted, {summary['converged']:,} converged"
-        + (f"; median rmse {median:.3g} 1/sr" if median is not None else "")
+        + (f"; median rmse {median:.3g}, in the {maps.loss} loss's units" if median is not None else "")
         + f") in {time.perf_counter() - started:.1f} s"
     )
     print(_table(maps))

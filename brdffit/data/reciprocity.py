@@ -109,7 +109,10 @@ _pairing: dict[tuple, threading.Event] = {}  # the geometries being paired now, 
 
 
 def reciprocity(samples: Samples) -> Reciprocity | None:
-    """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs)."""
+    """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs: at once for fewer than
+    twice as many samples, each pair being two samples, as a capture's texel is)."""
+    if samples.n_samples < 2 * MIN_PAIRS:
+        return None
     provenance = samples.provenance
     in_force = provenance.quantity if provenance is not None else "brdf"
     geometry = _geometry_key(samples)
@@ -233,7 +236,38 @@ def _canonical(first: np.ndarray, second: np.ndarray) -> np.ndarray:
     return np.column_stack([first_x, np.zeros(len(first)), first[:, 2], second_x, second_y, second[:, 2]])
 
 
-def tolerance(points: np.ndarray, tree: "cKDTree | None" = None) -> float:
+#: Up to this many samples the nearest points are found by comparing every pair (:class:`_EveryPair`): a k-d tree's
+#: construction and its worker threads cost more there (a capture's texels: 32 samples each, 4,096 texels paired in
+#: 5.1 s with trees, most of it starting threads).
+EVERY_PAIR_UP_TO = 256
+
+
+class _EveryPair:
+    """The nearest points of a few (N ≤ :data:`EVERY_PAIR_UP_TO`) by their whole distance matrix, with the
+    ``query`` of ``scipy.spatial.cKDTree`` (k nearest in order; beyond ``distance_upper_bound``, inf and index N)."""
+
+    def __init__(self, points: np.ndarray):
+        self.points = points
+
+    def query(self, asked: np.ndarray, k: int = 1, distance_upper_bound: float = np.inf, workers: int = 1):
+        distances = np.linalg.norm(asked[:, None, :] - self.points[None, :, :], axis=-1)
+        order = np.argsort(distances, axis=1, kind="stable")[:, :k]
+        nearest = np.take_along_axis(distances, order, axis=1)
+        beyond = nearest > distance_upper_bound
+        nearest, order = np.where(beyond, np.inf, nearest), np.where(beyond, len(self.points), order)
+        return (nearest[:, 0], order[:, 0]) if k == 1 else (nearest, order)
+
+
+def _tree(points: np.ndarray, **options) -> "cKDTree | _EveryPair":
+    """What finds the nearest of ``points``: every pair compared for a few, else a k-d tree (``options``: its)."""
+    if len(points) <= EVERY_PAIR_UP_TO:
+        return _EveryPair(points)
+    from scipy.spatial import cKDTree
+
+    return cKDTree(points, **options)
+
+
+def tolerance(points: np.ndarray, tree: "cKDTree | _EveryPair | None" = None) -> float:
     """The distance (radians, :func:`_points`) within which a partner is taken for the swapped point:
     :data:`SPACING_FRACTION` of the median distance from a sample to its nearest distinct neighbour (at most
     :data:`SPACING_SAMPLE` samples asked, a seeded choice), within [:data:`MIN_TOLERANCE`, :data:`MAX_TOLERANCE`].
@@ -242,9 +276,7 @@ def tolerance(points: np.ndarray, tree: "cKDTree | None" = None) -> float:
     the cap keeps a dense file's pairs close enough that a sharp lobe (a retro peak a few degrees wide) does not
     change between a pair's two samples."""
     if tree is None:
-        from scipy.spatial import cKDTree
-
-        tree = cKDTree(points)
+        tree = _tree(points)
     asked = points
     if len(points) > SPACING_SAMPLE:
         asked = points[np.random.default_rng(0).choice(len(points), SPACING_SAMPLE, replace=False)]
@@ -265,10 +297,8 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     every sample's point, its nearest taken within :func:`tolerance`. Not asked: a sample whose cosines differ by
     less than :data:`INFORMATIVE`, or that lies within twice the tolerance of its own swapped point (``wi`` near
     ``wo``: it would pair with itself or its neighbour); their ratios say nothing of a cosine factor."""
-    from scipy.spatial import cKDTree
-
     points = _points(samples.wi, samples.wo, general)
-    tree = cKDTree(points, balanced_tree=False, compact_nodes=False)  # ~2× faster to build, as fast to query
+    tree = _tree(points, balanced_tree=False, compact_nodes=False)  # ~2× faster to build, as fast to query
     within = tolerance(points, tree)
     queries = np.flatnonzero(samples.wi[:, 2] > samples.wo[:, 2])  # θi < θo
     if len(queries) > MAX_QUERIES:

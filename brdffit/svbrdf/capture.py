@@ -10,8 +10,9 @@ centred at the origin) and is photographed under point lights; ``capture.json`` 
                  "light": {"position_mm": [120.0, -40.0, 300.0], "intensity": [1.0, 1.0, 1.0]},
                  "camera": {"position_mm": [0.0, 0.0, 400.0]}}]}
 
-``texels`` is ``[rows, columns]`` (H × W). Optional keys: ``channels`` (default ``r, g, b`` for three, ``value``
-for one), ``mask`` (an image, nonzero where texels are fitted), ``normal_map`` (an H × W × 3 image of tangent-space
+``texels`` is ``[rows, columns]`` (H × W); a light's ``intensity`` is one number (every channel's) or one per
+channel. Optional keys: ``channels`` (default ``r, g, b`` for three intensities or one number, ``value`` for a list of
+one), ``mask`` (an image, nonzero where texels are fitted), ``normal_map`` (an H × W × 3 image of tangent-space
 normals, ``z > 0``, to fit a sample that is not flat), ``saturation`` (a pixel value at or above which a photograph
 is saturated: that texel's sample of that image is dropped, not fitted), ``scale`` (what a 16-bit image's 65,535
 stands for; default 1) and, per image, ``"camera": {"matrix": [[...], [...], [...]]}`` (a 3 × 4 OpenCV pinhole
@@ -45,7 +46,7 @@ LIGHT_KEYS = {"position_mm", "intensity"}
 CAMERA_KEYS = {"position_mm", "matrix"}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Shot:
     """One photograph of a capture: its file, the point light (``light_mm``, (3,) mm; radiant ``intensity`` (C,),
     in any unit: the albedos come out in units of radiance per that unit), and the camera: its centre
@@ -58,7 +59,7 @@ class Shot:
     matrix: np.ndarray | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Capture:
     """A capture (module docstring): its ``folder``, the plane's size (``width_mm``, ``height_mm``) and texel grid
     (``shape``, (H, W)), the ``channels``, the ``shots``, and the optional ``mask`` and ``normal_map`` files,
@@ -137,8 +138,10 @@ def _capture(file: Path, document: Any) -> Capture:
     images = document.get("images")
     if not isinstance(images, list) or not images:
         raise where.error("images", "must be a list of at least one image")
-    first_intensity = where.vector(_light(where, images[0], 0), "intensity", "images[0].light.", None)
-    channels = _channels(where, document.get("channels"), len(first_intensity))
+    first_light = _light(where, images[0], 0)
+    first_intensity = where.vector(first_light, "intensity", "images[0].light.", None)
+    given_one = not isinstance(first_light["intensity"], list)  # a number: every channel's, r, g, b unless named
+    channels = _channels(where, document.get("channels"), 3 if given_one else len(first_intensity), given_one)
     shots = tuple(_shot(where, image, index, len(channels)) for index, image in enumerate(images))
     saturation = document.get("saturation")
     if saturation is not None:
@@ -151,7 +154,11 @@ def _capture(file: Path, document: Any) -> Capture:
     )  # fmt: skip
 
 
-def _channels(where: "_Where", names: Any, count: int) -> tuple[str, ...]:
+def _channels(where: "_Where", names: Any, count: int, any_count: bool) -> tuple[str, ...]:
+    """The channels ``names`` gives, or by ``count`` (3: r, g, b; 1: value); ``any_count``: the intensity is one
+    number, which holds for any number of named channels."""
+    if names is not None and any_count:
+        count = len(names) if isinstance(names, list) else count
     if names is None:
         if count not in (1, 3):
             raise where.error("channels", f"missing: name the {count} channels the intensities have")
@@ -274,7 +281,7 @@ class _Where:
             and value
             and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
         )
-        if not ok or (length is not None and len(value) != length):
+        if not ok or (length is not None and len(value or ()) != length):
             size = f"{length} numbers" if length else "a number or a list of numbers"
             raise self.error(f"{prefix}{key}", f"{value!r}: must be {size}")
         return np.array(value, dtype=float)

@@ -80,8 +80,9 @@ def _sixteen_bit(path: Path) -> np.ndarray:
     if path.suffix.lower() == ".png":
         png = needs("png", "svbrdf", "16-bit PNG images")
         try:
-            width, height, rows, info = png.Reader(filename=str(path)).asDirect()
-            image = np.vstack([np.asarray(row, dtype=float) for row in rows]).reshape(height, width, info["planes"])
+            with open(path, "rb") as stream:
+                width, height, rows, info = png.Reader(file=stream).asDirect()
+                image = np.vstack([np.asarray(row, dtype=float) for row in rows]).reshape(height, width, info["planes"])
         except png.Error as error:
             raise BrdfInputError(f"{path}: not a PNG image ({error})") from None
         depth, image = info["bitdepth"], image[..., : 3 if info["planes"] >= 3 else 1]

@@ -60,7 +60,7 @@ class Maps:
 
     @property
     def shape(self) -> tuple[int, int]:
-        rows, columns = self.fit["cost"].shape
+        rows, columns = self.fit["n_samples"].shape
         return rows, columns
 
     @property
@@ -122,7 +122,8 @@ def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> 
     ``textures/`` images, each atomically; returns the paths written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    arrays = dict(maps.params) | dict(maps.fit) | {f"{name}{STDERR_SUFFIX}": a for name, a in maps.stderr.items()}
+    arrays: dict[str, Any] = dict(maps.params) | dict(maps.fit)  # Any: savez's stubs take allow_pickle among them
+    arrays |= {f"{name}{STDERR_SUFFIX}": array for name, array in maps.stderr.items()}
     params_path = folder / PARAMS_FILE
     with atomic_path(params_path) as temporary, open(temporary, "wb") as stream:
         np.savez_compressed(stream, **arrays)

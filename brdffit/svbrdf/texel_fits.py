@@ -114,8 +114,9 @@ def fit_capture(
     finally:
         bar.close()
     maps = _maps(columns, capture, built, loss, examples)
-    if maps.caveats():
-        warn(FitWarning(maps.caveats()))
+    caveats = maps.caveats()
+    if caveats:
+        warn(FitWarning(caveats))
     if output is not None:
         write_maps(output, maps, textures)
         shutil.rmtree(Path(output) / TILES, ignore_errors=True)
@@ -124,7 +125,7 @@ def fit_capture(
 
 def _fit_tile(
     run: TexelSamples, capture: Capture, *, model, loss: str, least: int, then: Callable | None, **options
-) -> dict[str, np.ndarray]:
+) -> dict[str, Any]:  # arrays; Any: savez's stubs take allow_pickle among its keywords
     """The flat arrays (one row per texel of ``run``) of its texels' fits: every parameter, its standard error
     (``then`` adding Laplace's), ``cost``, ``rmse``, ``converged``, ``n_samples``, ``n_caveats``; NaN where a texel
     has fewer than ``least`` samples; and :data:`EXAMPLES`, the caveats of its first texel that has any."""

@@ -198,3 +198,32 @@ def test_the_real_tape_read_as_its_header_says_is_checked_within_its_spacing(pat
     assert found is not None and found.pairs >= 108  # the 0.01° grid found 108
     assert 0.4 <= found.tolerance_degrees <= 0.5
     assert found.best == "cosine-weighted-out" and not found.reciprocal
+
+
+@pytest.mark.parametrize("general", [True, False])
+def test_a_few_samples_pair_as_a_k_d_tree_pairs_them(monkeypatch, general):
+    """Up to EVERY_PAIR_UP_TO samples the nearest points come from the whole distance matrix: the same pairs and the
+    same tolerance as a k-d tree's, on a grid with many pairs (325 samples, cut to 200) and jittered by 0.1°."""
+    from brdffit.data import reciprocity as module
+
+    wi, wo = isotropic_pairs()
+    rng = np.random.default_rng(4)
+    jitter = [w + rng.normal(0.0, np.radians(0.1), w.shape) for w in (wi, wo)]
+    wi, wo = (w[:200] / np.linalg.norm(w[:200], axis=1, keepdims=True) for w in jitter)
+    samples = Samples.from_arrays(wi, wo, np.ones((200, 1)))
+    few = module._paired(samples, general)
+    monkeypatch.setattr(module, "EVERY_PAIR_UP_TO", 0)
+    tree = module._paired(samples, general)
+    assert len(few[0]) >= (3 if general else MIN_PAIRS)  # swapped directions: the lights lie at azimuth 0 alone
+    np.testing.assert_array_equal(few[0], tree[0])
+    np.testing.assert_array_equal(few[1], tree[1])
+    assert few[2] == pytest.approx(tree[2], rel=1e-12)
+
+
+def test_fewer_samples_than_two_per_pair_say_nothing_at_once(monkeypatch):
+    """Under 2 × MIN_PAIRS samples (a capture's texel: 32) there cannot be MIN_PAIRS pairs: nothing is paired."""
+    from brdffit.data import reciprocity as module
+
+    monkeypatch.setattr(module, "_pairs", lambda *args, **kwargs: pytest.fail("paired"))
+    wi, wo = isotropic_pairs()
+    assert reciprocity(Samples.from_arrays(wi[: 2 * MIN_PAIRS - 1], wo[: 2 * MIN_PAIRS - 1], np.ones(39))) is None
