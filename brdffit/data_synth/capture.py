@@ -17,6 +17,7 @@ maps' true parameters, named as a maps folder's ``params.npz``), and returns the
 
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -89,6 +90,58 @@ def light_positions(n_images: int) -> np.ndarray:
     return LIGHT_DISTANCE_MM * unit
 
 
+def write_capture(
+    folder: str | os.PathLike,
+    brdf: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    lights_mm: np.ndarray,
+    *,
+    shape: tuple[int, int],
+    size_mm: float = 100.0,
+    camera_mm=(0.0, 0.0, CAMERA_HEIGHT_MM),
+    noise: float = 0.01,
+    seed: int = 0,
+    image_format: str = "npy",
+) -> None:
+    """Write ``capture.json`` and one photograph per light of ``lights_mm`` (n, 3) into ``folder``: a ``size_mm``
+    square sample of ``shape`` texels whose BRDF ``brdf(wi, wo) -> (H·W, C)`` gives each texel's value at its own
+    pair (texel ``t`` at ``wi[t]``, ``wo[t]``, row by row), seen by a camera at ``camera_mm``; each radiance
+    ``f · cos θi / d²`` (intensity 1) with multiplicative noise ``noise`` seeded by ``seed``."""
+    if image_format not in FORMATS:
+        raise BrdfInputError(f"image format {image_format!r}; use {' or '.join(FORMATS)}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    centres = texel_centres(size_mm, size_mm, shape)
+    camera = np.asarray(camera_mm, dtype=float)
+    wo = (camera - centres) / np.linalg.norm(camera - centres, axis=-1, keepdims=True)
+    rng = np.random.default_rng(seed)
+    images = []
+    for index, light in enumerate(np.asarray(lights_mm, dtype=float)):
+        to_light = light - centres
+        squared = np.sum(to_light**2, axis=-1)
+        wi = to_light / np.sqrt(squared)[:, None]
+        radiance = np.asarray(brdf(wi, wo)) * (wi[:, 2] / squared)[:, None]
+        radiance *= 1.0 + noise * rng.standard_normal(radiance.shape)
+        image = np.maximum(radiance, 0.0).reshape(*shape, -1).astype(np.float32)
+        name = f"img_{index:03d}.{image_format}"
+        if image_format == "npy":
+            np.save(folder / name, image)
+        else:
+            write_exr(folder / name, image)
+        images.append(
+            {
+                "file": name,
+                "light": {"position_mm": light.tolist(), "intensity": [1.0] * image.shape[-1]},
+                "camera": {"position_mm": camera.tolist()},
+            }
+        )
+    capture = {
+        "brdffit_capture": VERSION,
+        "plane": {"width_mm": size_mm, "height_mm": size_mm, "texels": list(shape)},
+        "images": images,
+    }
+    write_text_atomic(folder / CAPTURE_FILE, json.dumps(capture, indent=1) + "\n")
+
+
 def synth_capture(
     folder: str | os.PathLike,
     model: str = "ward",
@@ -111,45 +164,21 @@ def synth_capture(
         if model not in MATERIALS:
             raise BrdfInputError(f"give the two materials of a {model} capture; built in: {', '.join(MATERIALS)}")
         first, second = MATERIALS[model]
-    if image_format not in FORMATS:
-        raise BrdfInputError(f"image format {image_format!r}; use {' or '.join(FORMATS)}")
     built = model_for(model, first, **model_options)
     maps = blended_maps(model, first, second, shape)
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    centres = texel_centres(size_mm, size_mm, shape)
-    camera = np.array([0.0, 0.0, CAMERA_HEIGHT_MM])
-    wo = (camera - centres) / np.linalg.norm(camera - centres, axis=-1, keepdims=True)
     flat = {name: values.reshape(-1, *values.shape[2:]) for name, values in maps.items()}
-    stacked = stacked_params(built, flat, np.arange(len(centres)))
-    rng = np.random.default_rng(seed)
-    images = []
-    for index, light in enumerate(light_positions(n_images)):
-        to_light = light - centres
-        squared = np.sum(to_light**2, axis=-1)
-        wi = to_light / np.sqrt(squared)[:, None]
-        values = texel_brdf(built, stacked, wi, wo)
-        radiance = values * (wi[:, 2] / squared)[:, None]
-        radiance *= 1.0 + noise * rng.standard_normal(radiance.shape)
-        image = np.maximum(radiance, 0.0).reshape(*shape, -1).astype(np.float32)
-        name = f"img_{index:03d}.{image_format}"
-        if image_format == "npy":
-            np.save(folder / name, image)
-        else:
-            write_exr(folder / name, image)
-        images.append(
-            {
-                "file": name,
-                "light": {"position_mm": light.tolist(), "intensity": [1.0] * image.shape[-1]},
-                "camera": {"position_mm": camera.tolist()},
-            }
-        )
-    capture = {
-        "brdffit_capture": VERSION,
-        "plane": {"width_mm": size_mm, "height_mm": size_mm, "texels": list(shape)},
-        "images": images,
-    }
+    stacked = stacked_params(built, flat, np.arange(shape[0] * shape[1]))
+    folder = Path(folder)
+    write_capture(
+        folder,
+        lambda wi, wo: texel_brdf(built, stacked, wi, wo),
+        light_positions(n_images),
+        shape=shape,
+        size_mm=size_mm,
+        noise=noise,
+        seed=seed,
+        image_format=image_format,
+    )
     with open(folder / "truth.npz", "wb") as stream:
         np.savez(stream, **maps)
-    write_text_atomic(folder / CAPTURE_FILE, json.dumps(capture, indent=1) + "\n")
     return maps
