@@ -51,9 +51,23 @@ def documented_calls(page: str) -> list[tuple[str, str]]:
     import brdffit
 
     text = (ROOT / "docs" / page).read_text()
-    calls = re.findall(r"^\| `(?:brdffit\.)?(\w+)\(((?:[^()]|\([^()]*\))*)\)`", text, re.M)
+    calls = re.findall(r"^\| `(?:brdffit\.)?((?:svbrdf\.)?\w+)\(((?:[^()]|\([^()]*\))*)\)`", text, re.M)
     # A call that starts with … is an example of use (``fit(…, uncertainty="laplace")``), not a signature.
-    return [(name, arguments) for name, arguments in calls if name in brdffit.__all__ and arguments[:1] not in "…"]
+    return [
+        (name, arguments)
+        for name, arguments in calls
+        if name.split(".")[0] in brdffit.__all__ and arguments[:1] not in "…"
+    ]
+
+
+def public(name: str):
+    """``brdffit.<name>``, where ``name`` may name a module's member (``svbrdf.fit``)."""
+    import brdffit
+
+    value = brdffit
+    for part in name.split("."):
+        value = getattr(value, part)
+    return value
 
 
 def top_level_parts(arguments: str) -> list[str]:
@@ -76,9 +90,8 @@ def test_the_guides_signatures_are_the_codes(name, arguments):
     written with ``…`` may leave some out."""
     import inspect
 
-    import brdffit
 
-    parameters = inspect.signature(getattr(brdffit, name)).parameters
+    parameters = inspect.signature(public(name)).parameters
     written = [part for part in top_level_parts(arguments) if part not in ("*", "…", "")]
     names = [part.split("=")[0].lstrip("*") for part in written]
     real = [key for key in parameters if key in names]

@@ -7,7 +7,6 @@ folder (``params.npz``, ``maps.json``, ``textures/``; ``svbrdf/maps.py``). ``svb
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from ..errors import BrdfInputError
@@ -129,7 +128,6 @@ def _fit(args: argparse.Namespace) -> int:
     output = _output_folder(args.output)
     capture = read_capture(args.capture)
     held = holding_arguments(args)
-    started = time.perf_counter()
     maps = fit(
         capture,
         args.model,
@@ -154,7 +152,7 @@ def _fit(args: argparse.Namespace) -> int:
         f"wrote {output}/: {maps.model} maps of {rows} × {columns} texels from {len(capture.shots)} images"
         f" ({summary['fitted']:,} fitted, {summary['converged']:,} converged"
         + (f"; median rmse {median:.3g}, in the {maps.loss} loss's units" if median is not None else "")
-        + f") in {time.perf_counter() - started:.1f} s"
+        + ")"
     )
     print(_table(maps))
     if maps.caveats():
