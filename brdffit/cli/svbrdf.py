@@ -6,6 +6,7 @@ folder (``params.npz``, ``maps.json``, ``textures/``; ``svbrdf/maps.py``). ``svb
 """
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -155,6 +156,11 @@ def _fit(args: argparse.Namespace) -> int:
         + ")"
     )
     print(_table(maps))
+    glb = json.loads((output / "maps.json").read_text()).get("glb") or {}
+    if glb.get("file"):
+        print(f"  {glb['file']}: the maps on a quad for glTF viewers" + "".join(f"; {n}" for n in glb["notes"]))
+    elif glb.get("not_written"):
+        print(f"brdffit: note: no material.glb: {glb['not_written']}", file=sys.stderr)
     if maps.caveats():
         print(f"brdffit: warning: {maps.caveats()}", file=sys.stderr)
     return EXIT_OK if summary["converged"] == summary["fitted"] else EXIT_NOT_CONVERGED

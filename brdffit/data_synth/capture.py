@@ -38,6 +38,28 @@ MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
         {"rho_d": [0.45, 0.3, 0.2], "rho_s": [0.06, 0.06, 0.06], "alpha": 0.12},
         {"rho_d": [0.12, 0.22, 0.35], "rho_s": [0.15, 0.15, 0.15], "alpha": 0.3},
     ),
+    "gltf": (
+        {
+            "base_color": [0.6, 0.3, 0.15],
+            "roughness": 0.35,
+            "metallic": 0.0,
+            "ior": 1.5,
+            "clearcoat": 0.0,
+            "clearcoat_roughness": 0.1,
+            "anisotropy_strength": 0.0,
+            "anisotropy_rotation": 0.0,
+        },
+        {
+            "base_color": [0.9, 0.75, 0.4],
+            "roughness": 0.6,
+            "metallic": 1.0,
+            "ior": 1.5,
+            "clearcoat": 0.0,
+            "clearcoat_roughness": 0.1,
+            "anisotropy_strength": 0.0,
+            "anisotropy_rotation": 0.0,
+        },
+    ),
     "cook-torrance": (
         {"kd": [0.45, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "m": 0.15, "f0": 0.04},
         {"kd": [0.12, 0.22, 0.35], "ks": [0.9, 0.9, 0.9], "m": 0.35, "f0": 0.06},

@@ -178,9 +178,14 @@ def glb_bytes(
     material: dict[str, Any], extensions_used: list[str], name: str, generator: str, *, tangents: bool = False
 ) -> bytes:
     """A ``.glb`` file's bytes: the document of :func:`gltf_document` with its buffer in the container's binary
-    chunk. Chunks are padded to 4 bytes, the JSON with spaces and the binary with zeros (§4.4.3)."""
+    chunk (:func:`glb_container`)."""
     data = _mesh_bytes(tangents)
-    document = _scene(material, extensions_used, name, generator, {"byteLength": len(data)}, tangents)
+    return glb_container(_scene(material, extensions_used, name, generator, {"byteLength": len(data)}, tangents), data)
+
+
+def glb_container(document: dict[str, Any], data: bytes) -> bytes:
+    """A ``.glb`` file's bytes: ``document`` (whose one buffer has no ``uri``) and its buffer's ``data``. Chunks are
+    padded to 4 bytes, the JSON with spaces and the binary with zeros (§4.4.3)."""
     text = json.dumps(document, ensure_ascii=False, allow_nan=False, separators=(",", ":")).encode("utf-8")
     text += b" " * (-len(text) % 4)
     data += b"\0" * (-len(data) % 4)

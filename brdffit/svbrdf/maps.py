@@ -10,6 +10,9 @@ A maps folder holds:
   that was not fitted (masked out, or with fewer samples than its model has parameters) holds NaN;
 * ``maps.json``: what the arrays are: the model and its options, the loss, the channels, the texel grid and the
   plane's size, the capture they came from, and counts (texels fitted, converged; the rmse's median);
+* ``material.glb``, for the maps of a ``gltf`` fit: a quad the size of the sample with the maps as its material's
+  textures (``gltf_maps.py``), which ``maps.json``'s ``glb`` describes (its notes, the 8-bit textures' rounding, or
+  why it was not written);
 * ``textures/``: each parameter as a linear OpenEXR image (``<parameter>.exr``: one channel, or RGB) and an 8-bit
   PNG preview (``<parameter>.png``: an albedo or colour sRGB-encoded, any other parameter linear over the map's own
   range, its 1st to 99th percentile, which ``maps.json`` records as ``preview_range``).
@@ -30,6 +33,7 @@ from .images import srgb_encoded, write_exr, write_png
 PARAMS_FILE = "params.npz"
 MAPS_FILE = "maps.json"
 TEXTURES = "textures"
+GLB_FILE = "material.glb"
 VERSION = 1
 #: The per-texel arrays beside the parameters.
 FIT_ARRAYS = ("cost", "rmse", "converged", "n_samples", "n_caveats")
@@ -117,9 +121,12 @@ def nested_params(flat: dict[str, Any]) -> dict[str, Any]:
     return params
 
 
-def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> list[Path]:
+def write_maps(
+    folder: str | os.PathLike, maps: Maps, textures: bool = True, glb: dict[str, Any] | None = None
+) -> list[Path]:
     """``maps`` into ``folder`` (made if missing): ``params.npz``, ``maps.json`` and, with ``textures``, the
-    ``textures/`` images, each atomically; returns the paths written."""
+    ``textures/`` images, each atomically; returns the paths written. ``glb``: what ``maps.json`` says of the
+    ``material.glb`` written beside them (``gltf_maps.write_glb``)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, Any] = dict(maps.params) | dict(maps.fit)  # Any: savez's stubs take allow_pickle among them
@@ -153,6 +160,7 @@ def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> 
         "uncertainty": "laplace" if maps.stderr else None,
         "preview_range": ranges,
         "caveat_examples": maps.caveat_examples,
+        "glb": glb,
         **maps.summary(),
     }
     write_text_atomic(folder / MAPS_FILE, json.dumps(description, indent=1) + "\n")

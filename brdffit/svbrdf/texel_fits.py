@@ -39,6 +39,7 @@ from ..fitting.single.result import FitResult
 from ..physics.models.registry import get_model
 from ..uncertainty.methods import with_uncertainty
 from .capture import Capture, read_capture
+from .gltf_maps import write_glb
 from .maps import FIT_ARRAYS, Maps, flat_params, write_maps
 from .texels import TexelSamples, read_photographs, texel_samples
 
@@ -118,7 +119,8 @@ def fit_capture(
     if caveats:
         warn(FitWarning(caveats))
     if output is not None:
-        write_maps(output, maps, textures)
+        glb = write_glb(output, maps) if textures and maps.model == "gltf" else None
+        write_maps(output, maps, textures, glb)
         shutil.rmtree(Path(output) / TILES, ignore_errors=True)
     return maps
 

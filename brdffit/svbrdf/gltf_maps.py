@@ -1,0 +1,204 @@
+"""The maps of a ``gltf`` fit as a glTF 2.0 binary (``.glb``): a quad the size of the sample with the maps as its
+material's textures, which a glTF viewer shows as the material scanned.
+
+glTF's metallic-roughness material takes textures for exactly the parameters brdffit's ``gltf`` model fits
+(``physics/renderers/gltf_model.py``), each texture's value multiplied by a factor of 1 (glTF 2.0 §3.9.2):
+
+* ``base_color``: ``baseColorTexture``, sRGB-encoded as the specification requires;
+* ``roughness`` and ``metallic``: ``metallicRoughnessTexture``'s green and blue channels, linear;
+* ``clearcoat`` and ``clearcoat_roughness`` (where any texel has a coat): ``KHR_materials_clearcoat``'s
+  ``clearcoatTexture`` (red) and ``clearcoatRoughnessTexture`` (green), linear;
+* ``ior``: ``KHR_materials_ior``'s one number (glTF has no texture for it): the maps' median, with a note when the
+  texels' values differ.
+
+Textures are 8-bit PNG images inside the file (the only depth glTF viewers read alike), so each value is rounded to
+1/255 (the base colour in sRGB's steps): the export says how far that moves each map (``GltfMaps.quantization``).
+The anisotropy and the sheen, which need tangents and more textures, are not exported yet: a fit that freed them is
+refused in one line. A texel that was not fitted is black (base colour 0) and rough (roughness 1).
+
+The quad lies in glTF's x-y plane (metres, the capture's frame: x to the right, y up), facing +z, where a viewer's
+default camera looks; texture coordinate (0, 0) is the images' top left (§3.8.4), texel (0, 0).
+"""
+
+import io
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._files import atomic_path
+from .._version import __version__
+from ..errors import BrdfInputError
+from ..export.gltf_preview import glb_container
+from .images import srgb_encoded
+from .maps import GLB_FILE, Maps
+
+_FLOAT, _UNSIGNED_SHORT = 5126, 5123
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_LINEAR, _CLAMP_TO_EDGE = 9729, 33071
+#: Parameters the quad's material cannot hold texel by texel, and what a fit must hold them at.
+NOT_EXPORTED = {"anisotropy_strength": 0.0, "sheen_roughness": None, "sheen_color": None}
+
+
+@dataclass
+class GltfMaps:
+    """A ``.glb`` of ``maps`` (:func:`gltf_maps`): its ``data`` (bytes), the ``notes`` a user must read, and the
+    largest change 8-bit textures make to each exported map (``quantization``: name → absolute difference)."""
+
+    data: bytes
+    notes: list[str] = field(default_factory=list)
+    quantization: dict[str, float] = field(default_factory=dict)
+
+
+def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
+    """The ``.glb`` of the maps of a ``gltf`` fit (module docstring); anything else is refused in one line."""
+    if maps.model != "gltf":
+        raise BrdfInputError(
+            f"the maps of a {maps.model} fit do not map onto glTF's material texel by texel: fit the capture with"
+            " --model gltf (or export one texel's parameters)"
+        )
+    if len(maps.channels) != 3:
+        raise BrdfInputError(f"glTF's textures are RGB; these maps have {len(maps.channels)} channel(s)")
+    for parameter, held in NOT_EXPORTED.items():
+        values = maps.params.get(parameter)
+        if values is not None and not (held is not None and np.all(values[maps.fitted] == held)):
+            raise BrdfInputError(f"the maps' {parameter} varies: glTF textures for it are not exported yet")
+    fitted, notes = maps.fitted, []
+    base = np.where(fitted[..., None], maps.params["base_color"], 0.0)
+    roughness = np.where(fitted, maps.params["roughness"], 1.0)
+    metallic = np.where(fitted, maps.params["metallic"], 0.0)
+    zeros = np.zeros(maps.shape)
+    images = {
+        "base_color": _png(srgb_encoded(base)),
+        "metallic_roughness": _png(np.stack([zeros, roughness, metallic], -1)),
+    }
+    quantization = {
+        "base_color": _largest(_srgb_decoded(np.round(srgb_encoded(base) * 255) / 255), base),
+        "roughness": _largest(np.round(roughness * 255) / 255, roughness),
+        "metallic": _largest(np.round(metallic * 255) / 255, metallic),
+    }
+    coat = np.where(fitted, maps.params["clearcoat"], 0.0)
+    material: dict[str, Any] = {
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0},
+            "metallicRoughnessTexture": {"index": 1},
+        },
+    }
+    extensions: dict[str, Any] = {}
+    if np.any(coat > 0):
+        coat_roughness = np.where(fitted, maps.params["clearcoat_roughness"], 0.0)
+        images["clearcoat"] = _png(np.stack([coat, coat_roughness, zeros], -1))
+        extensions["KHR_materials_clearcoat"] = {
+            "clearcoatFactor": 1.0,
+            "clearcoatTexture": {"index": 2},
+            "clearcoatRoughnessFactor": 1.0,
+            "clearcoatRoughnessTexture": {"index": 2},
+        }
+        quantization["clearcoat"] = _largest(np.round(coat * 255) / 255, coat)
+        quantization["clearcoat_roughness"] = _largest(np.round(coat_roughness * 255) / 255, coat_roughness)
+    ior = maps.params["ior"][fitted]
+    median_ior = float(np.median(ior)) if ior.size else 1.5
+    if ior.size and np.ptp(ior) > 1e-9:
+        notes.append(
+            f"ior varies over the texels ({ior.min():.4g}–{ior.max():.4g}); glTF holds one: the median,"
+            f" {median_ior:.4g}"
+        )
+    if abs(median_ior - 1.5) > 1e-12:
+        extensions["KHR_materials_ior"] = {"ior": median_ior}
+    if extensions:
+        material["extensions"] = extensions
+    return GltfMaps(_glb(maps, material, images, sorted(extensions)), notes, quantization)
+
+
+def write_glb(folder: str | os.PathLike, maps: Maps) -> dict[str, Any]:
+    """The maps of a ``gltf`` fit as ``folder/material.glb`` (:func:`gltf_maps`), atomically, and what the maps'
+    ``maps.json`` says of it: the file, its notes and its textures' rounding; or why it was not written (a map glTF
+    cannot hold texel by texel)."""
+    try:
+        exported = gltf_maps(maps)
+    except BrdfInputError as error:
+        return {"file": None, "not_written": str(error)}
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    with atomic_path(Path(folder) / GLB_FILE) as temporary:
+        temporary.write_bytes(exported.data)
+    return {"file": GLB_FILE, "notes": exported.notes, "quantization": exported.quantization}
+
+
+def _largest(rounded: np.ndarray, values: np.ndarray) -> float:
+    return float(np.max(np.abs(rounded - values), initial=0.0))
+
+
+def _srgb_decoded(encoded: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`~brdffit.svbrdf.images.srgb_encoded` (IEC 61966-2-1)."""
+    return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
+
+
+def _accessors(positions: np.ndarray) -> list[dict[str, Any]]:
+    """The quad's accessors: positions (with their bounds, §3.6.2.4), normals, texture coordinates, indices."""
+    bounds = {"min": positions.min(axis=0).tolist(), "max": positions.max(axis=0).tolist()}
+    return [
+        {"bufferView": 0, "componentType": _FLOAT, "count": 4, "type": "VEC3", **bounds},
+        {"bufferView": 1, "componentType": _FLOAT, "count": 4, "type": "VEC3"},
+        {"bufferView": 2, "componentType": _FLOAT, "count": 4, "type": "VEC2"},
+        {"bufferView": 3, "componentType": _UNSIGNED_SHORT, "count": 6, "type": "SCALAR"},
+    ]
+
+
+def _png(image: np.ndarray) -> bytes:
+    """``image`` (values in [0, 1]) as 8-bit PNG bytes."""
+    from PIL import Image
+
+    stream = io.BytesIO()
+    Image.fromarray(np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)).save(stream, format="PNG")
+    return stream.getvalue()
+
+
+def _glb(maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensions: list[str]) -> bytes:
+    """The quad (module docstring) with ``material`` and its PNG ``images`` (in texture order) in one buffer."""
+    half_width, half_height = maps.width_mm / 2000.0, maps.height_mm / 2000.0  # metres
+    positions = np.array(
+        [[-half_width, half_height, 0], [-half_width, -half_height, 0], [half_width, -half_height, 0],
+         [half_width, half_height, 0]], dtype="<f4",
+    )  # fmt: skip
+    normals = np.tile(np.array([0.0, 0.0, 1.0], dtype="<f4"), (4, 1))
+    coordinates = np.array([[0, 0], [0, 1], [1, 1], [1, 0]], dtype="<f4")
+    indices = np.array([0, 1, 2, 0, 2, 3, 0, 0], dtype="<u2")  # two triangles, counter-clockwise seen from +z; padded
+    pieces = [positions.tobytes(), normals.tobytes(), coordinates.tobytes(), indices.tobytes()]
+    pieces += [image + b"\0" * (-len(image) % 4) for image in images.values()]
+    offsets = np.concatenate([[0], np.cumsum([len(piece) for piece in pieces])[:-1]]).tolist()
+    views = [
+        {"buffer": 0, "byteOffset": offset, "byteLength": length}
+        for offset, length in zip(
+            offsets, [len(p) for p in pieces[:3]] + [12] + list(map(len, images.values())), strict=True
+        )
+    ]
+    for view, target in zip(views[:4], [_ARRAY_BUFFER] * 3 + [_ELEMENT_ARRAY_BUFFER], strict=True):
+        view["target"] = target
+    document: dict[str, Any] = {
+        "asset": {"version": "2.0", "generator": f"brdffit {__version__}"},
+        **({"extensionsUsed": extensions} if extensions else {}),
+        "scene": 0,
+        "scenes": [{"name": material["name"], "nodes": [0]}],
+        "nodes": [{"name": material["name"], "mesh": 0}],
+        "meshes": [
+            {
+                "name": "the sample",
+                "primitives": [
+                    {"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}
+                ],
+            }
+        ],
+        "materials": [material],
+        "accessors": _accessors(positions),
+        "bufferViews": views,
+        "buffers": [{"byteLength": sum(len(piece) for piece in pieces)}],
+        "images": [
+            {"name": name, "bufferView": 4 + index, "mimeType": "image/png"} for index, name in enumerate(images)
+        ],
+        "samplers": [{"magFilter": _LINEAR, "minFilter": _LINEAR, "wrapS": _CLAMP_TO_EDGE, "wrapT": _CLAMP_TO_EDGE}],
+        "textures": [{"sampler": 0, "source": index} for index in range(len(images))],
+    }
+    return glb_container(document, b"".join(pieces))
