@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads lint format docs examples clean
+.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads bench-svbrdf lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -101,6 +101,11 @@ bench-exports: $(STAMP)
 # warm, phase by phase (~5 minutes); writes benchmarks/results/phases.{json,md}, which docs/scale.md quotes.
 bench-phases: $(STAMP)
 	$(BIN)/python benchmarks/phases.py
+
+# Spatially varying materials (issue 31): per-texel cost against a scipy loop, where it goes, compilation, and a
+# 256 × 256 capture end to end (~5 minutes); writes benchmarks/results/svbrdf.{json,md}.
+bench-svbrdf: $(STAMP)
+	$(BIN)/python benchmarks/svbrdf.py
 
 # Reading a samples file (issue 29): peak memory and time per row of load_samples on CSVs of 10⁵ and 10⁶ rows
 # (~1 minute); writes benchmarks/results/reading.{json,md}.

@@ -48,7 +48,9 @@ class Maps:
     """Maps of one model's parameters over a texel grid (module docstring): ``params`` and, with Laplace errors,
     ``stderr`` (name → (H, W) or (H, W, C)), ``fit`` (:data:`FIT_ARRAYS` → (H, W)); ``model``, ``model_options``,
     ``loss``, ``channels``; the plane's ``width_mm`` and ``height_mm``; ``capture``: the capture file's path;
-    ``caveat_examples``: the caveats of the first texel that has any (``n_caveats`` counts every texel's)."""
+    ``caveat_examples``: the caveats of the first texel that has any (``n_caveats`` counts every texel's);
+    ``neighbour_starts``: how many texels were fitted again from a neighbour's parameters, and how many ended lower
+    (``texel_fits._neighbour_starts``)."""
 
     model: str
     model_options: dict[str, Any]
@@ -61,6 +63,7 @@ class Maps:
     capture: str = ""
     stderr: dict[str, np.ndarray] = field(default_factory=dict)
     caveat_examples: list[str] = field(default_factory=list)
+    neighbour_starts: dict[str, int] = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -122,11 +125,16 @@ def nested_params(flat: dict[str, Any]) -> dict[str, Any]:
 
 
 def write_maps(
-    folder: str | os.PathLike, maps: Maps, textures: bool = True, glb: dict[str, Any] | None = None
+    folder: str | os.PathLike,
+    maps: Maps,
+    textures: bool = True,
+    glb: dict[str, Any] | None = None,
+    mitsuba: dict[str, Any] | None = None,
 ) -> list[Path]:
     """``maps`` into ``folder`` (made if missing): ``params.npz``, ``maps.json`` and, with ``textures``, the
-    ``textures/`` images, each atomically; returns the paths written. ``glb``: what ``maps.json`` says of the
-    ``material.glb`` written beside them (``gltf_maps.write_glb``)."""
+    ``textures/`` images, each atomically; returns the paths written. ``glb`` and ``mitsuba``: what ``maps.json``
+    says of the ``material.glb`` and the ``mitsuba/`` folder written beside them (``gltf_maps.write_glb``,
+    ``mitsuba_maps.write_mitsuba_maps``)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, Any] = dict(maps.params) | dict(maps.fit)  # Any: savez's stubs take allow_pickle among them
@@ -160,7 +168,9 @@ def write_maps(
         "uncertainty": "laplace" if maps.stderr else None,
         "preview_range": ranges,
         "caveat_examples": maps.caveat_examples,
+        "neighbour_starts": maps.neighbour_starts,
         "glb": glb,
+        "mitsuba": mitsuba,
         **maps.summary(),
     }
     write_text_atomic(folder / MAPS_FILE, json.dumps(description, indent=1) + "\n")
@@ -207,4 +217,5 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         description.get("capture", ""),
         {name: loaded[f"{name}{STDERR_SUFFIX}"] for name in names if f"{name}{STDERR_SUFFIX}" in loaded},
         list(description.get("caveat_examples", [])),
+        dict(description.get("neighbour_starts") or {}),
     )

@@ -105,7 +105,7 @@ def test_an_interrupted_fit_leaves_no_maps_and_resumes(ward_capture, tmp_path, m
     ]
     calls.clear()
     resumed = svbrdf.fit(folder, "ward", resume=True, **options)
-    assert calls == [100, 56] and (output / "params.npz").exists()
+    assert calls[:2] == [100, 56] and (output / "params.npz").exists()  # then the neighbour starts' refits
     whole = svbrdf.fit(folder, "ward", progress=False, tile_texels=100)
     for name in whole.params:
         np.testing.assert_allclose(resumed.params[name], whole.params[name], rtol=1e-12)
