@@ -156,11 +156,15 @@ def _fit(args: argparse.Namespace) -> int:
         + ")"
     )
     print(_table(maps))
-    glb = json.loads((output / "maps.json").read_text()).get("glb") or {}
+    described = json.loads((output / "maps.json").read_text())
+    glb, mitsuba = described.get("glb") or {}, described.get("mitsuba") or {}
     if glb.get("file"):
         print(f"  {glb['file']}: the maps on a quad for glTF viewers" + "".join(f"; {n}" for n in glb["notes"]))
-    elif glb.get("not_written"):
-        print(f"brdffit: note: no material.glb: {glb['not_written']}", file=sys.stderr)
+    if mitsuba.get("folder"):
+        print(f"  {mitsuba['folder']}/: bsdf.xml with {len(mitsuba['textured'])} bitmap texture(s), scene.xml")
+    for what, said in (("material.glb", glb), ("Mitsuba scene", mitsuba)):
+        if said.get("not_written"):
+            print(f"brdffit: note: no {what}: {said['not_written']}", file=sys.stderr)
     if maps.caveats():
         print(f"brdffit: warning: {maps.caveats()}", file=sys.stderr)
     return EXIT_OK if summary["converged"] == summary["fitted"] else EXIT_NOT_CONVERGED
