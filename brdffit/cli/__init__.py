@@ -28,6 +28,7 @@ from contextlib import contextmanager
 from .._files import check_not_stopped, resume_writing, stop_writing
 from .._version import __version__
 from ..errors import BrdfInputError, BrdfWriteError, FitWarning, InputWarning, Spelled, UncertaintyWarning
+from .arguments import QUIET_HELP
 from .files import check_one_standard_input, is_standard, printing_to, standard_streams
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
@@ -100,12 +101,6 @@ EXAMPLES = {
         "brdffit svbrdf render maps/ --light 0,-150,250 --camera 0,0,400 -o relit.exr",
     ),
 }
-
-
-QUIET_HELP = (
-    "print nothing but warnings and errors (the exit status says how it went; a product sent to standard output"
-    " with -o - is still written there); no progress bars"
-)
 
 
 def _epilog(command: str) -> str:

@@ -51,6 +51,19 @@ def spell(argument: Argument) -> str:
 MODEL_OPTIONS = ("fresnel", "distribution", "shadowing", "anisotropic", "sheen", "lobes", "int_ior", "basis", "ridge")
 
 
+#: What ``-q`` does, as every command's help says it.
+QUIET_HELP = (
+    "print nothing but warnings and errors (the exit status says how it went; a product sent to standard output"
+    " with -o - is still written there); no progress bars"
+)
+
+
+def quiet(action: argparse.ArgumentParser) -> None:
+    """``-q`` after an action's name too (``brdffit svbrdf fit … -q``), as after a command's: unset there, the
+    command's or the top level's value stands."""
+    action.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
+
+
 def add_model_options(command: argparse.ArgumentParser, default: str | None) -> None:
     """``--model`` and the model options (``--fresnel``, ``--distribution``, ``--shadowing``, ``--anisotropic``,
     ``--sheen``, ``--lobes``, ``--int-ior``, ``--basis``, ``--ridge``)."""

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import output_file
+from .arguments import output_file, quiet
 from .files import Files
 
 
@@ -24,6 +24,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(title="actions", metavar="ACTION", required=True)
     build = actions.add_parser("build", help="learn a basis from a library of MERL tables", allow_abbrev=False)
     build.add_argument("library", nargs="+", metavar="LIB", help="MERL .binary files, or folders of them")
+    quiet(build)
     build.add_argument("-o", "--output", required=True, metavar="FILE", help="basis file to write (.npz)")
     build.add_argument(
         "--components",
@@ -43,6 +44,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "directions", help="the direction pairs that best condition a coefficient fit", allow_abbrev=False
     )
     directions.add_argument("basis", metavar="BASIS", help="basis file (from brdffit basis build)")
+    quiet(directions)
     directions.add_argument("-n", type=int, default=20, metavar="N", help="how many pairs (default 20)")
     directions.add_argument("-o", "--output", required=True, metavar="FILE", help="directions CSV to write")
     directions.add_argument(

@@ -19,6 +19,7 @@ from .arguments import (
     model_files,
     model_options,
     output_file,
+    quiet,
 )
 from .files import Files
 
@@ -35,6 +36,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "fit", help="fit a model to every texel of a capture; write its parameter maps", allow_abbrev=False
     )
     fit.add_argument("capture", metavar="CAPTURE", help="capture folder, or its capture.json")
+    quiet(fit)
     add_model_options(fit, "ward")
     fit.add_argument(
         "--loss",
@@ -73,6 +75,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "render", help="the image fitted maps predict for a light and a camera", allow_abbrev=False
     )
     render.add_argument("maps", metavar="MAPS", help="maps folder (from brdffit svbrdf fit)")
+    quiet(render)
     render.add_argument("--light", required=True, metavar="X,Y,Z", help="the point light's position in mm")
     render.add_argument("--camera", required=True, metavar="X,Y,Z", help="the camera's position in mm")
     render.add_argument(

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..errors import BrdfInputError
 from . import EXIT_OK
-from .arguments import add_model_options, json_argument, json_file, model_files, model_options, output_file
+from .arguments import add_model_options, json_argument, json_file, model_files, model_options, output_file, quiet
 from .files import Files
 
 
@@ -62,6 +62,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         allow_abbrev=False,
     )
     capture.add_argument("folder", metavar="OUT", help="folder to write capture.json, the images and truth.npz into")
+    quiet(capture)
     add_model_options(capture, "ward")
     capture.add_argument(
         "--params",

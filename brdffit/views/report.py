@@ -45,7 +45,7 @@ DETAILED = 2
 #: Resolution of the embedded figures (dots per inch).
 DPI = 96
 
-_STYLE = """
+PAGE_STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto; max-width: 1200px;
        padding: 0 1em; color: #222; line-height: 1.4; }
 h1 { font-size: 1.5em; } h2 { font-size: 1.25em; margin-top: 2em; border-bottom: 1px solid #ccc; }
@@ -136,7 +136,7 @@ def _page(samples: Samples, comparison: Comparison, shown: list[FitResult]) -> s
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
-        f"<title>brdffit report: {source}</title><style>{_STYLE}</style></head><body>",
+        f"<title>brdffit report: {source}</title><style>{PAGE_STYLE}</style></head><body>",
         f"<h1>brdffit report: {source}</h1>",
         f'<p class="note">brdffit {__version__}, {today}. {samples.n_samples} samples × {samples.n_channels}'
         f" channel(s), loss {html.escape(comparison.loss)}.</p>",
@@ -151,24 +151,26 @@ def _page(samples: Samples, comparison: Comparison, shown: list[FitResult]) -> s
         parts += [f"<h3>{rank}. <code>{html.escape(label(result))}</code></h3>", _parameter_table(result)]
         parts += [f'<p class="warning">warning: {html.escape(line)}</p>' for line in _warnings(result)]
     parts += [
-        _figure(
+        embedded_figure(
             plots.slices(shown, samples),
             "Slices: the data (points) and the fits (lines) against the viewer's"
             " signed zenith, in the plane of incidence and the perpendicular plane.",
         ),
-        _figure(plots.polar(shown, samples), "The plane of incidence as polar plots (radius: BRDF on a log scale)."),
+        embedded_figure(
+            plots.polar(shown, samples), "The plane of incidence as polar plots (radius: BRDF on a log scale)."
+        ),
     ]
     limit = max(colour_limit(result, samples) for result in shown)  # one colour scale: the maps compare
     for result in shown:
         parts.append(
-            _figure(
+            embedded_figure(
                 plots.residuals(result, samples, limit=limit),
                 f"Where <code>{html.escape(label(result))}</code> misses: its residuals in the loss's units"
                 " (red: the model above the data).",
             )
         )
     parts.append(
-        _figure(
+        embedded_figure(
             plots.sphere(shown, samples, lights="both"),
             "Lit spheres of the fits (and of the measured values, where the data cover the sphere), one exposure"
             " per row.",
@@ -219,7 +221,7 @@ def _warnings(result: FitResult) -> list[str]:
     return [*result.warnings, *(result.uncertainty["warnings"] if result.uncertainty else [])]
 
 
-def _figure(figure, caption: str) -> str:
+def embedded_figure(figure, caption: str) -> str:
     """A figure as an embedded PNG (base64 ``data:`` URI) with its caption (already HTML)."""
     buffer = io.BytesIO()
     text_as_typed(figure)

@@ -150,7 +150,7 @@ EVERY_FILE = {
         *["--chain", "c.npz", "--corner", "c.png", "-o", "r.json"],
     ],
     ("compare",): ["compare", "oak.csv", "--basis", "b.npz", "-o", "c.json"],
-    ("report",): ["report", "oak.csv", "--basis", "b.npz", "-o", "r.html"],
+    ("report",): ["report", "oak.csv", "--basis", "b.npz", "--held-back", "cap", "-o", "r.html"],
     ("plot",): ["plot", "fit.json", "oak.csv", "--kind", "slices", "-o", "p.png"],
     ("export",): ["export", "fit.json", "--to", "merl", "--samples", "table.binary", "-o", "e.binary"],
     ("render",): ["render", "fit.json", "--samples", "oak.csv", "-o", "r.png"],
