@@ -90,7 +90,6 @@ def test_the_guides_signatures_are_the_codes(name, arguments):
     written with ``…`` may leave some out."""
     import inspect
 
-
     parameters = inspect.signature(public(name)).parameters
     written = [part for part in top_level_parts(arguments) if part not in ("*", "…", "")]
     names = [part.split("=")[0].lstrip("*") for part in written]

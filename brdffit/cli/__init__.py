@@ -97,7 +97,7 @@ EXAMPLES = {
     ),
     "svbrdf": (
         "brdffit svbrdf fit examples/ward-capture --model ward -o maps/",
-        "brdffit svbrdf fit capture/ --model cook-torrance --uncertainty laplace --resume -o maps/",
+        "brdffit svbrdf fit capture/ --model cook-torrance --fix f0=0.04 --uncertainty laplace --resume -o maps/",
         "brdffit svbrdf render maps/ --light 0,-150,250 --camera 0,0,400 -o relit.exr",
     ),
 }

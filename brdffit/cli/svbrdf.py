@@ -100,10 +100,9 @@ def files(args: argparse.Namespace) -> Files:
     """What ``svbrdf fit`` reads (``capture.json`` and every image it names) and writes (the maps' files in ``-o``);
     what ``svbrdf render`` reads (the maps) and writes (``-o``)."""
     if args.action is _render:
-        maps = Path(args.maps)
-        return Files.of(
-            inputs={"MAPS": [args.maps, maps / "maps.json", maps / "params.npz"]}, outputs={"-o": args.output}
-        )
+        maps = _maps_folder(args.maps)  # every file in it: a render never replaces a map's own texture
+        inside = [path for path in maps.rglob("*") if path.is_file()] if maps.is_dir() else []
+        return Files.of(inputs={"MAPS": [args.maps, maps / "maps.json", *inside]}, outputs={"-o": args.output})
     from ..svbrdf.capture import capture_file, read_capture
 
     capture = read_capture(args.capture)
@@ -168,8 +167,8 @@ def _fit(args: argparse.Namespace) -> int:
     for what, said in (("material.glb", glb), ("Mitsuba scene", mitsuba)):
         if said.get("not_written"):
             print(f"brdffit: note: no {what}: {said['not_written']}", file=sys.stderr)
-    if maps.caveats():
-        print(f"brdffit: warning: {maps.caveats()}", file=sys.stderr)
+    for note in [*maps.notes, *([maps.caveats()] if maps.caveats() else [])]:
+        print(f"brdffit: warning: {note}", file=sys.stderr)
     return EXIT_OK if summary["converged"] == summary["fitted"] else EXIT_NOT_CONVERGED
 
 
@@ -206,6 +205,12 @@ def _output_folder(value: str) -> Path:
     return path
 
 
+def _maps_folder(value: str) -> Path:
+    """The maps folder ``MAPS`` names: the folder, or its ``maps.json``."""
+    path = Path(value)
+    return path.parent if path.name == "maps.json" and path.is_file() else path
+
+
 def _render(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -222,7 +227,9 @@ def _render(args: argparse.Namespace) -> int:
         raise BrdfInputError(f"--intensity {args.intensity}: every value must be > 0")
     if args.exposure is not None and not args.exposure > 0:
         raise BrdfInputError(f"--exposure {args.exposure:g}: must be > 0")
-    maps = read_maps(args.maps)
+    if args.exposure is not None and suffix != ".png":
+        raise BrdfInputError(f"--exposure exposes a .png; {suffix} holds the radiance itself")
+    maps = read_maps(_maps_folder(args.maps))
     if len(intensity) not in (1, len(maps.channels)):
         raise BrdfInputError(
             f"--intensity: {len(intensity)} values for {len(maps.channels)} channels; give 1 or {len(maps.channels)}"

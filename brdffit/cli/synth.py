@@ -187,6 +187,10 @@ def _capture(args: argparse.Namespace) -> int:
     folder = Path(args.folder)
     if folder.exists() and not folder.is_dir():
         raise BrdfInputError(f"OUT {args.folder}: is a file; give a folder")
+    if folder.is_dir() and any(folder.iterdir()):
+        raise BrdfInputError(
+            f"OUT {args.folder}: is not empty; give a new or empty folder (a capture's files would mix)"
+        )
     options = {name: value for name, value in model_options(args).items() if value is not None}
     synth_capture(
         folder, args.model, *materials, shape=shape, size_mm=args.size, n_images=args.images, noise=args.noise,

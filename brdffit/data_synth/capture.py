@@ -88,7 +88,7 @@ MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
     ),
     "cook-torrance": (
         {"kd": [0.45, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "m": 0.15, "f0": 0.04},
-        {"kd": [0.12, 0.22, 0.35], "ks": [0.9, 0.9, 0.9], "m": 0.35, "f0": 0.06},
+        {"kd": [0.12, 0.22, 0.35], "ks": [0.9, 0.9, 0.9], "m": 0.35, "f0": 0.04},
     ),
 }
 #: Parameters blended in their logarithm (scales: a roughness, an exponent, an index).

@@ -10,15 +10,15 @@ centred at the origin) and is photographed under point lights; ``capture.json`` 
                  "light": {"position_mm": [120.0, -40.0, 300.0], "intensity": [1.0, 1.0, 1.0]},
                  "camera": {"position_mm": [0.0, 0.0, 400.0]}}]}
 
-``texels`` is ``[rows, columns]`` (H × W); a light's ``intensity`` is one number (every channel's) or one per
-channel. Optional keys: ``channels`` (default ``r, g, b`` for three intensities or one number, ``value`` for a list of
-one), ``mask`` (an image, nonzero where texels are fitted), ``normal_map`` (an H × W × 3 image of tangent-space
-normals, ``z > 0``, to fit a sample that is not flat), ``saturation`` (a pixel value at or above which a photograph
-is saturated: that texel's sample of that image is dropped, not fitted), ``scale`` (what a 16-bit image's 65,535
-stands for; default 1) and, per image, ``"camera": {"matrix": [[...], [...], [...]]}`` (a 3 × 4 OpenCV pinhole
-projection ``K [R | t]`` of the plane's millimetres to the photograph's pixels) for a raw, unrectified photograph,
-rectified on reading (``texels.py``). Everything else in the file is refused by name (a misspelt key would be
-silently ignored otherwise).
+``texels`` is ``[rows, columns]`` (H × W); a light's ``intensity`` is one number (every channel's) or one per channel.
+Optional keys: ``channels`` (default ``r, g, b`` for three intensities or one number, ``value`` for a list of one),
+``mask`` (an image, nonzero where texels are fitted), ``normal_map`` (an H × W × 3 image of tangent-space normals,
+``z > 0``, to fit a sample that is not flat), ``saturation`` (a pixel value, in the image file's own values, at or above
+which a photograph is saturated: that texel's sample of that image is dropped, not fitted), ``scale`` (what a 16-bit
+image's 65,535 stands for; default 1) and, per image, ``"camera": {"matrix": [[...], [...], [...]]}`` (a 3 × 4 OpenCV
+pinhole projection ``K [R | t]`` of the plane's millimetres to the photograph's pixels) for a raw, unrectified
+photograph, rectified on reading (``texels.py``). Everything else in the file is refused by name (a misspelt key would
+be silently ignored otherwise).
 
 Every problem is one line naming the file and what is allowed (:class:`~brdffit.errors.BrdfInputError`), raised by
 :func:`read_capture` before any image is read: a light or camera on or below the plane, an intensity with the wrong

@@ -27,6 +27,30 @@ IMAGE_SUFFIXES = (".exr", ".npy", ".png", ".tif", ".tiff")
 SIXTEEN_BITS = 65535.0
 
 
+def is_sixteen_bit(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is read as a 16-bit image (PNG or TIFF), whose values the capture's ``scale`` scales."""
+    return Path(path).suffix.lower() in (".png", ".tif", ".tiff")
+
+
+def read_mask(path: str | os.PathLike) -> np.ndarray:
+    """A mask image as (H, W) booleans, true where any channel is nonzero (NaN counts as 0): any format
+    :func:`read_image` reads, and PNG or TIFF of any depth (an 8-bit mask is exact)."""
+    path = Path(path)
+    if is_sixteen_bit(path):
+        from PIL import Image, UnidentifiedImageError
+
+        with reading(path, "an image"):
+            try:
+                with Image.open(path) as image:
+                    mask = np.asarray(image)
+            except UnidentifiedImageError:
+                raise BrdfInputError(f"{path}: not an image") from None
+    else:
+        mask = read_image(path)
+    mask = np.nan_to_num(np.asarray(mask, dtype=float))
+    return mask != 0 if mask.ndim == 2 else np.any(mask != 0, axis=-1)
+
+
 def read_image(path: str | os.PathLike, scale: float = 1.0) -> np.ndarray:
     """The image at ``path`` as float64, (H, W) or (H, W, C) (module docstring); ``scale``: the value of a 16-bit
     image's 65,535."""
@@ -97,29 +121,37 @@ def _sixteen_bit(path: Path) -> np.ndarray:
         image = image[..., :3] if image.ndim == 3 and image.shape[-1] >= 3 else image
     if depth != 16:
         raise BrdfInputError(
-            f"{path}: a {depth}-bit image; a capture's PNG and TIFF images must be 16-bit integers (linear values),"
-            " or use .exr or .npy"
+            f"{path}: an image of {depth} bits; a capture's PNG and TIFF images must be 16-bit integers (linear"
+            " values), or use .exr or .npy"
         )
     return image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image
 
 
-def write_exr(path: str | os.PathLike, image: np.ndarray) -> None:
-    """``image`` ((H, W) or (H, W, 3)) as a float32 OpenEXR file (lossless ZIP), atomically."""
+def write_exr(path: str | os.PathLike, image: np.ndarray, channels: tuple[str, ...] | None = None) -> None:
+    """``image`` as a float32 OpenEXR file (lossless ZIP), atomically: (H, W) or (H, W, 1) as its one channel ``Y``,
+    (H, W, 3) as ``RGB``, (H, W, C) otherwise as C channels named ``channels``."""
     import OpenEXR as openexr
 
     pixels = np.ascontiguousarray(image, dtype=np.float32)
-    name = "RGB" if pixels.ndim == 3 and pixels.shape[-1] == 3 else "Y"
-    if name == "Y" and pixels.ndim == 3:
-        raise ValueError(f"an image of {pixels.shape[-1]} channels: OpenEXR maps here are one or three")
+    if pixels.ndim == 3 and pixels.shape[-1] == 1:
+        pixels = pixels[..., 0]
+    if pixels.ndim == 2:
+        layers = {"Y": pixels}
+    elif pixels.shape[-1] == 3:
+        layers = {"RGB": pixels}
+    else:
+        names = channels or tuple(f"c{index}" for index in range(pixels.shape[-1]))
+        layers = {str(name): np.ascontiguousarray(pixels[..., index]) for index, name in enumerate(names)}
     header = {"compression": openexr.ZIP_COMPRESSION, "type": openexr.scanlineimage}
-    with atomic_path(path) as temporary, openexr.File(header, {name: pixels}) as file:
+    with atomic_path(path) as temporary, openexr.File(header, layers) as file:
         file.write(str(temporary))
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
-    """``image`` ((H, W) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG, atomically."""
+    """``image`` ((H, W), (H, W, 1) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG, atomically."""
     from PIL import Image
 
+    image = image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image
     pixels = np.round(np.clip(np.nan_to_num(image, nan=0.0), 0.0, 1.0) * 255.0).astype(np.uint8)
     with atomic_path(path) as temporary:
         Image.fromarray(pixels).save(temporary, format="PNG")

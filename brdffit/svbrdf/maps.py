@@ -50,7 +50,8 @@ class Maps:
     ``loss``, ``channels``; the plane's ``width_mm`` and ``height_mm``; ``capture``: the capture file's path;
     ``caveat_examples``: the caveats of the first texel that has any (``n_caveats`` counts every texel's);
     ``neighbour_starts``: how many texels were fitted again from a neighbour's parameters, and how many ended lower
-    (``texel_fits._neighbour_starts``)."""
+    (``texel_fits._neighbour_starts``); ``notes``: what a user must know of the fit as a whole (the capture's values
+    far below the relative loss's floor)."""
 
     model: str
     model_options: dict[str, Any]
@@ -64,6 +65,7 @@ class Maps:
     stderr: dict[str, np.ndarray] = field(default_factory=dict)
     caveat_examples: list[str] = field(default_factory=list)
     neighbour_starts: dict[str, int] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -91,10 +93,10 @@ class Maps:
         )
 
     def summary(self) -> dict[str, Any]:
-        """The counts ``maps.json`` holds: texels, fitted, converged, the median rmse of the fitted ones."""
+        """The counts ``maps.json`` holds: texels (``n_texels``), fitted, converged, the fitted ones' median rmse."""
         fitted = self.fitted
         return {
-            "texels": int(fitted.size),
+            "n_texels": int(fitted.size),
             "fitted": int(fitted.sum()),
             "converged": int(np.sum(self.fit["converged"] & fitted)),
             "median_rmse": float(np.median(self.fit["rmse"][fitted])) if fitted.any() else None,
@@ -147,14 +149,17 @@ def write_maps(
     if textures:
         (folder / TEXTURES).mkdir(exist_ok=True)
         for name, array in maps.params.items():
-            for suffix in (".exr", ".png"):
-                path = folder / TEXTURES / f"{name}{suffix}"
-                if suffix == ".exr":
-                    write_exr(path, array)
-                else:
-                    preview, ranges[name] = _preview(name, array)
-                    write_png(path, preview)
-                written.append(path)
+            write_exr(folder / TEXTURES / f"{name}.exr", array, maps.channels)
+            written.append(folder / TEXTURES / f"{name}.exr")
+            if array.ndim == 2 or array.shape[-1] in (1, 3):  # an image's channels; no preview of other counts
+                preview, ranges[name] = _preview(name, array)
+                write_png(folder / TEXTURES / f"{name}.png", preview)
+                written.append(folder / TEXTURES / f"{name}.png")
+    if glb and glb.get("file"):
+        written.append(folder / glb["file"])
+    if mitsuba and mitsuba.get("folder"):
+        written += [folder / mitsuba["folder"] / name for name in mitsuba["files"]]
+    _remove_stale(folder, written)
     description = {
         "brdffit_maps": VERSION,
         "model": maps.model,
@@ -169,12 +174,24 @@ def write_maps(
         "preview_range": ranges,
         "caveat_examples": maps.caveat_examples,
         "neighbour_starts": maps.neighbour_starts,
+        "notes": maps.notes,
         "glb": glb,
         "mitsuba": mitsuba,
         **maps.summary(),
     }
     write_text_atomic(folder / MAPS_FILE, json.dumps(description, indent=1) + "\n")
     return [*written, folder / MAPS_FILE]
+
+
+def _remove_stale(folder: Path, written: list[Path]) -> None:
+    """A previous fit's files in ``folder`` that this one does not write again: its textures (another model's
+    parameters) and its ``material.glb`` and ``mitsuba/`` (another model's exports), so the folder holds one fit."""
+    kept = {path.resolve() for path in written}
+    stale = [path for path in (folder / TEXTURES).glob("*") if path.suffix in (".exr", ".png")]
+    stale += [folder / GLB_FILE, *(folder / "mitsuba").glob("*.xml"), *(folder / "mitsuba").glob("*.exr")]
+    for path in stale:
+        if path.is_file() and path.resolve() not in kept:
+            path.unlink()
 
 
 def _preview(name: str, array: np.ndarray) -> tuple[np.ndarray, list[float]]:
@@ -218,4 +235,5 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         {name: loaded[f"{name}{STDERR_SUFFIX}"] for name in names if f"{name}{STDERR_SUFFIX}" in loaded},
         list(description.get("caveat_examples", [])),
         dict(description.get("neighbour_starts") or {}),
+        list(description.get("notes") or []),
     )

@@ -7,6 +7,7 @@ its maps predict for the same light and camera.
 """
 
 import functools
+import os
 
 import jax
 import numpy as np
@@ -17,7 +18,7 @@ from ..physics.models.model import Model
 from ..physics.models.params import Params
 from ..physics.models.registry import get_model
 from .capture import texel_centres
-from .maps import Maps, nested_params
+from .maps import Maps, nested_params, read_maps
 from .texels import MIN_COSINE
 
 #: Texels evaluated in one call of the compiled, vmapped BRDF.
@@ -25,12 +26,21 @@ CHUNK = 65536
 
 
 @float64
-def relight(maps: Maps, light_mm, camera_mm, intensity=1.0) -> np.ndarray:
-    """The image (H, W, C) of linear radiance ``maps`` predict with a point light at ``light_mm`` (3,) of radiant
-    ``intensity`` (a number, or one per channel) and the camera at ``camera_mm`` (3,), both above the plane."""
-    light, camera = (_point(name, value) for name, value in (("light", light_mm), ("camera", camera_mm)))
+def relight(maps: "Maps | str | os.PathLike", light_mm, camera_mm, intensity=1.0) -> np.ndarray:
+    """The image (H, W, C) of linear radiance ``maps`` (or a maps folder) predict with a point light at
+    ``light_mm`` (3,) of radiant ``intensity`` (a number, or one per channel, > 0) and the camera at ``camera_mm``
+    (3,), both above the plane."""
+    maps = maps if isinstance(maps, Maps) else read_maps(maps)
+    light, camera = (_point(name, value) for name, value in (("light_mm", light_mm), ("camera_mm", camera_mm)))
     n_channels = len(maps.channels)
-    intensity = np.broadcast_to(np.asarray(intensity, dtype=float), (n_channels,))
+    try:
+        intensity = np.broadcast_to(np.asarray(intensity, dtype=float), (n_channels,))
+    except ValueError:
+        raise BrdfInputError(
+            f"intensity: {np.size(intensity)} values for {n_channels} channels; give one, or one per channel"
+        ) from None
+    if not np.all(np.isfinite(intensity) & (intensity > 0)):
+        raise BrdfInputError(f"intensity: {intensity.tolist()}: every value must be > 0")
     centres = texel_centres(maps.width_mm, maps.height_mm, maps.shape)
     to_light = light[None, :] - centres
     squared = np.sum(to_light**2, axis=-1)

@@ -32,8 +32,9 @@ from .._files import atomic_path, write_text_atomic
 from .._progress import progress_bar
 from .._version import __version__
 from ..checks import choice, whole_number
-from ..errors import BrdfInputError, FitWarning, UncertaintyWarning, warn
+from ..errors import Argument, BrdfInputError, FitWarning, UncertaintyWarning, warn
 from ..fitting.many.cluster import fit_here
+from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
 from ..fitting.options import holding_of, solving_of
 from ..fitting.single.result import FitResult
 from ..physics.models.registry import get_model
@@ -94,9 +95,13 @@ def fit_capture(
     holding = holding_of(None, fixed=fixed, bounds=bounds)
     if resume and output is None:
         raise BrdfInputError("resume=True continues a fit written to an output folder: give output")
+    if output is not None:
+        _check_output(Path(output), capture)
+    photographs = read_photographs(capture)  # every photograph checked before anything is written
     tiles = None if output is None else _tile_folder(Path(output), capture, built, loss, solving, holding, resume)
-    photographs = read_photographs(capture)
     least = built.physical.size(1) + 1  # a texel with fewer samples than one channel's parameters is not fitted
+    positive = get_loss(loss).name == "relative"  # a value of 0 has no relative residual
+    notes = _scale_notes(photographs, loss)
     then = None if uncertainty is None else partial(with_uncertainty, method=uncertainty)
     fit_tile = partial(
         _fit_tile, model=built, loss=loss, least=least, then=then, threads=threads, solving=solving, holding=holding
@@ -113,7 +118,7 @@ def fit_capture(
                 with np.load(kept, allow_pickle=False) as stored:
                     tile = {name: stored[name] for name in stored.files}
             else:
-                tile = fit_tile(texel_samples(photographs, texels), capture)
+                tile = fit_tile(texel_samples(photographs, texels, positive), capture)
                 if kept is not None:
                     with atomic_path(kept) as temporary, open(temporary, "wb") as stream:
                         np.savez(stream, **tile)
@@ -122,9 +127,11 @@ def fit_capture(
             bar.update(len(texels))
     finally:
         bar.close()
-    retried = _neighbour_starts(columns, capture, photographs, fit_tile)
+    retried = _neighbour_starts(columns, capture, photographs, fit_tile, positive)
     maps = _maps(columns, capture, built, loss, examples)
-    maps.neighbour_starts = retried
+    maps.neighbour_starts, maps.notes = retried, notes
+    for note in notes:
+        warn(FitWarning(note))
     caveats = maps.caveats()
     if caveats:
         warn(FitWarning(caveats))
@@ -187,8 +194,32 @@ def _fit_tile(
     return tile
 
 
+#: Values (1/sr) the relative loss weighs as relative only well above its floor (``losses.RELATIVE_FLOOR``): a capture
+#: whose median BRDF is below this many times the floor is said to be in too small a unit.
+FLOOR_MARGIN = 100.0
+
+
+def _scale_notes(photographs, loss: str) -> list[str]:
+    """What a user must know of the capture's values as BRDF: with the relative loss, a median far below its floor
+    (lights' intensities in another unit than the photographs') makes its residuals absolute."""
+    if get_loss(loss).name != "relative":
+        return []
+    sample = texel_samples(
+        photographs, np.arange(0, photographs.capture.n_texels, max(1, photographs.capture.n_texels // 256))
+    )
+    values = sample.values[sample.kept]
+    median = float(np.median(values)) if values.size else float("nan")
+    if not median < FLOOR_MARGIN * RELATIVE_FLOOR:
+        return []
+    return [
+        f"the photographs' values as BRDF have a median of {median:.3g} 1/sr: the relative loss counts values below"
+        f" {RELATIVE_FLOOR:g} 1/sr as absolute differences; give the lights' intensities in the photographs' units"
+        " (a white diffuse surface is then 1/π ≈ 0.32 1/sr)"
+    ]
+
+
 def _neighbour_starts(
-    columns: dict[str, np.ndarray], capture: Capture, photographs, fit_tile: Callable
+    columns: dict[str, np.ndarray], capture: Capture, photographs, fit_tile: Callable, positive: bool
 ) -> dict[str, int]:
     """Each texel whose fit ended at more than :data:`RESTART_ABOVE` times the cost of one of its four neighbours'
     fitted again from that neighbour's parameters (the one of lowest cost), kept where it ends lower; up to
@@ -211,7 +242,7 @@ def _neighbour_starts(
         offsets = np.array([-width, width, -1, 1])  # up, down, left, right, as ``shifted`` stacks them
         sources = texels + offsets[best.ravel()[texels]]
         starts = [nested_params({name: columns[name][source].tolist() for name in names}) for source in sources]
-        tile = fit_tile(texel_samples(photographs, texels), capture, starts=starts)
+        tile = fit_tile(texel_samples(photographs, texels, positive), capture, starts=starts)
         tile.pop(EXAMPLES)
         lower = tile["cost"] < columns["cost"][texels] * (1.0 - SAME_COST)
         for name, values in tile.items():
@@ -260,19 +291,35 @@ def _maps(columns: dict[str, np.ndarray], capture: Capture, model, loss: str, ex
         fit,
         capture.width_mm,
         capture.height_mm,
-        str(capture.file),
+        str(capture.file.resolve()),
         stderr,
         examples,
     )
 
 
+def _stamp(path: Path) -> tuple[int, int]:
+    """A file's size and modification time (ns): a photograph changed since a tile was fitted changes them."""
+    status = path.stat()
+    return status.st_size, status.st_mtime_ns
+
+
+def _check_output(output: Path, capture: Capture) -> None:
+    """An output folder the maps can be written into: not a file, not the capture's folder (its photographs are
+    never overwritten), its parent a folder."""
+    if output.exists() and not output.is_dir():
+        raise BrdfInputError(f"{output}: not a folder; the maps are written into a folder")
+    if output.resolve() == capture.folder.resolve():
+        raise BrdfInputError(f"{output}: is the capture's folder; give another folder for the maps")
+    if not output.resolve().parent.is_dir():
+        raise BrdfInputError(f"{output}: folder {output.resolve().parent} does not exist")
+
+
 def _tile_folder(output: Path, capture: Capture, model, loss: str, solving, holding, resume: bool) -> Path:
     """``output/.tiles``, ready: kept from an unfinished fit of the same capture and options with ``resume``,
     else emptied."""
-    if output.exists() and not output.is_dir():
-        raise BrdfInputError(f"{output}: not a folder; the maps are written into a folder")
     key = {
         "capture": hashlib.sha256(capture.file.read_bytes()).hexdigest(),
+        "photographs": [[str(shot.file), *_stamp(shot.file)] for shot in capture.shots],
         "fit": repr((model.name, sorted(model.model_options.items()), loss, solving, holding)),
         "brdffit": __version__,
     }
@@ -286,7 +333,9 @@ def _tile_folder(output: Path, capture: Capture, model, loss: str, solving, hold
             return tiles
         if kept is not None:
             raise BrdfInputError(
-                f"{output}: the unfinished fit there is of another capture or other options; run without resume"
+                f"{output}: the unfinished fit there is of another capture, other photographs or other options;"
+                " fit afresh, without ",
+                Argument("resume"),
             )
     shutil.rmtree(tiles, ignore_errors=True)
     tiles.mkdir(parents=True)

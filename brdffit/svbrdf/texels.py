@@ -11,9 +11,11 @@ normal map the directions are taken to the texel's own frame: its tangent-space 
 tangent ``t`` the plane's ``x`` made perpendicular to ``n``, ``b = n × t``; ``cos θi`` is then ``wi · n``.
 
 A sample is dropped, not fitted, where the photograph is saturated (any channel at or above the capture's
-``saturation``), where its value is not finite (a rectified photograph outside the camera's view), where the light
-or the camera lies at or below the texel's own horizon (a normal map), and everywhere in a texel the mask leaves
-out. Negative values (noise below a camera's black level) are read as 0.
+``saturation``, in the image file's own values: a 16-bit image's integers; a 16-bit image's 65,535 always), where its
+value is not finite (a rectified photograph outside the camera's view), where the light or the camera lies at or below
+the texel's own horizon (a normal map), and everywhere in a texel the mask leaves out. Negative values (noise below a
+camera's black level) are read as 0; with the relative loss, which divides by the value, a sample with a channel at 0
+is dropped.
 """
 
 from dataclasses import dataclass
@@ -24,7 +26,7 @@ from scipy.ndimage import map_coordinates
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from .capture import Capture
-from .images import read_image
+from .images import SIXTEEN_BITS, is_sixteen_bit, read_image, read_mask
 
 #: The smallest cosine of a light's or camera's angle to a texel's normal that is a sample (an 89.9° grazing angle):
 #: below it the cosine's rounding, not the light, decides the value.
@@ -71,7 +73,10 @@ def read_photographs(capture: Capture) -> Photographs:
         image = read_image(shot.file, capture.scale)
         image = image[..., None] if image.ndim == 2 else image
         if image.shape[-1] != n_channels:
-            raise BrdfInputError(f"{shot.file}: {image.shape[-1]} channels; the capture has {n_channels}")
+            hint = ' (a light\'s "intensity": [1.0] makes a capture of one channel)' if image.shape[-1] == 1 else ""
+            raise BrdfInputError(
+                f"{shot.file}: {_channels(image.shape[-1])}; the capture has {_channels(n_channels)}{hint}"
+            )
         if shot.matrix is None:
             if image.shape[:2] != capture.shape:
                 raise BrdfInputError(
@@ -81,10 +86,25 @@ def read_photographs(capture: Capture) -> Photographs:
             flat = image.reshape(-1, n_channels)
         else:
             flat = rectified(image, shot.matrix, centres)
-        if capture.saturation is not None:
-            flat = np.where(np.any(flat >= capture.saturation, axis=-1, keepdims=True), np.nan, flat)
+        saturated = _saturation(capture, shot.file)
+        if saturated is not None:
+            flat = np.where(np.any(flat >= saturated, axis=-1, keepdims=True), np.nan, flat)
         radiance[index] = np.maximum(flat, 0.0)  # NaN stays NaN: np.maximum propagates it
     return Photographs(capture, radiance, _mask(capture), _normals(capture))
+
+
+def _channels(count: int) -> str:
+    return f"{count} channel" + ("" if count == 1 else "s")
+
+
+def _saturation(capture: Capture, file) -> float | None:
+    """The value at or above which a pixel of ``file`` (as read, scaled) is saturated: the capture's
+    ``saturation``, given in the file's own values (a 16-bit image's integers), else for a 16-bit image its largest
+    value, 65,535 (a clipped pixel); None for a float image without one."""
+    if not is_sixteen_bit(file):
+        return capture.saturation
+    stored = SIXTEEN_BITS if capture.saturation is None else capture.saturation
+    return stored * capture.scale / SIXTEEN_BITS
 
 
 def rectified(image: np.ndarray, matrix: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -105,13 +125,13 @@ def rectified(image: np.ndarray, matrix: np.ndarray, centres: np.ndarray) -> np.
 def _mask(capture: Capture) -> np.ndarray:
     if capture.mask is None:
         return np.ones(capture.n_texels, dtype=bool)
-    mask = read_image(capture.mask)
-    mask = mask if mask.ndim == 2 else np.any(mask != 0, axis=-1)
+    mask = read_mask(capture.mask)
     if mask.shape != capture.shape:
         raise BrdfInputError(
-            f"{capture.mask}: {mask.shape[0]} × {mask.shape[1]} pixels; the capture has {capture.shape}"
+            f"{capture.mask}: {mask.shape[0]} × {mask.shape[1]} pixels; the capture has {capture.shape[0]} ×"
+            f" {capture.shape[1]} texels"
         )
-    return (mask != 0).ravel()
+    return mask.ravel()
 
 
 def _normals(capture: Capture) -> np.ndarray | None:
@@ -131,8 +151,10 @@ def _normals(capture: Capture) -> np.ndarray | None:
     return normals / length[:, None]
 
 
-def texel_samples(photographs: Photographs, texels: np.ndarray) -> TexelSamples:
-    """The samples of ``texels`` (flat indices) of ``photographs`` (module docstring)."""
+def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool = False) -> TexelSamples:
+    """The samples of ``texels`` (flat indices) of ``photographs`` (module docstring); ``positive``: a sample with a
+    channel at or below 0 dropped too (a relative residual divides by the value: a pixel clipped to 0 by noise below
+    a camera's black level would outweigh every other sample)."""
     capture = photographs.capture
     centres = capture.texel_centres()[texels]
     lights = np.stack([shot.light_mm for shot in capture.shots])  # (K, 3)
@@ -150,7 +172,7 @@ def texel_samples(photographs: Photographs, texels: np.ndarray) -> TexelSamples:
     with np.errstate(invalid="ignore", divide="ignore"):
         values = radiance * (squared / np.maximum(cos_i, MIN_COSINE))[..., None] / intensity[None, :, :]
     kept = (
-        np.all(np.isfinite(values), axis=-1)
+        np.all(np.isfinite(values) & ((values > 0) if positive else True), axis=-1)
         & (cos_i >= MIN_COSINE)
         & (wo[..., 2] >= MIN_COSINE)
         & photographs.mask[texels][:, None]

@@ -103,3 +103,26 @@ def test_bad_input_is_one_line_and_writes_nothing(capture, tmp_path, capsys):
     one_line_error(status, err, "-o x.jpg: write .exr, .png, .npy")
     status, _, err = run(["synth", "capture", tmp_path / "c", "--texels", "8"], capsys)
     one_line_error(status, err, "--texels 8: give ROWS,COLUMNS")
+
+
+def test_render_never_replaces_a_maps_file_and_takes_maps_json(capture, tmp_path, capsys):
+    maps = tmp_path / "maps"
+    assert run(["-q", "svbrdf", "fit", capture, "-o", maps], capsys)[0] == 0
+    texture = maps / "textures" / "alpha.exr"
+    before = texture.read_bytes()
+    status, _, err = run(["svbrdf", "render", maps, "--light", "0,0,300", "--camera", "0,0,400", "-o", texture], capsys)
+    one_line_error(status, err, "is the input")
+    assert texture.read_bytes() == before
+    status, _, err = run(
+        ["svbrdf", "render", maps / "maps.json", "--light", "0,0,300", "--camera", "0,0,400", "-o", tmp_path / "r.npy"],
+        capsys,
+    )
+    assert status == 0, err
+    argv = ["svbrdf", "render", maps, "--light", "0,0,300", "--camera", "0,0,400", "--exposure", "2"]
+    status, _, err = run([*argv, "-o", tmp_path / "r.exr"], capsys)
+    one_line_error(status, err, "--exposure exposes a .png; .exr holds the radiance itself")
+
+
+def test_synth_capture_refuses_a_folder_that_is_not_empty(capture, capsys):
+    status, _, err = run(["synth", "capture", capture, "--texels", "2,2", "--images", "2"], capsys)
+    one_line_error(status, err, "is not empty; give a new or empty folder")

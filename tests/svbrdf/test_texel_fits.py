@@ -118,7 +118,9 @@ def test_resuming_another_fit_is_refused(ward_capture, tmp_path, monkeypatch):
     tiles = tmp_path / "maps" / ".tiles"
     tiles.mkdir(parents=True)
     (tiles / "key.json").write_text(json.dumps({"capture": "another"}))
-    with pytest.raises(BrdfInputError, match="of another capture or other options; run without resume"):
+    with pytest.raises(
+        BrdfInputError, match="of another capture, other photographs or other options; fit afresh, without resume"
+    ):
         svbrdf.fit(folder, "ward", output=tmp_path / "maps", resume=True, progress=False)
 
 

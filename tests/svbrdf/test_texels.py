@@ -137,5 +137,5 @@ def test_sixteen_bit_images_are_read_with_the_captures_scale(tmp_path, suffix):
     from PIL import Image
 
     Image.fromarray(np.zeros((2, 2, 3), dtype=np.uint8)).save(tmp_path / f"eight{suffix}")
-    with pytest.raises(BrdfInputError, match="8-bit image; a capture's PNG and TIFF images must be 16-bit"):
+    with pytest.raises(BrdfInputError, match="an image of 8 bits; a capture's PNG and TIFF images must be 16-bit"):
         read_image(tmp_path / f"eight{suffix}")
