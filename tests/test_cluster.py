@@ -139,3 +139,16 @@ def test_the_command_line_spreads_a_library_over_local_workers(materials, tmp_pa
     assert not (tmp_path / "one.json").exists()
     status = main(["fit", str(paths[0]), "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "nowhere.json")])
     assert status == 2 and "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there" in capsys.readouterr().err
+
+
+def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_path):
+    """``brdffit.svbrdf.fit(…, client=)``: each tile's texels fitted by the workers, the maps the same as here."""
+    import brdffit.svbrdf as svbrdf
+    from brdffit.data_synth.capture import synth_capture
+
+    synth_capture(tmp_path / "capture", "ward", shape=(6, 6), n_images=16, noise=0.01, seed=1)
+    here = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16)
+    there = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16, client=client)
+    for name in here.params:
+        np.testing.assert_allclose(there.params[name], here.params[name], rtol=SAME, atol=0)
+    np.testing.assert_array_equal(there.fit["converged"], here.fit["converged"])

@@ -6,6 +6,7 @@ folder (``params.npz``, ``maps.json``, ``textures/``; ``svbrdf/maps.py``). ``svb
 """
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -15,6 +16,7 @@ from . import EXIT_NOT_CONVERGED, EXIT_OK
 from .arguments import (
     add_holding_options,
     add_model_options,
+    cluster_client,
     holding_arguments,
     model_files,
     model_options,
@@ -69,6 +71,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="continue an interrupted fit into the same -o folder: the tiles it finished are kept",
     )
     fit.add_argument("--no-textures", action="store_true", help="write params.npz and maps.json alone")
+    spread = fit.add_argument_group("cluster (pip install 'brdffit[cluster]')").add_mutually_exclusive_group()
+    spread.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="fit each tile's texels on the Dask cluster whose scheduler is at ADDRESS",
+    )
+    spread.add_argument(
+        "--workers", type=int, metavar="N", help="fit each tile's texels on a local Dask cluster of N worker processes"
+    )
     fit.add_argument("-o", "--output", required=True, metavar="MAPS", help="folder to write the maps into")
     fit.set_defaults(action=_fit)
     render = actions.add_parser(
@@ -131,23 +142,31 @@ def _fit(args: argparse.Namespace) -> int:
     output = _output_folder(args.output)
     capture = read_capture(args.capture)
     held = holding_arguments(args)
-    maps = fit(
-        capture,
-        args.model,
-        args.loss,
-        output=output,
-        resume=args.resume,
-        progress=False if args.quiet else None,
-        threads=args.threads,
-        n_starts=args.starts,
-        max_steps=args.max_steps,
-        seed=args.seed,
-        uncertainty=args.uncertainty,
-        textures=not args.no_textures,
-        fixed=held["fixed"],
-        bounds=held["bounds"],
-        **options,
-    )
+    for option, value in (("--workers", args.workers), ("--threads", args.threads)):
+        if value is not None and value < 1:
+            raise BrdfInputError(f"{option} must be 1 or more, got {value}")
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.scheduler or args.workers:
+            client = stack.enter_context(cluster_client(args.scheduler, args.workers))
+        maps = fit(
+            capture,
+            args.model,
+            args.loss,
+            output=output,
+            resume=args.resume,
+            progress=False if args.quiet else None,
+            threads=args.threads,
+            n_starts=args.starts,
+            max_steps=args.max_steps,
+            seed=args.seed,
+            uncertainty=args.uncertainty,
+            textures=not args.no_textures,
+            fixed=held["fixed"],
+            bounds=held["bounds"],
+            client=client,
+            **options,
+        )
     summary = maps.summary()
     rows, columns = maps.shape
     median = summary["median_rmse"]

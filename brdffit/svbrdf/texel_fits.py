@@ -33,7 +33,7 @@ from .._progress import progress_bar
 from .._version import __version__
 from ..checks import choice, whole_number
 from ..errors import Argument, BrdfInputError, FitWarning, UncertaintyWarning, warn
-from ..fitting.many.cluster import fit_here
+from ..fitting.many.cluster import fit_here, fit_on_cluster
 from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
 from ..fitting.options import holding_of, solving_of
 from ..fitting.single.result import FitResult
@@ -79,13 +79,16 @@ def fit_capture(
     uncertainty: str | None = None,
     textures: bool = True,
     tile_texels: int = TILE_TEXELS,
+    client=None,
     **model_options: Any,
 ) -> Maps:
     """Fit ``model`` to every texel of ``capture`` (a capture folder, its ``capture.json``, or a read
     :class:`~brdffit.svbrdf.capture.Capture`) and return the :class:`~brdffit.svbrdf.maps.Maps`, written to
     ``output`` (a folder) where one is given (module docstring). The options are those of :func:`brdffit.fit`;
     ``uncertainty="laplace"`` adds a standard-error map per parameter; ``textures``: write the ``textures/`` images
-    too; ``progress``: a bar over the texels on stderr (default: when stderr is a terminal)."""
+    too; ``progress``: a bar over the texels on stderr (default: when stderr is a terminal); ``client``: a
+    ``dask.distributed.Client`` whose workers fit each tile's texels (this process reads the photographs and writes
+    the maps; the results are this process's, ``fitting/many/cluster.py``)."""
     capture = capture if isinstance(capture, Capture) else read_capture(capture)
     if uncertainty is not None:
         choice("uncertainty", uncertainty, UNCERTAINTIES)
@@ -104,7 +107,15 @@ def fit_capture(
     notes = _scale_notes(photographs, loss)
     then = None if uncertainty is None else partial(with_uncertainty, method=uncertainty)
     fit_tile = partial(
-        _fit_tile, model=built, loss=loss, least=least, then=then, threads=threads, solving=solving, holding=holding
+        _fit_tile,
+        model=built,
+        loss=loss,
+        least=least,
+        then=then,
+        client=client,
+        threads=threads,
+        solving=solving,
+        holding=holding,
     )
     starts = range(0, capture.n_texels, tile_texels)
     bar = progress_bar(capture.n_texels, "texel", progress)
@@ -155,6 +166,7 @@ def _fit_tile(
     least: int,
     then: Callable | None,
     starts: list[dict[str, Any]] | None = None,
+    client=None,
     **options,
 ) -> dict[str, Any]:  # arrays; Any: savez's stubs take allow_pickle among its keywords
     """The flat arrays (one row per texel of ``run``) of its texels' fits: every parameter, its standard error
@@ -170,7 +182,12 @@ def _fit_tile(
     with warnings.catch_warnings():  # a texel's caveats are counted (n_caveats) and summed up once (_caveats)
         warnings.simplefilter("ignore", FitWarning)
         warnings.simplefilter("ignore", UncertaintyWarning)
-        results = fit_here(datasets, model, loss, then=then, progress=False, **options) if datasets else []
+        if not datasets:
+            results = []
+        elif client is not None:
+            results = fit_on_cluster(client, datasets, model, loss, then=then, progress=False, **options)
+        else:
+            results = fit_here(datasets, model, loss, then=then, progress=False, **options)
     tile: dict[str, np.ndarray] = {
         "n_samples": counts.astype(np.int32),
         "n_caveats": np.zeros(len(counts), dtype=np.int32),
