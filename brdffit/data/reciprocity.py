@@ -109,9 +109,9 @@ _pairing: dict[tuple, threading.Event] = {}  # the geometries being paired now, 
 
 
 def reciprocity(samples: Samples) -> Reciprocity | None:
-    """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs: at once for fewer than
-    twice as many samples, each pair being two samples, as a capture's texel is)."""
-    if samples.n_samples < 2 * MIN_PAIRS:
+    """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs: at once where fewer
+    samples than that have ``θi < θo``, each pair's first, as a capture's texel seen from above has)."""
+    if np.count_nonzero(samples.wi[:, 2] > samples.wo[:, 2]) < MIN_PAIRS:
         return None
     provenance = samples.provenance
     in_force = provenance.quantity if provenance is not None else "brdf"

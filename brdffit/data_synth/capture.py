@@ -23,13 +23,14 @@ from typing import Any
 
 import numpy as np
 
-from brdffit._files import write_text_atomic
+from brdffit._files import atomic_path, write_text_atomic
 from brdffit.errors import BrdfInputError
 from brdffit.physics.models.registry import model_for
 from brdffit.svbrdf.capture import CAPTURE_FILE, VERSION, texel_centres
 from brdffit.svbrdf.images import write_exr
 from brdffit.svbrdf.maps import flat_params
 from brdffit.svbrdf.relight import stacked_params, texel_brdf
+from brdffit.svbrdf.texels import point_light
 
 #: Two materials per model that a capture's maps blend, where the user gives none.
 MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
@@ -160,13 +161,10 @@ def write_capture(
     folder.mkdir(parents=True, exist_ok=True)
     centres = texel_centres(size_mm, size_mm, shape)
     camera = np.asarray(camera_mm, dtype=float)
-    wo = (camera - centres) / np.linalg.norm(camera - centres, axis=-1, keepdims=True)
     rng = np.random.default_rng(seed)
     images = []
     for index, light in enumerate(np.asarray(lights_mm, dtype=float)):
-        to_light = light - centres
-        squared = np.sum(to_light**2, axis=-1)
-        wi = to_light / np.sqrt(squared)[:, None]
+        wi, wo, squared = (array[:, 0] for array in point_light(centres, light[None], camera[None]))
         radiance = np.asarray(brdf(wi, wo)) * (wi[:, 2] / squared)[:, None]
         radiance *= 1.0 + noise * rng.standard_normal(radiance.shape)
         image = np.maximum(radiance, 0.0).reshape(*shape, -1).astype(np.float32)
@@ -227,6 +225,6 @@ def synth_capture(
         seed=seed,
         image_format=image_format,
     )
-    with open(folder / "truth.npz", "wb") as stream:
+    with atomic_path(folder / "truth.npz") as temporary, open(temporary, "wb") as stream:
         np.savez(stream, **maps)
     return maps

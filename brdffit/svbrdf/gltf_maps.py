@@ -61,6 +61,8 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
         )
     if len(maps.channels) != 3:
         raise BrdfInputError(f"glTF's textures are RGB; these maps have {len(maps.channels)} channel(s)")
+    if not maps.fitted.any():
+        raise BrdfInputError("no texel was fitted: there is no material to export")
     for parameter, held in NOT_EXPORTED.items():
         values = maps.params.get(parameter)
         if values is not None and not (held is not None and np.all(values[maps.fitted] == held)):

@@ -116,13 +116,16 @@ def _sixteen_bit(path: Path) -> np.ndarray:
             array = tifffile.imread(path)
         except (ValueError, tifffile.TiffFileError) as error:
             raise BrdfInputError(f"{path}: not a TIFF image ({error})") from None
-        depth = array.dtype.itemsize * 8 if array.dtype.kind == "u" else array.dtype.str
+        depth = array.dtype.itemsize * 8 if array.dtype.kind == "u" else f"{array.dtype.name}"
         image = np.asarray(array, dtype=float)
         image = image[..., :3] if image.ndim == 3 and image.shape[-1] >= 3 else image
     if depth != 16:
         raise BrdfInputError(
             f"{path}: an image of {depth} bits; a capture's PNG and TIFF images must be 16-bit integers (linear"
             " values), or use .exr or .npy"
+            if isinstance(depth, int)
+            else f"{path}: an image of {depth} values; a capture's TIFF images must be 16-bit integers, or use .exr or"
+            " .npy"
         )
     return image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image
 

@@ -6,10 +6,11 @@ A maps folder holds:
   a parameter shared by the channels and (H, W, C) for one per channel; ``cost`` and ``rmse`` (H, W; the fit's, as a
   result file's), ``converged`` (H, W, bool), ``n_samples`` (H, W: the samples each texel's fit used; 0 where it was not
   fitted), ``n_caveats`` (H, W: how many caveats its fit and its uncertainty have, as a result's warnings) and, with
-  ``uncertainty="laplace"``, ``<parameter>_stderr`` for each parameter (the Laplace standard error, same shape). A texel
-  that was not fitted (masked out, or with fewer samples than its model has parameters) holds NaN;
-* ``maps.json``: what the arrays are: the model and its options, the loss, the channels, the texel grid and the
-  plane's size, the capture they came from, and counts (texels fitted, converged; the rmse's median);
+  ``uncertainty="laplace"``, ``<parameter>_stderr`` for each parameter (the Laplace standard error, same shape), and
+  ``normal`` (H, W, 3), the capture's normal map, where it had one. A texel that was not fitted (masked out, or with
+  fewer samples than its model has parameters) holds NaN; * ``maps.json``: what the arrays are: the model and its
+  options, the loss, the channels, the texel grid and the plane's size, the capture they came from, and counts (texels
+  fitted, converged; the rmse's median);
 * ``material.glb``, for the maps of a ``gltf`` fit: a quad the size of the sample with the maps as its material's
   textures (``gltf_maps.py``), which ``maps.json``'s ``glb`` describes (its notes, the 8-bit textures' rounding, or
   why it was not written);
@@ -34,6 +35,8 @@ PARAMS_FILE = "params.npz"
 MAPS_FILE = "maps.json"
 TEXTURES = "textures"
 GLB_FILE = "material.glb"
+#: The capture's normal map in ``params.npz``, where it had one.
+NORMALS = "normal"
 VERSION = 1
 #: The per-texel arrays beside the parameters.
 FIT_ARRAYS = ("cost", "rmse", "converged", "n_samples", "n_caveats")
@@ -50,8 +53,9 @@ class Maps:
     ``loss``, ``channels``; the plane's ``width_mm`` and ``height_mm``; ``capture``: the capture file's path;
     ``caveat_examples``: the caveats of the first texel that has any (``n_caveats`` counts every texel's);
     ``neighbour_starts``: how many texels were fitted again from a neighbour's parameters, and how many ended lower
-    (``texel_fits._neighbour_starts``); ``notes``: what a user must know of the fit as a whole (the capture's values
-    far below the relative loss's floor)."""
+    (``neighbours.py``); ``notes``: what a user must know of the fit as a whole (the capture's values far below the
+    relative loss's floor); ``normals``: the capture's normal map (H, W, 3), where it had one, which relighting
+    needs."""
 
     model: str
     model_options: dict[str, Any]
@@ -66,6 +70,7 @@ class Maps:
     caveat_examples: list[str] = field(default_factory=list)
     neighbour_starts: dict[str, int] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    normals: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -99,8 +104,14 @@ class Maps:
             "n_texels": int(fitted.size),
             "fitted": int(fitted.sum()),
             "converged": int(np.sum(self.fit["converged"] & fitted)),
-            "median_rmse": float(np.median(self.fit["rmse"][fitted])) if fitted.any() else None,
+            "median_rmse": _median(self.fit["rmse"][fitted]),
         }
+
+
+def _median(values: np.ndarray) -> float | None:
+    """The median of the finite ``values``; None where there is none (JSON has no NaN)."""
+    finite = values[np.isfinite(values)]
+    return float(np.median(finite)) if finite.size else None
 
 
 def flat_params(params: dict[str, Any]) -> dict[str, Any]:
@@ -141,6 +152,8 @@ def write_maps(
     folder.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, Any] = dict(maps.params) | dict(maps.fit)  # Any: savez's stubs take allow_pickle among them
     arrays |= {f"{name}{STDERR_SUFFIX}": array for name, array in maps.stderr.items()}
+    if maps.normals is not None:
+        arrays[NORMALS] = maps.normals
     params_path = folder / PARAMS_FILE
     with atomic_path(params_path) as temporary, open(temporary, "wb") as stream:
         np.savez_compressed(stream, **arrays)
@@ -184,11 +197,23 @@ def write_maps(
 
 
 def _remove_stale(folder: Path, written: list[Path]) -> None:
-    """A previous fit's files in ``folder`` that this one does not write again: its textures (another model's
-    parameters) and its ``material.glb`` and ``mitsuba/`` (another model's exports), so the folder holds one fit."""
+    """The files of the fit whose ``maps.json`` ``folder`` holds (its textures, ``material.glb``, ``mitsuba/``) that
+    this fit does not write again (another model's parameters and exports): the folder then holds one fit. Only
+    files that ``maps.json`` names go, never anything else in the folder."""
+    try:
+        earlier = parse_json(read_json_text(folder / MAPS_FILE))
+    except (OSError, ValueError):
+        return
+    if not isinstance(earlier, dict):
+        return
+    names = [name for name in earlier.get("parameters") or [] if isinstance(name, str)]
+    stale = [folder / TEXTURES / f"{name}{suffix}" for name in names for suffix in (".exr", ".png")]
+    glb, mitsuba = earlier.get("glb") or {}, earlier.get("mitsuba") or {}
+    if isinstance(glb, dict) and glb.get("file") == GLB_FILE:
+        stale.append(folder / GLB_FILE)
+    if isinstance(mitsuba, dict) and mitsuba.get("folder") == "mitsuba":
+        stale += [folder / "mitsuba" / Path(str(name)).name for name in mitsuba.get("files") or []]
     kept = {path.resolve() for path in written}
-    stale = [path for path in (folder / TEXTURES).glob("*") if path.suffix in (".exr", ".png")]
-    stale += [folder / GLB_FILE, *(folder / "mitsuba").glob("*.xml"), *(folder / "mitsuba").glob("*.exr")]
     for path in stale:
         if path.is_file() and path.resolve() not in kept:
             path.unlink()
@@ -236,4 +261,5 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         list(description.get("caveat_examples", [])),
         dict(description.get("neighbour_starts") or {}),
         list(description.get("notes") or []),
+        loaded.get(NORMALS),
     )

@@ -15,9 +15,11 @@ others): ``roughplastic``'s ``alpha``, ``principled``'s ``specular``. Maps where
 * ``scene.xml``: the sample (a ``rectangle`` the plane's size, in mm, its texture coordinates turned so that
   texel (0, 0) is the top left seen from +z), lit by a point light and seen by a perspective camera looking straight
   down at its centre, whose field of view is the sample's width: its image is the capture's rectified image for a
-  camera above the sample's centre. The light's position and intensity, the camera's height and the samples per
-  pixel are the scene's parameters (``mitsuba.load_file(path, light_x=…, light_y=…, light_z=…, intensity=…,
-  camera_z=…, spp=…)``), by default the capture's first photograph's.
+  camera above the sample's centre (texels must be square: the film's pixels are). The light's position and
+  intensity (``"r, g, b"``), the camera's height and the samples per pixel are the scene's parameters
+  (``mitsuba.load_file(path, light_x=…, light_y=…, light_z=…, intensity=…, camera_z=…, spp=…)``), by default the
+  capture's first photograph's light and its camera's height (not its x and y: the scene's camera is above the
+  centre).
 """
 
 import os
@@ -94,8 +96,8 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
 
 def write_mitsuba_maps(folder: str | os.PathLike, maps: Maps, light_mm, intensity, camera_mm) -> dict[str, Any]:
     """``MAPS/mitsuba/`` (module docstring) for ``maps`` written into ``folder``, the scene's defaults those of a
-    light at ``light_mm`` of ``intensity`` (one number) and a camera at ``camera_mm``; what ``maps.json`` says of it
-    (the files), or why nothing was written."""
+    light at ``light_mm`` of ``intensity`` (per channel: one, or r, g, b) and a camera at the height of
+    ``camera_mm``; what ``maps.json`` says of it (the files), or why nothing was written."""
     try:
         bsdf, textured = mitsuba_bsdf_of_maps(maps)
     except BrdfInputError as error:
@@ -142,6 +144,16 @@ def _bsdf_xml(node: dict[str, Any], indent: str, version: str | None = None, id_
     return [*lines, f"{indent}</bsdf>"]
 
 
+def _rgb_text(intensity) -> str:
+    """A light's intensity (one number, or one per channel) as Mitsuba's ``rgb`` value: ``r, g, b``."""
+    values = (
+        np.broadcast_to(np.asarray(intensity, dtype=float).ravel()[:3], (3,))
+        if np.size(intensity) in (1, 3)
+        else [float(np.max(intensity))] * 3
+    )
+    return ", ".join(repr(float(value)) for value in values)
+
+
 def _scene_xml(maps: Maps, light_mm, intensity, camera_mm) -> str:
     """The scene of the module docstring, its defaults the given light and camera."""
     light = [float(value) for value in light_mm]
@@ -153,7 +165,7 @@ def _scene_xml(maps: Maps, light_mm, intensity, camera_mm) -> str:
     <default name="light_x" value="{light[0]!r}"/>
     <default name="light_y" value="{light[1]!r}"/>
     <default name="light_z" value="{light[2]!r}"/>
-    <default name="intensity" value="{float(intensity)!r}"/>
+    <default name="intensity" value="{_rgb_text(intensity)}"/>
     <default name="camera_z" value="{height!r}"/>
     <default name="spp" value="64"/>
     <integrator type="direct"/>

@@ -1,9 +1,9 @@
 """The photograph fitted maps predict: the rectified image of the sample under a new point light and camera.
 
-Texel by texel (``texels.py``'s geometry, in reverse): ``L = f(wi, wo) · I · cos θi / |l − p|²``, with ``f`` the
-texel's fitted BRDF (``maps.py``), ``I`` the light's radiant intensity, ``l`` its position and ``p`` the texel's
-centre (mm); NaN where a texel was not fitted. So a photograph held back from a fit can be set beside the image
-its maps predict for the same light and camera.
+Texel by texel (``texels.py``'s geometry, in reverse, in each texel's frame where the capture had a normal map): ``L =
+f(wi, wo) · I · cos θi / |l − p|²``, with ``f`` the texel's fitted BRDF (``maps.py``), ``I`` the light's radiant
+intensity, ``l`` its position and ``p`` the texel's centre (mm); NaN where a texel was not fitted. So a photograph held
+back from a fit can be set beside the image its maps predict for the same light and camera.
 """
 
 import functools
@@ -19,7 +19,7 @@ from ..physics.models.params import Params
 from ..physics.models.registry import get_model
 from .capture import texel_centres
 from .maps import Maps, nested_params, read_maps
-from .texels import MIN_COSINE
+from .texels import MIN_COSINE, point_light
 
 #: Texels evaluated in one call of the compiled, vmapped BRDF.
 CHUNK = 65536
@@ -42,10 +42,8 @@ def relight(maps: "Maps | str | os.PathLike", light_mm, camera_mm, intensity=1.0
     if not np.all(np.isfinite(intensity) & (intensity > 0)):
         raise BrdfInputError(f"intensity: {intensity.tolist()}: every value must be > 0")
     centres = texel_centres(maps.width_mm, maps.height_mm, maps.shape)
-    to_light = light[None, :] - centres
-    squared = np.sum(to_light**2, axis=-1)
-    wi = to_light / np.sqrt(squared)[:, None]
-    wo = (camera[None, :] - centres) / np.linalg.norm(camera[None, :] - centres, axis=-1, keepdims=True)
+    normals = None if maps.normals is None else maps.normals.reshape(-1, 3)
+    wi, wo, squared = (array[:, 0] for array in point_light(centres, light[None], camera[None], normals))
     values = np.full((centres.shape[0], n_channels), np.nan)
     fitted = np.flatnonzero(maps.fitted.ravel())
     model = get_model(maps.model, **maps.model_options)

@@ -8,9 +8,10 @@ The page shows:
 * each parameter's map: a colour (``rho_d``, ``base_color``, …) as the sRGB image of its values, any other parameter
   on a colour scale with its bar, per channel where it has one value per channel;
 * the cost map (log scale), the texels that did not converge and those with caveats;
-* for photographs (``held_back``: a capture whose photographs the fit did not see, or else a few of the fitted
-  capture's own, which says so): the photograph, the image the maps predict for its light and camera
-  (``relight.py``), both at one exposure (the photograph's 99th percentile to white), and their relative difference.
+* for photographs (``held_back``: a capture of the same plane and channels whose photographs the fit did not see, or
+  else a few of the fitted capture's own, which says so): the photograph, the image the maps predict for its light
+  and camera (``relight.py``), both at one exposure (the photograph's 99th percentile to white), and their relative
+  difference in each texel's channel that differs most (NaN where the photograph is 0).
 """
 
 import datetime
@@ -52,8 +53,14 @@ def maps_report(
         capture = read_capture(maps.capture)
     elif not own:
         capture = held_back if isinstance(held_back, Capture) else read_capture(held_back)  # type: ignore[arg-type]
-        if capture.shape != maps.shape:
-            raise BrdfInputError(f"{capture.file}: {capture.shape} texels; the maps have {maps.shape}")
+        mine = (capture.shape, capture.width_mm, capture.height_mm, capture.channels)
+        theirs = (maps.shape, maps.width_mm, maps.height_mm, maps.channels)
+        if mine != theirs:
+            raise BrdfInputError(
+                f"{capture.file}: its plane ({capture.shape[0]} × {capture.shape[1]} texels of {capture.width_mm:g} ×"
+                f" {capture.height_mm:g} mm, channels {', '.join(capture.channels)}) is not the maps' ({maps.shape[0]}"
+                f" × {maps.shape[1]} of {maps.width_mm:g} × {maps.height_mm:g} mm, {', '.join(maps.channels)})"
+            )
     title = html.escape(f"{maps.model} maps of {maps.capture or 'a capture'}")
     parts = [
         "<!DOCTYPE html>",
@@ -180,8 +187,13 @@ def _relit_figures(maps: Maps, capture: Capture | None, own: bool) -> list[str]:
         predicted = relight(maps, shot.light_mm, shot.camera_mm, shot.intensity)
         finite = photograph[np.isfinite(photograph)]
         exposure = 1.0 / max(float(np.percentile(finite, 99)), 1e-300) if finite.size else 1.0
-        with np.errstate(invalid="ignore", divide="ignore"):
-            difference = np.nanmean((predicted - photograph) / photograph, axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):  # a photograph's 0 has no relative difference: NaN
+            relative = np.where(
+                photograph > 0, (predicted - photograph) / np.where(photograph > 0, photograph, 1), np.nan
+            )
+        # signed where the channels agree in sign, the largest in size: opposite channels' errors do not cancel
+        largest = np.nanargmax(np.nan_to_num(np.abs(relative), nan=-1.0), axis=-1)
+        difference = np.take_along_axis(relative, largest[..., None], axis=-1)[..., 0]
         figure, axes = plt.subplots(1, 3, figsize=(12, 3.6), layout="constrained")
         for axis, image, title in ((axes[0], photograph, "photograph"), (axes[1], predicted, "the maps relit")):
             axis.imshow(_shown(image * exposure), interpolation="nearest")
@@ -190,7 +202,7 @@ def _relit_figures(maps: Maps, capture: Capture | None, own: bool) -> list[str]:
         shown = axes[2].imshow(difference, cmap="RdBu_r", vmin=-limit, vmax=limit, interpolation="nearest")
         figure.colorbar(shown, ax=axes[2], shrink=0.8)
         median = float(np.nanmedian(np.abs(difference))) if np.isfinite(difference).any() else float("nan")
-        axes[2].set_title(f"relit / photograph − 1 (median |·| {median:.2%})")
+        axes[2].set_title(f"relit / photograph − 1, largest channel (median |·| {median:.2%})")
         for axis in axes:
             axis.set_axis_off()
         light = ", ".join(f"{value:g}" for value in shot.light_mm)

@@ -10,16 +10,13 @@ signal, and relative residuals of such noise share one scatter, which Laplace's 
 synthetic capture with 1% multiplicative noise (16 × 16 texels, 24 images, Ward) the 68% intervals of the relative
 loss covered 68–70% of the true parameters; the log loss's, whose residuals scale with the signal, 44–72%.
 
-With an ``output`` folder each finished tile is kept in ``output/.tiles/`` as it ends (atomically), and the maps
-are written only when every tile is done (``maps.py``): an interrupted fit leaves no maps, and ``resume=True``
-fits only the tiles that are not kept, provided they were fitted from the same capture file with the same
-options (``.tiles/key.json``); a fit without ``resume`` starts afresh.
+With an ``output`` folder each finished tile is kept as it ends (``tiles.py``), and the maps are written only when
+every tile is done (``maps.py``): an interrupted fit leaves no maps, and ``resume=True`` fits only the tiles that
+are not kept, provided they were fitted from the same capture and options. Then texels stuck in a local minimum are
+fitted again from a neighbour's parameters (``neighbours.py``).
 """
 
-import hashlib
-import json
 import os
-import shutil
 import warnings
 from collections.abc import Callable
 from functools import partial
@@ -28,11 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path, write_text_atomic
 from .._progress import progress_bar
-from .._version import __version__
 from ..checks import choice, whole_number
-from ..errors import Argument, BrdfInputError, FitWarning, UncertaintyWarning, warn
+from ..errors import BrdfInputError, FitWarning, UncertaintyWarning, warn
 from ..fitting.many.cluster import fit_here, fit_on_cluster
 from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
 from ..fitting.options import holding_of, solving_of
@@ -41,23 +36,15 @@ from ..physics.models.registry import get_model
 from ..uncertainty.methods import with_uncertainty
 from .capture import Capture, read_capture
 from .gltf_maps import write_glb
-from .maps import FIT_ARRAYS, Maps, flat_params, nested_params, write_maps
+from .maps import FIT_ARRAYS, Maps, flat_params, write_maps
 from .mitsuba_maps import TEXTURED, write_mitsuba_maps
+from .neighbours import neighbour_starts
 from .texels import TexelSamples, read_photographs, texel_samples
+from .tiles import TileStore
 
 #: Texels fitted at a time: a tile's samples (32 photographs: about 20 MB) and results are what grows with it.
 TILE_TEXELS = 4096
-#: The folder of finished tiles inside an output folder, and the file naming what they were fitted from.
-TILES = ".tiles"
-TILES_KEY = "key.json"
 UNCERTAINTIES = ("laplace",)
-#: A texel whose cost is above this many times a neighbour's is fitted again from the neighbour's parameters: a
-#: fit stuck in a local minimum ends far above (a principled texel of noise-free photographs: 0.01–0.09 against
-#: 4·10⁻¹⁴), while neighbours' costs at one noise level differ by tens of percent. At most this many passes.
-RESTART_ABOVE = 2.0
-NEIGHBOUR_PASSES = 3
-#: A refit from a neighbour's start replaces a fit when its cost is lower by more than this (relative).
-SAME_COST = 1e-9
 #: A tile's array of the caveats of its first texel that has any (not a map: left out of the maps).
 EXAMPLES = "caveat_examples"
 
@@ -98,16 +85,19 @@ def fit_capture(
     holding = holding_of(None, fixed=fixed, bounds=bounds)
     if resume and output is None:
         raise BrdfInputError("resume=True continues a fit written to an output folder: give output")
+    positive = get_loss(loss).name == "relative"  # a value of 0 has no relative residual
     if output is not None:
         _check_output(Path(output), capture)
     photographs = read_photographs(capture)  # every photograph checked before anything is written
-    tiles = None if output is None else _tile_folder(Path(output), capture, built, loss, solving, holding, resume)
+    how = {"model": built.name, "options": built.model_options, "loss": loss, "solving": solving, "holding": holding}
+    how |= {"uncertainty": uncertainty, "tile_texels": tile_texels}
+    store = TileStore(None if output is None else Path(output), capture, how, resume)
     least = built.physical.size(1) + 1  # a texel with fewer samples than one channel's parameters is not fitted
-    positive = get_loss(loss).name == "relative"  # a value of 0 has no relative residual
     notes = _scale_notes(photographs, loss)
     then = None if uncertainty is None else partial(with_uncertainty, method=uncertainty)
     fit_tile = partial(
         _fit_tile,
+        capture=capture,
         model=built,
         loss=loss,
         least=least,
@@ -117,30 +107,34 @@ def fit_capture(
         solving=solving,
         holding=holding,
     )
-    starts = range(0, capture.n_texels, tile_texels)
     bar = progress_bar(capture.n_texels, "texel", progress)
     columns: dict[str, np.ndarray] = {}
     examples: list[str] = []
     try:
-        for number, start in enumerate(starts):
+        for number, start in enumerate(range(0, capture.n_texels, tile_texels)):
             texels = np.arange(start, min(start + tile_texels, capture.n_texels))
-            kept = None if tiles is None else tiles / f"{number:06d}.npz"
-            if kept is not None and kept.exists():
-                with np.load(kept, allow_pickle=False) as stored:
-                    tile = {name: stored[name] for name in stored.files}
-            else:
-                tile = fit_tile(texel_samples(photographs, texels, positive), capture)
-                if kept is not None:
-                    with atomic_path(kept) as temporary, open(temporary, "wb") as stream:
-                        np.savez(stream, **tile)
+            tile = store.kept(number)
+            if tile is None:
+                tile = fit_tile(texel_samples(photographs, texels, positive))
+                store.keep(number, tile)
             examples += [str(text) for text in tile.pop(EXAMPLES)]
             _gather(columns, tile, capture.n_texels, texels)
             bar.update(len(texels))
     finally:
         bar.close()
-    retried = _neighbour_starts(columns, capture, photographs, fit_tile, positive)
-    maps = _maps(columns, capture, built, loss, examples)
-    maps.neighbour_starts, maps.notes = retried, notes
+    if not np.any(columns["n_samples"] > 0):
+        store.remove()
+        raise BrdfInputError(
+            f"{capture.file}: no texel has the {least} samples a {built.name} fit needs; nothing written"
+        )
+
+    def refit(texels: np.ndarray, starts: list[dict[str, Any]]) -> dict[str, Any]:
+        tile = fit_tile(texel_samples(photographs, texels, positive), starts=starts)
+        tile.pop(EXAMPLES)
+        return tile
+
+    retried = neighbour_starts(columns, capture, refit)
+    maps = _maps(columns, capture, built, loss, examples, retried, notes, photographs.normals)
     for note in notes:
         warn(FitWarning(note))
     caveats = maps.caveats()
@@ -151,16 +145,16 @@ def fit_capture(
         first = capture.shots[0]
         mitsuba = None
         if textures and maps.model in TEXTURED:
-            mitsuba = write_mitsuba_maps(output, maps, first.light_mm, float(np.max(first.intensity)), first.camera_mm)
+            mitsuba = write_mitsuba_maps(output, maps, first.light_mm, first.intensity, first.camera_mm)
         write_maps(output, maps, textures, glb, mitsuba)
-        shutil.rmtree(Path(output) / TILES, ignore_errors=True)
+        store.remove()
     return maps
 
 
 def _fit_tile(
     run: TexelSamples,
-    capture: Capture,
     *,
+    capture: Capture,
     model,
     loss: str,
     least: int,
@@ -189,7 +183,7 @@ def _fit_tile(
         else:
             results = fit_here(datasets, model, loss, then=then, progress=False, **options)
     tile: dict[str, np.ndarray] = {
-        "n_samples": counts.astype(np.int32),
+        "n_samples": np.where(counts >= least, counts, 0).astype(np.int32),  # 0: not fitted
         "n_caveats": np.zeros(len(counts), dtype=np.int32),
         "converged": np.zeros(len(counts), dtype=bool),
     }
@@ -235,42 +229,6 @@ def _scale_notes(photographs, loss: str) -> list[str]:
     ]
 
 
-def _neighbour_starts(
-    columns: dict[str, np.ndarray], capture: Capture, photographs, fit_tile: Callable, positive: bool
-) -> dict[str, int]:
-    """Each texel whose fit ended at more than :data:`RESTART_ABOVE` times the cost of one of its four neighbours'
-    fitted again from that neighbour's parameters (the one of lowest cost), kept where it ends lower; up to
-    :data:`NEIGHBOUR_PASSES` times, so that a good fit spreads across a patch of texels stuck in a local minimum.
-    Updates ``columns`` (the capture's flat arrays); returns how many fits were ``retried`` and ``improved``."""
-    rows, width = capture.shape
-    names = [name for name in columns if name not in FIT_ARRAYS and not name.endswith("_stderr")]
-    retried = improved = 0
-    for _ in range(NEIGHBOUR_PASSES):
-        cost = columns["cost"].reshape(rows, width)
-        finite = np.where(np.isfinite(cost), cost, np.inf)
-        padded = np.pad(finite, 1, constant_values=np.inf)
-        shifted = np.stack([padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]])
-        best = shifted.argmin(axis=0)
-        lowest = np.take_along_axis(shifted, best[None], axis=0)[0]
-        again = np.isfinite(cost) & (cost > RESTART_ABOVE * lowest)
-        if not again.any():
-            break
-        texels = np.flatnonzero(again.ravel())
-        offsets = np.array([-width, width, -1, 1])  # up, down, left, right, as ``shifted`` stacks them
-        sources = texels + offsets[best.ravel()[texels]]
-        starts = [nested_params({name: columns[name][source].tolist() for name in names}) for source in sources]
-        tile = fit_tile(texel_samples(photographs, texels, positive), capture, starts=starts)
-        tile.pop(EXAMPLES)
-        lower = tile["cost"] < columns["cost"][texels] * (1.0 - SAME_COST)
-        for name, values in tile.items():
-            if name in columns:
-                columns[name][texels[lower]] = values[lower]
-        retried, improved = retried + len(texels), improved + int(lower.sum())
-        if not lower.any():
-            break
-    return {"retried": retried, "improved": improved}
-
-
 def _texel_name(capture: Capture, texel) -> str:
     row, column = divmod(int(texel), capture.shape[1])
     return f"{capture.file} texel ({row}, {column})"
@@ -292,7 +250,16 @@ def _gather(columns: dict[str, np.ndarray], tile: dict[str, np.ndarray], n_texel
         columns[name][texels] = values
 
 
-def _maps(columns: dict[str, np.ndarray], capture: Capture, model, loss: str, examples: list[str]) -> Maps:
+def _maps(
+    columns: dict[str, np.ndarray],
+    capture: Capture,
+    model,
+    loss: str,
+    examples: list[str],
+    retried: dict[str, int],
+    notes: list[str],
+    normals: np.ndarray | None,
+) -> Maps:
     rows, width = capture.shape
     grid = {name: values.reshape(rows, width, *values.shape[1:]) for name, values in columns.items()}
     for name in ("cost", "rmse"):
@@ -311,13 +278,10 @@ def _maps(columns: dict[str, np.ndarray], capture: Capture, model, loss: str, ex
         str(capture.file.resolve()),
         stderr,
         examples,
+        retried,
+        notes,
+        None if normals is None else normals.reshape(rows, width, 3),
     )
-
-
-def _stamp(path: Path) -> tuple[int, int]:
-    """A file's size and modification time (ns): a photograph changed since a tile was fitted changes them."""
-    status = path.stat()
-    return status.st_size, status.st_mtime_ns
 
 
 def _check_output(output: Path, capture: Capture) -> None:
@@ -329,32 +293,3 @@ def _check_output(output: Path, capture: Capture) -> None:
         raise BrdfInputError(f"{output}: is the capture's folder; give another folder for the maps")
     if not output.resolve().parent.is_dir():
         raise BrdfInputError(f"{output}: folder {output.resolve().parent} does not exist")
-
-
-def _tile_folder(output: Path, capture: Capture, model, loss: str, solving, holding, resume: bool) -> Path:
-    """``output/.tiles``, ready: kept from an unfinished fit of the same capture and options with ``resume``,
-    else emptied."""
-    key = {
-        "capture": hashlib.sha256(capture.file.read_bytes()).hexdigest(),
-        "photographs": [[str(shot.file), *_stamp(shot.file)] for shot in capture.shots],
-        "fit": repr((model.name, sorted(model.model_options.items()), loss, solving, holding)),
-        "brdffit": __version__,
-    }
-    tiles = output / TILES
-    if resume:
-        try:
-            kept = json.loads((tiles / TILES_KEY).read_text())
-        except (OSError, ValueError):
-            kept = None
-        if kept == key:
-            return tiles
-        if kept is not None:
-            raise BrdfInputError(
-                f"{output}: the unfinished fit there is of another capture, other photographs or other options;"
-                " fit afresh, without ",
-                Argument("resume"),
-            )
-    shutil.rmtree(tiles, ignore_errors=True)
-    tiles.mkdir(parents=True)
-    write_text_atomic(tiles / TILES_KEY, json.dumps(key))
-    return tiles

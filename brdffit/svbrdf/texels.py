@@ -77,6 +77,9 @@ def read_photographs(capture: Capture) -> Photographs:
             raise BrdfInputError(
                 f"{shot.file}: {_channels(image.shape[-1])}; the capture has {_channels(n_channels)}{hint}"
             )
+        saturated = _saturation(capture, shot.file)
+        if saturated is not None:  # before rectifying: a clipped pixel then spoils every texel it is mixed into
+            image = np.where(np.any(image >= saturated, axis=-1, keepdims=True), np.nan, image)
         if shot.matrix is None:
             if image.shape[:2] != capture.shape:
                 raise BrdfInputError(
@@ -86,9 +89,6 @@ def read_photographs(capture: Capture) -> Photographs:
             flat = image.reshape(-1, n_channels)
         else:
             flat = rectified(image, shot.matrix, centres)
-        saturated = _saturation(capture, shot.file)
-        if saturated is not None:
-            flat = np.where(np.any(flat >= saturated, axis=-1, keepdims=True), np.nan, flat)
         radiance[index] = np.maximum(flat, 0.0)  # NaN stays NaN: np.maximum propagates it
     return Photographs(capture, radiance, _mask(capture), _normals(capture))
 
@@ -137,6 +137,11 @@ def _mask(capture: Capture) -> np.ndarray:
 def _normals(capture: Capture) -> np.ndarray | None:
     if capture.normal_map is None:
         return None
+    if is_sixteen_bit(capture.normal_map):
+        raise BrdfInputError(
+            f"{capture.normal_map}: a normal map holds the normals themselves (x, y, z, z > 0): give it as .exr or"
+            " .npy, not as an encoded 16-bit image"
+        )
     normals = read_image(capture.normal_map)
     if normals.shape != (*capture.shape, 3):
         raise BrdfInputError(
@@ -156,17 +161,11 @@ def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool =
     channel at or below 0 dropped too (a relative residual divides by the value: a pixel clipped to 0 by noise below
     a camera's black level would outweigh every other sample)."""
     capture = photographs.capture
-    centres = capture.texel_centres()[texels]
     lights = np.stack([shot.light_mm for shot in capture.shots])  # (K, 3)
     cameras = np.stack([shot.camera_mm for shot in capture.shots])
     intensity = np.stack([shot.intensity for shot in capture.shots])  # (K, C)
-    to_light = lights[None, :, :] - centres[:, None, :]  # (T, K, 3)
-    squared = np.sum(to_light**2, axis=-1)
-    wi = to_light / np.sqrt(squared)[..., None]
-    to_camera = cameras[None, :, :] - centres[:, None, :]
-    wo = to_camera / np.linalg.norm(to_camera, axis=-1, keepdims=True)
-    if photographs.normals is not None:
-        wi, wo = (_in_texel_frame(w, photographs.normals[texels]) for w in (wi, wo))
+    normals = None if photographs.normals is None else photographs.normals[texels]
+    wi, wo, squared = point_light(capture.texel_centres()[texels], lights, cameras, normals)
     radiance = np.asarray(photographs.radiance[:, texels, :], dtype=float).transpose(1, 0, 2)  # (T, K, C)
     cos_i = wi[..., 2]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -178,6 +177,23 @@ def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool =
         & photographs.mask[texels][:, None]
     )
     return TexelSamples(texels, wi, wo, np.where(kept[..., None], values, 0.0), kept)
+
+
+def point_light(
+    centres: np.ndarray, lights: np.ndarray, cameras: np.ndarray, normals: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The geometry of texels at ``centres`` (T, 3) mm lit by point lights at ``lights`` (K, 3) and seen from
+    ``cameras`` (K, 3): ``wi`` and ``wo`` (T, K, 3), in each texel's frame where ``normals`` (T, 3) are given
+    (module docstring), and the squared distance to each light (T, K), mm². One function for the capture's samples,
+    its relighting (``relight.py``) and its synthesis (``data_synth/capture.py``)."""
+    to_light = lights[None, :, :] - centres[:, None, :]
+    squared = np.sum(to_light**2, axis=-1)
+    wi = to_light / np.sqrt(squared)[..., None]
+    to_camera = cameras[None, :, :] - centres[:, None, :]
+    wo = to_camera / np.linalg.norm(to_camera, axis=-1, keepdims=True)
+    if normals is not None:
+        wi, wo = (_in_texel_frame(w, normals) for w in (wi, wo))
+    return wi, wo, squared
 
 
 def _in_texel_frame(w: np.ndarray, normals: np.ndarray) -> np.ndarray:

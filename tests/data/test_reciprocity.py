@@ -220,10 +220,15 @@ def test_a_few_samples_pair_as_a_k_d_tree_pairs_them(monkeypatch, general):
     assert few[2] == pytest.approx(tree[2], rel=1e-12)
 
 
-def test_fewer_samples_than_two_per_pair_say_nothing_at_once(monkeypatch):
-    """Under 2 × MIN_PAIRS samples (a capture's texel: 32) there cannot be MIN_PAIRS pairs: nothing is paired."""
+def test_fewer_firsts_than_pairs_say_nothing_at_once(monkeypatch):
+    """A pair's first sample has θi < θo: under MIN_PAIRS of those (a capture's texel seen from above: its camera
+    nearer the normal than almost every light) there cannot be MIN_PAIRS pairs, so nothing is paired."""
     from brdffit.data import reciprocity as module
 
     monkeypatch.setattr(module, "_pairs", lambda *args, **kwargs: pytest.fail("paired"))
-    wi, wo = isotropic_pairs()
-    assert reciprocity(Samples.from_arrays(wi[: 2 * MIN_PAIRS - 1], wo[: 2 * MIN_PAIRS - 1], np.ones(39))) is None
+    count = 100
+    azimuth = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+    theta_i = np.where(np.arange(count) < MIN_PAIRS - 1, np.radians(5.0), np.radians(40.0))
+    wi = spherical_to_direction(theta_i, azimuth)
+    wo = spherical_to_direction(np.full(count, np.radians(10.0)), np.zeros(count))
+    assert reciprocity(Samples.from_arrays(wi, wo, np.ones(count))) is None

@@ -88,11 +88,11 @@ def test_an_interrupted_fit_leaves_no_maps_and_resumes(ward_capture, tmp_path, m
     folder, _ = ward_capture
     fit_tile, calls = texel_fits._fit_tile, []
 
-    def interrupted(run, capture, **options):
+    def interrupted(run, **options):
         calls.append(len(run.texels))
         if calls == [100, 100]:  # Ctrl-C in the second tile of the first run
             raise KeyboardInterrupt
-        return fit_tile(run, capture, **options)
+        return fit_tile(run, **options)
 
     monkeypatch.setattr(texel_fits, "_fit_tile", interrupted)
     output = tmp_path / "maps"
