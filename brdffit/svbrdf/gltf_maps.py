@@ -30,7 +30,7 @@ import numpy as np
 
 from .._files import atomic_path
 from .._version import __version__
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError
 from ..export.gltf_preview import glb_container
 from .images import srgb_encoded
 from .maps import GLB_FILE, Maps
@@ -56,8 +56,9 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
     """The ``.glb`` of the maps of a ``gltf`` fit (module docstring); anything else is refused in one line."""
     if maps.model != "gltf":
         raise BrdfInputError(
-            f"the maps of a {maps.model} fit do not map onto glTF's material texel by texel: fit the capture with"
-            " --model gltf (or export one texel's parameters)"
+            f"the maps of a {maps.model} fit do not map onto glTF's material texel by texel: fit the capture with ",
+            Argument("model", "gltf"),
+            " (or export one texel's parameters)",
         )
     if len(maps.channels) != 3:
         raise BrdfInputError(f"glTF's textures are RGB; these maps have {len(maps.channels)} channel(s)")

@@ -6,7 +6,7 @@ A model whose Mitsuba export is exact (``principled``, ``roughplastic``: the sam
 over the fitted texels becomes a ``bitmap`` of its OpenEXR image (linear float32; nearest-texel lookup, so a texel is
 its own value), the others stay numbers. Some parameters Mitsuba takes as one number only (:data:`TEXTURED` lists the
 others): ``roughplastic``'s ``alpha``, ``principled``'s ``specular``. Maps where one of those varies are not exported
-(``maps.json`` says why): hold it (``--fix specular=0.5``) to export them.
+(``maps.json`` says why): hold it (``fixed={"specular": 0.5}``, ``--fix specular=0.5``) to export them.
 
 ``MAPS/mitsuba/`` then holds:
 
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .._files import write_text_atomic
-from ..errors import BrdfInputError
+from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
 from .images import write_exr
 from .maps import Maps
@@ -85,7 +85,9 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
         if allowed is not None and name not in allowed:
             raise BrdfInputError(
                 f"the maps' {name} varies ({np.nanmin(values):.4g}–{np.nanmax(values):.4g}), and Mitsuba's"
-                f" {maps.model} takes one number for it: hold it (--fix {name}=…) to export"
+                f" {maps.model} takes one number for it: hold it (",
+                Argument("fixed", f"{name}=…"),
+                ") to export",
             )
         bsdf[name] = {"type": "bitmap", "filename": f"{name}.exr", "filter_type": "nearest"} | (
             {} if name in COLOURS else {"raw": True}
