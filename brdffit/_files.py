@@ -112,6 +112,17 @@ def reading(path: str | os.PathLike, what: str) -> Iterator[None]:
         raise BrdfInputError(f"{path}: cannot be read ({error.strerror or error})") from None
 
 
+def read_json_file(path: str | os.PathLike, what: str) -> Any:
+    """The JSON in the file ``path`` (:func:`read_json_text`, :func:`parse_json`), or a one-line error naming the
+    file and ``what`` it should be (``a capture file``)."""
+    with reading(path, what):
+        text = read_json_text(path)
+    try:
+        return parse_json(text)
+    except ValueError as error:
+        raise BrdfInputError(f"{path}: not {what} ({error})") from None
+
+
 def parse_json(text: str) -> Any:
     """``text`` as JSON, strictly, as every JSON brdffit is given is read: no ``NaN`` or ``Infinity`` (not JSON) and no
     number beyond float64's range (``1e400``), nesting no deeper than Python's recursion limit (~1,000); raises

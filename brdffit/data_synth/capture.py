@@ -32,6 +32,12 @@ from brdffit.svbrdf.maps import flat_params
 from brdffit.svbrdf.relight import stacked_params, texel_brdf
 from brdffit.svbrdf.texels import point_light
 
+#: A glTF dielectric and Mitsuba principled plastic, without coat, anisotropy or sheen: the first of their pairs.
+_GLTF = {"base_color": [0.6, 0.3, 0.15], "roughness": 0.35, "metallic": 0.0, "ior": 1.5, "clearcoat": 0.0,
+         "clearcoat_roughness": 0.1, "anisotropy_strength": 0.0, "anisotropy_rotation": 0.0}  # fmt: skip
+_PRINCIPLED = {"base_color": [0.7, 0.3, 0.15], "roughness": 0.3, "metallic": 0.0, "specular": 0.5,
+               "spec_tint": 0.0, "anisotropic": 0.0, "sheen": 0.0, "sheen_tint": 0.0, "clearcoat": 0.0,
+               "clearcoat_gloss": 1.0}  # fmt: skip
 #: Two materials per model that a capture's maps blend, where the user gives none.
 MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
     "lambert": ({"rho_d": [0.6, 0.35, 0.2]}, {"rho_d": [0.15, 0.3, 0.55]}),
@@ -39,54 +45,8 @@ MATERIALS: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {
         {"rho_d": [0.45, 0.3, 0.2], "rho_s": [0.06, 0.06, 0.06], "alpha": 0.12},
         {"rho_d": [0.12, 0.22, 0.35], "rho_s": [0.15, 0.15, 0.15], "alpha": 0.3},
     ),
-    "gltf": (
-        {
-            "base_color": [0.6, 0.3, 0.15],
-            "roughness": 0.35,
-            "metallic": 0.0,
-            "ior": 1.5,
-            "clearcoat": 0.0,
-            "clearcoat_roughness": 0.1,
-            "anisotropy_strength": 0.0,
-            "anisotropy_rotation": 0.0,
-        },
-        {
-            "base_color": [0.9, 0.75, 0.4],
-            "roughness": 0.6,
-            "metallic": 1.0,
-            "ior": 1.5,
-            "clearcoat": 0.0,
-            "clearcoat_roughness": 0.1,
-            "anisotropy_strength": 0.0,
-            "anisotropy_rotation": 0.0,
-        },
-    ),
-    "principled": (
-        {
-            "base_color": [0.7, 0.3, 0.15],
-            "roughness": 0.3,
-            "metallic": 0.0,
-            "specular": 0.5,
-            "spec_tint": 0.0,
-            "anisotropic": 0.0,
-            "sheen": 0.0,
-            "sheen_tint": 0.0,
-            "clearcoat": 0.0,
-            "clearcoat_gloss": 1.0,
-        },
-        {
-            "base_color": [0.2, 0.4, 0.7],
-            "roughness": 0.6,
-            "metallic": 0.0,
-            "specular": 0.5,
-            "spec_tint": 0.0,
-            "anisotropic": 0.0,
-            "sheen": 0.0,
-            "sheen_tint": 0.0,
-            "clearcoat": 0.0,
-            "clearcoat_gloss": 1.0,
-        },
-    ),
+    "gltf": (_GLTF, _GLTF | {"base_color": [0.9, 0.75, 0.4], "roughness": 0.6, "metallic": 1.0}),
+    "principled": (_PRINCIPLED, _PRINCIPLED | {"base_color": [0.2, 0.4, 0.7], "roughness": 0.6}),
     "cook-torrance": (
         {"kd": [0.45, 0.3, 0.2], "ks": [0.5, 0.5, 0.5], "m": 0.15, "f0": 0.04},
         {"kd": [0.12, 0.22, 0.35], "ks": [0.9, 0.9, 0.9], "m": 0.35, "f0": 0.04},

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from .._files import parse_json, read_json_text, reading
+from .._files import read_json_file
 from ..errors import BrdfInputError
 
 #: The capture file's name inside a capture folder, and the format version it holds.
@@ -110,13 +110,7 @@ def read_capture(path: str | os.PathLike) -> Capture:
     """The capture of ``path`` (a capture folder or its ``capture.json``), every field checked (module docstring);
     each image must exist, but is not read."""
     file = capture_file(path)
-    with reading(file, "a capture file"):
-        text = read_json_text(file)
-    try:
-        document = parse_json(text)
-    except ValueError as error:
-        raise BrdfInputError(f"{file}: not a capture file ({error})") from None
-    return _capture(file, document)
+    return _capture(file, read_json_file(file, "a capture file"))
 
 
 def _capture(file: Path, document: Any) -> Capture:

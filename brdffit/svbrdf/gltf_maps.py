@@ -20,7 +20,6 @@ The quad lies in glTF's x-y plane (metres, the capture's frame: x to the right, 
 default camera looks; texture coordinate (0, 0) is the images' top left (§3.8.4), texel (0, 0).
 """
 
-import io
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +31,7 @@ from .._files import atomic_path
 from .._version import __version__
 from ..errors import Argument, BrdfInputError
 from ..export.gltf_preview import glb_container
-from .images import srgb_encoded
+from .images import png_bytes, srgb_decoded, srgb_encoded
 from .maps import GLB_FILE, Maps
 
 _FLOAT, _UNSIGNED_SHORT = 5126, 5123
@@ -74,11 +73,11 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
     metallic = np.where(fitted, maps.params["metallic"], 0.0)
     zeros = np.zeros(maps.shape)
     images = {
-        "base_color": _png(srgb_encoded(base)),
-        "metallic_roughness": _png(np.stack([zeros, roughness, metallic], -1)),
+        "base_color": png_bytes(srgb_encoded(base)),
+        "metallic_roughness": png_bytes(np.stack([zeros, roughness, metallic], -1)),
     }
     quantization = {
-        "base_color": _largest(_srgb_decoded(np.round(srgb_encoded(base) * 255) / 255), base),
+        "base_color": _largest(srgb_decoded(np.round(srgb_encoded(base) * 255) / 255), base),
         "roughness": _largest(np.round(roughness * 255) / 255, roughness),
         "metallic": _largest(np.round(metallic * 255) / 255, metallic),
     }
@@ -93,7 +92,7 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
     extensions: dict[str, Any] = {}
     if np.any(coat > 0):
         coat_roughness = np.where(fitted, maps.params["clearcoat_roughness"], 0.0)
-        images["clearcoat"] = _png(np.stack([coat, coat_roughness, zeros], -1))
+        images["clearcoat"] = png_bytes(np.stack([coat, coat_roughness, zeros], -1))
         extensions["KHR_materials_clearcoat"] = {
             "clearcoatFactor": 1.0,
             "clearcoatTexture": {"index": 2},
@@ -134,11 +133,6 @@ def _largest(rounded: np.ndarray, values: np.ndarray) -> float:
     return float(np.max(np.abs(rounded - values), initial=0.0))
 
 
-def _srgb_decoded(encoded: np.ndarray) -> np.ndarray:
-    """The inverse of :func:`~brdffit.svbrdf.images.srgb_encoded` (IEC 61966-2-1)."""
-    return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
-
-
 def _accessors(positions: np.ndarray) -> list[dict[str, Any]]:
     """The quad's accessors: positions (with their bounds, §3.6.2.4), normals, texture coordinates, indices."""
     bounds = {"min": positions.min(axis=0).tolist(), "max": positions.max(axis=0).tolist()}
@@ -148,15 +142,6 @@ def _accessors(positions: np.ndarray) -> list[dict[str, Any]]:
         {"bufferView": 2, "componentType": _FLOAT, "count": 4, "type": "VEC2"},
         {"bufferView": 3, "componentType": _UNSIGNED_SHORT, "count": 6, "type": "SCALAR"},
     ]
-
-
-def _png(image: np.ndarray) -> bytes:
-    """``image`` (values in [0, 1]) as 8-bit PNG bytes."""
-    from PIL import Image
-
-    stream = io.BytesIO()
-    Image.fromarray(np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)).save(stream, format="PNG")
-    return stream.getvalue()
 
 
 def _glb(maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensions: list[str]) -> bytes:

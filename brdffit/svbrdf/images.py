@@ -13,6 +13,7 @@ Written (atomically): :func:`write_exr` (float32, lossless ZIP compression, line
 a preview).
 """
 
+import io
 import os
 from pathlib import Path
 
@@ -151,13 +152,21 @@ def write_exr(path: str | os.PathLike, image: np.ndarray, channels: tuple[str, .
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
-    """``image`` ((H, W), (H, W, 1) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG, atomically."""
+    """``image`` as an 8-bit PNG (:func:`png_bytes`), atomically."""
+    data = png_bytes(image)
+    with atomic_path(path) as temporary:
+        temporary.write_bytes(data)
+
+
+def png_bytes(image: np.ndarray) -> bytes:
+    """``image`` ((H, W), (H, W, 1) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG's bytes."""
     from PIL import Image
 
     image = image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image
     pixels = np.round(np.clip(np.nan_to_num(image, nan=0.0), 0.0, 1.0) * 255.0).astype(np.uint8)
-    with atomic_path(path) as temporary:
-        Image.fromarray(pixels).save(temporary, format="PNG")
+    stream = io.BytesIO()
+    Image.fromarray(pixels).save(stream, format="PNG")
+    return stream.getvalue()
 
 
 def srgb_encoded(linear: np.ndarray) -> np.ndarray:
@@ -165,3 +174,9 @@ def srgb_encoded(linear: np.ndarray) -> np.ndarray:
     0.055`` above; clipped to [0, 1] first."""
     v = np.clip(linear, 0.0, 1.0)
     return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1.0 / 2.4) - 0.055)
+
+
+def srgb_decoded(encoded: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`srgb_encoded` (IEC 61966-2-1): ``v / 12.92`` up to 0.04045, ``((v + 0.055) /
+    1.055)^2.4`` above."""
+    return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path, parse_json, read_json_text, reading, write_text_atomic
+from .._files import atomic_path, parse_json, read_json_file, read_json_text, reading, write_text_atomic
 from ..errors import BrdfInputError
 from .images import srgb_encoded, write_exr, write_png
 
@@ -233,12 +233,7 @@ def read_maps(folder: str | os.PathLike) -> Maps:
     """The maps in ``folder`` (written by :func:`write_maps`)."""
     folder = Path(folder)
     described = folder / MAPS_FILE
-    with reading(described, "a maps description"):
-        text = read_json_text(described)
-    try:
-        description = parse_json(text)
-    except ValueError as error:
-        raise BrdfInputError(f"{described}: not a maps description ({error})") from None
+    description = read_json_file(described, "a maps description")
     if not isinstance(description, dict) or description.get("brdffit_maps") != VERSION:
         raise BrdfInputError(f'{described}: not a brdffit maps description (no "brdffit_maps": {VERSION})')
     with reading(folder / PARAMS_FILE, "a maps file"), np.load(folder / PARAMS_FILE, allow_pickle=False) as arrays:

@@ -6,13 +6,13 @@ intensity, ``l`` its position and ``p`` the texel's centre (mm); NaN where a tex
 back from a fit can be set beside the image its maps predict for the same light and camera.
 """
 
-import functools
 import os
 
 import jax
 import numpy as np
 
 from .._jax import float64
+from .._programs import built_once
 from ..errors import BrdfInputError
 from ..physics.models.model import Model
 from ..physics.models.params import Params
@@ -73,7 +73,7 @@ def texel_brdf(model: Model, stacked: Params, wi: np.ndarray, wo: np.ndarray) ->
     return np.asarray(_vmapped_brdf(model)(stacked, np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)))
 
 
-@functools.cache
+@built_once
 def _vmapped_brdf(model: Model):
     return jax.jit(jax.vmap(lambda params, wi, wo: model.brdf(params, wi[None], wo[None])[0]))
 
