@@ -124,7 +124,8 @@ def test_the_screen_changes_no_verdict(name):
     """The screen clears an incidence only where the fine grid finds no albedo above the limit there: on 40 seeded
     random materials per model whose albedos straddle 1 (diffuse 0.02–0.9, specular 0.01–1.5, roughness
     0.002–1.5 or the equivalent exponents), the verdicts equal those of the fine grid alone; both verdicts
-    occur, and the screen does skip some."""
+    occur, and the screen does skip some. Each of its grids' bounds is checked alone as well: the first grid's
+    decides alone where it clears every incidence."""
     from brdffit.fitting.single import caveats as module
 
     model = get_model(name)
@@ -146,11 +147,52 @@ def test_the_screen_changes_no_verdict(name):
         assert bool(module._albedo_above_one(model, params, ("y",))) is expected, params
         above += expected
         per_incidence = (fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)
-        cleared = np.all(np.asarray(module._screen_bound(model, params)) < module.SCREEN_BELOW, axis=1)
-        assert not np.any(per_incidence.any(axis=1) & cleared), params
+        for bound in (
+            module._screen_bound(model, params),
+            module._grid_bound(model, params, module.FIRST_SCREEN_GRID),
+            module._grid_bound(model, params, module.SCREEN_GRID),
+        ):
+            cleared = np.all(np.asarray(bound) < module.SCREEN_BELOW, axis=1)
+            assert not np.any(per_incidence.any(axis=1) & cleared), params
         skipped += bool(cleared.all())
     print(f"{name}: the screen skipped {skipped} of 40, {above} above 1")
     assert skipped >= 5 and above >= 1
+
+
+def screenable_models() -> list[str]:
+    """Every registered model the albedo screen applies to (one channel; the data-driven kind needs a basis)."""
+    from brdffit import MODELS
+    from brdffit.fitting.single.caveats import _screenable
+
+    return [name for name in MODELS if name != "pca" and _screenable(get_model(name))]
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("name", screenable_models())
+def test_neither_screen_grid_clears_an_albedo_above_one_over_the_whole_domain(name):
+    """400 seeded random materials per model, each unconstrained coordinate drawn from N(0, 2²) (albedos from ~0
+    to far above 1, roughness from mirror-like to diffuse): an incidence either screen grid's bound clears
+    (:data:`FIRST_SCREEN_GRID`, :data:`SCREEN_GRID`) is never one where the fine grid finds the albedo above the
+    limit. Written on 2026-11-27, when one seeded draw of this kind over the 9 models (3,600 materials) found none
+    wrongly cleared, the first grid clearing every incidence of 1,116 of them, the second of 1,410."""
+    import jax
+
+    from brdffit.fitting.single import caveats as module
+
+    model = get_model(name)
+    rng = np.random.default_rng(11)
+    bounds = [
+        jax.jit(lambda p, n=n: module._grid_bound(model, p, n)) for n in (module.FIRST_SCREEN_GRID, module.SCREEN_GRID)
+    ]
+    for _ in range(400):
+        params = model.unconstrained.to_params(rng.normal(0.0, 2.0, model.unconstrained.size(1)), 1)
+        fine, coarse = (np.asarray(a) for a in module._albedo_estimates(model, params, 256))
+        if not np.all(np.isfinite(fine)):
+            continue
+        above = ((fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)).any(axis=1)
+        for bound in bounds:
+            cleared = np.all(np.asarray(bound(params)) < module.SCREEN_BELOW, axis=1)
+            assert not np.any(above & cleared), model.physical.from_params(params)
 
 
 @pytest.mark.parametrize("n", [1.0, 30.0, 1000.0, 10000.0])
