@@ -7,7 +7,6 @@ folder (``params.npz``, ``maps.json``, ``textures/``; ``svbrdf/maps.py``). ``svb
 
 import argparse
 import contextlib
-import json
 import sys
 from pathlib import Path
 
@@ -177,8 +176,7 @@ def _fit(args: argparse.Namespace) -> int:
         + ")"
     )
     print(_table(maps))
-    described = json.loads((output / "maps.json").read_text())
-    glb, mitsuba = described.get("glb") or {}, described.get("mitsuba") or {}
+    glb, mitsuba = maps.exports.get("glb") or {}, maps.exports.get("mitsuba") or {}
     if glb.get("file"):
         print(f"  {glb['file']}: the maps on a quad for glTF viewers" + "".join(f"; {n}" for n in glb["notes"]))
     if mitsuba.get("folder"):
@@ -274,12 +272,12 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _point(flag: str, value: str):
+    from ..svbrdf.relight import point_above
+
     numbers = _numbers(flag, value)
     if len(numbers) != 3:
         raise BrdfInputError(f"{flag} {value}: give X,Y,Z, three numbers in mm")
-    if not numbers[2] > 0:
-        raise BrdfInputError(f"{flag} {value}: z must be > 0 (above the sample's plane)")
-    return numbers
+    return point_above(flag, numbers)
 
 
 def _numbers(flag: str, value: str):

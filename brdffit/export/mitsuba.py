@@ -173,7 +173,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
             f" cannot hold it beside a specular albedo of {_albedo_maxima(result)[1]:.3g}"
         )
         approximation = approximation_error(result, without.predict)
-        bsdf = _exact_bsdf_of(without)
+        bsdf = exact_bsdf_of(without)
         return MitsubaExport(bsdf, source, without, approximation, notes + _tangent_notes(result), change=change)
 
     known = reference(result)
@@ -187,7 +187,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     else:
         exported, approximation = _best_stand_in(known)
     notes += _tangent_notes(exported) + approximation.warnings("Mitsuba's microfacet model")
-    return MitsubaExport(_exact_bsdf_of(exported), source, exported, approximation, notes)
+    return MitsubaExport(exact_bsdf_of(exported), source, exported, approximation, notes)
 
 
 #: A stand-in whose coarse fit lies farther from the fitted BRDF than this many times the best one's (rmse over the
@@ -285,7 +285,7 @@ def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
     return None if mapping is None else mapping(result)
 
 
-def _exact_bsdf_of(result: FitResult) -> dict[str, Any]:
+def exact_bsdf_of(result: FitResult) -> dict[str, Any]:
     """:func:`_exact_bsdf` of a result whose model has an exact mapping (Mitsuba's own, or one of the model's)."""
     bsdf = _exact_bsdf(result)
     assert bsdf is not None, f"no exact Mitsuba BSDF for {result.model}"

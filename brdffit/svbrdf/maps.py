@@ -55,7 +55,9 @@ class Maps:
     ``neighbour_starts``: how many texels were fitted again from a neighbour's parameters, and how many ended lower
     (``neighbours.py``); ``notes``: what a user must know of the fit as a whole (the capture's values far below the
     relative loss's floor); ``normals``: the capture's normal map (H, W, 3), where it had one, which relighting
-    needs."""
+    needs; ``exports``: what ``maps.json`` says of the ``material.glb`` (``"glb"``) and the ``mitsuba/`` folder
+    (``"mitsuba"``) written beside the maps (``gltf_maps.write_glb``, ``mitsuba_maps.write_mitsuba_maps``; None:
+    not made)."""
 
     model: str
     model_options: dict[str, Any]
@@ -71,6 +73,7 @@ class Maps:
     neighbour_starts: dict[str, int] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     normals: np.ndarray | None = None
+    exports: dict[str, dict[str, Any] | None] = field(default_factory=lambda: {"glb": None, "mitsuba": None})
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -137,17 +140,10 @@ def nested_params(flat: dict[str, Any]) -> dict[str, Any]:
     return params
 
 
-def write_maps(
-    folder: str | os.PathLike,
-    maps: Maps,
-    textures: bool = True,
-    glb: dict[str, Any] | None = None,
-    mitsuba: dict[str, Any] | None = None,
-) -> list[Path]:
+def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> list[Path]:
     """``maps`` into ``folder`` (made if missing): ``params.npz``, ``maps.json`` and, with ``textures``, the
-    ``textures/`` images, each atomically; returns the paths written. ``glb`` and ``mitsuba``: what ``maps.json``
-    says of the ``material.glb`` and the ``mitsuba/`` folder written beside them (``gltf_maps.write_glb``,
-    ``mitsuba_maps.write_mitsuba_maps``)."""
+    ``textures/`` images, each atomically; returns the paths written, and ``maps.exports``' files, written
+    beside them before."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, Any] = dict(maps.params) | dict(maps.fit)  # Any: savez's stubs take allow_pickle among them
@@ -168,6 +164,7 @@ def write_maps(
                 preview, ranges[name] = _preview(name, array)
                 write_png(folder / TEXTURES / f"{name}.png", preview)
                 written.append(folder / TEXTURES / f"{name}.png")
+    glb, mitsuba = maps.exports.get("glb"), maps.exports.get("mitsuba")
     if glb and glb.get("file"):
         written.append(folder / glb["file"])
     if mitsuba and mitsuba.get("folder"):
@@ -257,4 +254,5 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         dict(description.get("neighbour_starts") or {}),
         list(description.get("notes") or []),
         loaded.get(NORMALS),
+        {"glb": description.get("glb"), "mitsuba": description.get("mitsuba")},
     )

@@ -60,7 +60,7 @@ XML_VERSION = "3.0.0"
 def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
     """The Mitsuba BSDF (the dictionary ``mitsuba.load_dict`` takes, textures named ``<parameter>.exr``) of
     ``maps`` and the names of its textured parameters (module docstring); one line where it cannot be made."""
-    from ..export.mitsuba import _exact_bsdf_of
+    from ..export.mitsuba import exact_bsdf_of
 
     if maps.model not in TEXTURED:
         raise BrdfInputError(
@@ -73,9 +73,19 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
     if len(maps.channels) not in (1, 3):
         raise BrdfInputError(f"Mitsuba's textures are RGB; these maps have {len(maps.channels)} channels")
     row, column = (int(index[0]) for index in np.nonzero(fitted))
-    first = FitResult(maps.model, maps.model_options, maps.channels, maps.texel_params(row, column), maps.loss,
-                      0.0, 0.0, 0, 0, True)  # fmt: skip
-    bsdf = _exact_bsdf_of(first)
+    first = FitResult(  # one texel's parameters: the BSDF's keys and the numbers of the parameters that do not vary
+        model=maps.model,
+        model_options=maps.model_options,
+        channels=maps.channels,
+        params=maps.texel_params(row, column),
+        loss=maps.loss,
+        cost=0.0,
+        rmse=0.0,
+        n_samples=0,
+        n_steps=0,
+        converged=True,
+    )
+    bsdf = exact_bsdf_of(first)
     allowed = TEXTURED[maps.model]
     textured = []
     for name, array in maps.params.items():

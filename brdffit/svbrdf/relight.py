@@ -31,7 +31,7 @@ def relight(maps: "Maps | str | os.PathLike", light_mm, camera_mm, intensity=1.0
     ``light_mm`` (3,) of radiant ``intensity`` (a number, or one per channel, > 0) and the camera at ``camera_mm``
     (3,), both above the plane."""
     maps = maps if isinstance(maps, Maps) else read_maps(maps)
-    light, camera = (_point(name, value) for name, value in (("light_mm", light_mm), ("camera_mm", camera_mm)))
+    light, camera = (point_above(name, value) for name, value in (("light_mm", light_mm), ("camera_mm", camera_mm)))
     n_channels = len(maps.channels)
     try:
         intensity = np.broadcast_to(np.asarray(intensity, dtype=float), (n_channels,))
@@ -78,7 +78,9 @@ def _vmapped_brdf(model: Model):
     return jax.jit(jax.vmap(lambda params, wi, wo: model.brdf(params, wi[None], wo[None])[0]))
 
 
-def _point(name: str, value) -> np.ndarray:
+def point_above(name: str, value) -> np.ndarray:
+    """``value`` as a point (3,) in mm above the sample's plane; a one-line error naming ``name`` where it is not
+    three finite numbers with z > 0."""
     try:
         point = np.asarray(value, dtype=float).reshape(3)
     except (TypeError, ValueError):

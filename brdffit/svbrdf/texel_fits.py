@@ -141,12 +141,12 @@ def fit_capture(
     if caveats:
         warn(FitWarning(caveats))
     if output is not None:
-        glb = write_glb(output, maps) if textures and maps.model == "gltf" else None
         first = capture.shots[0]
-        mitsuba = None
+        if textures and maps.model == "gltf":
+            maps.exports["glb"] = write_glb(output, maps)
         if textures and maps.model in TEXTURED:
-            mitsuba = write_mitsuba_maps(output, maps, first.light_mm, first.intensity, first.camera_mm)
-        write_maps(output, maps, textures, glb, mitsuba)
+            maps.exports["mitsuba"] = write_mitsuba_maps(output, maps, first.light_mm, first.intensity, first.camera_mm)
+        write_maps(output, maps, textures)
         store.remove()
     return maps
 

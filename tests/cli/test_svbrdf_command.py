@@ -93,7 +93,7 @@ def test_bad_input_is_one_line_and_writes_nothing(capture, tmp_path, capsys):
     one_line_error(status, err, "maps.json: no such file")
     for flag, value, piece in [
         ("--light", "0,0", "--light 0,0: give X,Y,Z"),
-        ("--light", "0,0,-3", "z must be > 0"),
+        ("--light", "0,0,-3", "--light: [0.0, 0.0, -3.0] must be finite and above the sample's plane"),
         ("--camera", "a,b,c", "give comma-separated numbers"),
     ]:
         argv = ["svbrdf", "render", tmp_path, "--light", "0,0,9", "--camera", "0,0,9", flag, value]
