@@ -17,7 +17,8 @@ Sections (issue 3):
 (c) ``brdffit fit`` of the shipped 10k-sample example, process start to result written.
 (d) Peak resident memory of the MERL-size Cook-Torrance fit (the process that loads the samples and fits).
 (e) Time per Levenberg-Marquardt step against one fused normal-equation pass (the lower bound of a step), and
-    the pass's own lower bound: the bytes of its arrays at the memory's streaming rate, measured in the run.
+    the pass's own lower bound: the larger of the bytes of its arrays at the memory's streaming rate and XLA's
+    count of its flops at the rate of a float64 matrix product, both rates measured in the run.
 (f) MCMC (issue 4): emcee, 32 walkers × 2000 steps on the 10k-sample example, compile included.
 (g) Reading a full MERL file (issue 5): 1,458,000 bins to direction pairs.
 (h) ``brdffit compare`` of 4 models × 5 folds on the 10k-sample example (issue 12) against the four plain
@@ -513,10 +514,15 @@ def table(results: dict) -> str:
                 f"    {name}: {1000 * per_step:.0f} ms / {1000 * step['pass_seconds']:.0f} ms"
                 f" = {per_step / step['pass_seconds']:.2f}× ({step['steps']} steps)"
             )
-            if "bound_seconds" in step:  # worker.pass_bound: XLA's bytes and flops at this machine's rates
+            if "pass_flops" in step:  # worker.pass_bound: the bytes and XLA's flops at this machine's rates
                 line += (
-                    f"; the pass's bytes at the memory's rate {1000 * step['bound_seconds']:.0f} ms"
-                    f" ({step['pass_bytes'] / 1e6:.0f} MB at {step['bandwidth_bytes_per_second'] / 1e9:.1f} GB/s):"
+                    f"; the pass's bound {1000 * step['bound_seconds']:.0f} ms, the larger of its bytes at the"
+                    f" memory's rate ({step['pass_bytes'] / 1e6:.0f} MB at"
+                    f" {step['bandwidth_bytes_per_second'] / 1e9:.1f} GB/s:"
+                    f" {1000 * step['pass_bytes'] / step['bandwidth_bytes_per_second']:.0f} ms) and its flops at"
+                    f" the machine's float64 rate ({step['pass_flops'] / 1e9:.2f} GFLOP at"
+                    f" {step['flops_per_second'] / 1e9:.0f} GFLOP/s:"
+                    f" {1000 * step['pass_flops'] / step['flops_per_second']:.0f} ms):"
                     f" a step is {per_step / step['bound_seconds']:.1f}× that bound"
                 )
             lines.append(line)

@@ -155,21 +155,44 @@ def steps(args) -> dict:
     solve_seconds, output = median_seconds(lambda: solve(theta, problem), 3)
     n_steps = int(output[2])
     return {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps} | pass_bound(
-        problem, median_seconds
+        lambda t, p: normal_equations(model, loss, t, p), theta, problem, median_seconds
     )
 
 
-def pass_bound(problem, median_seconds) -> dict:
-    """(e)'s lower bound of one normal-equation pass on this machine: the bytes it must read (every array of the
-    problem, once) at the memory's streaming rate, measured here by a 256 MB numpy sum. (XLA's own count,
-    ``cost_analysis``, counts a loop's body once, not once per chunk of samples: no bound on the arithmetic here.)"""
+def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
+    """(e)'s lower bound of one normal-equation pass on this machine, the larger of two:
+
+    * the bytes it must read (every array of the problem, once) at the memory's streaming rate, measured here by a
+      256 MB numpy sum;
+    * its arithmetic at the machine's float64 rate: XLA's count of the flops (``cost_analysis``) of the pass over
+      one chunk of samples, times the chunks (XLA counts a loop's body once, so the count is taken on a problem of
+      one chunk), at the rate of a 1024² float64 matrix product on every core (no elementwise work runs faster;
+      XLA counts a transcendental function as one flop, so the bound is generous).
+    """
     import jax
+
+    from brdffit.fitting.objective.problem import chunk_size
 
     bytes_read = float(sum(np.asarray(leaf).nbytes for leaf in jax.tree.leaves(problem)))
     stream = np.ones(32 * 2**20)  # 256 MB
     stream_seconds, _ = median_seconds(lambda: stream.sum(), 5)
     bandwidth = stream.nbytes / stream_seconds
-    return {"pass_bytes": bytes_read, "bandwidth_bytes_per_second": bandwidth, "bound_seconds": bytes_read / bandwidth}
+    n = problem.wi.shape[0]
+    size = chunk_size(n)
+    one_chunk = jax.tree.map(lambda leaf: leaf[:size], problem)
+    chunk_flops = jax.jit(normal_pass).lower(theta, one_chunk).compile().cost_analysis()
+    chunk_flops = (chunk_flops[0] if isinstance(chunk_flops, list) else chunk_flops)["flops"]
+    flops = float(chunk_flops) * (n // size)
+    square = np.random.default_rng(0).random((1024, 1024))
+    product_seconds, _ = median_seconds(lambda: jax.numpy.dot(square, square), 5)
+    rate = 2 * 1024**3 / product_seconds
+    return {
+        "pass_bytes": bytes_read,
+        "bandwidth_bytes_per_second": bandwidth,
+        "pass_flops": flops,
+        "flops_per_second": rate,
+        "bound_seconds": max(bytes_read / bandwidth, flops / rate),
+    }
 
 
 #: Seeded realistic parameter ranges of the batch benchmarks' materials.
