@@ -124,8 +124,9 @@ def fit_batch(
     workers (``brdffit/fitting/many/cluster.py``), paths are read there, and the results are
     those of this process's fit. ``threads``: how many batches of datasets
     are fitted at once (default: every CPU core this process may use; on a
-    cluster, 1 in each task, whose workers are the parallelism); the results
-    do not depend on it.
+    cluster, 1 in each task, whose workers are the parallelism; with
+    ``vmap``, always 1: its programs fill the device); the results do not
+    depend on it.
     """
     solving = solving_of(solving, n_starts=n_starts, max_steps=max_steps, dtype=dtype, seed=seed)
     holding = holding_of(holding, fixed=fixed, bounds=bounds)

@@ -10,14 +10,19 @@ import numbers
 
 import numpy as np
 
+#: The host's array and number types, checked first: an abstract class's ``isinstance`` (``numbers.Number``) costs
+#: five times a tuple of concrete ones, and host code asks this of every small array it computes with.
+_HOST_TYPES = (np.ndarray, np.generic, float, int, complex)
+
 
 def namespace(*arrays):
     """numpy when every argument is a numpy array or scalar or a Python number, else ``jax.numpy``."""
-    if all(isinstance(a, np.ndarray | np.generic | numbers.Number) for a in arrays):
-        return np
-    import jax.numpy as jnp
+    for array in arrays:
+        if not isinstance(array, _HOST_TYPES) and not isinstance(array, numbers.Number):
+            import jax.numpy as jnp
 
-    return jnp
+            return jnp
+    return np
 
 
 def first_bad(bad: np.ndarray) -> tuple[int, int] | None:

@@ -169,8 +169,10 @@ def _fit_tile(
     one start per texel of ``run`` (``neighbour_starts``), in place of the start search."""
     counts = run.kept.sum(axis=1)
     fitted = np.flatnonzero(counts >= least)
-    width = capture.shape[1]
-    datasets = [run.samples(int(index), capture.channels, _texel_name(capture, run.texels[index])) for index in fitted]
+    file, width = str(capture.file), capture.shape[1]  # once, not once a texel
+    datasets = [
+        run.samples(int(index), capture.channels, _texel_name(file, width, run.texels[index])) for index in fitted
+    ]
     if starts is not None:
         options["start"] = [starts[index] for index in fitted]
     with warnings.catch_warnings():  # a texel's caveats are counted (n_caveats) and summed up once (_caveats)
@@ -229,9 +231,10 @@ def _scale_notes(photographs, loss: str) -> list[str]:
     ]
 
 
-def _texel_name(capture: Capture, texel) -> str:
-    row, column = divmod(int(texel), capture.shape[1])
-    return f"{capture.file} texel ({row}, {column})"
+def _texel_name(file: str, width: int, texel) -> str:
+    """A texel's samples' source: the capture ``file`` and the texel's (row, column) in a grid ``width`` wide."""
+    row, column = divmod(int(texel), width)
+    return f"{file} texel ({row}, {column})"
 
 
 def _texel_values(result: FitResult) -> dict[str, Any]:

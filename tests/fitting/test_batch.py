@@ -112,6 +112,21 @@ def test_vmap_equals_loop():
             assert flat_parameters(other.params)[name] == pytest.approx(value, rel=1e-8), name
 
 
+def test_vmap_runs_one_batch_at_a_time_whatever_the_threads(monkeypatch):
+    """Two vmapped programs at once hung in XLA's CPU thread pool (512 texel fits on 2 threads of 2 cores): the vmap
+    strategy fills the device alone, so ``threads`` does not apply to it."""
+    from brdffit.fitting.many import batch
+
+    seen = []
+    real = batch.run_units
+    monkeypatch.setattr(
+        batch, "run_units", lambda units, fit, threads, bar: seen.append(threads) or real(units, fit, threads, bar)
+    )
+    fit_batch(datasets()[:2], "ward", strategy="vmap", threads=3)
+    fit_batch(datasets()[:2], "ward", strategy="loop", threads=3)
+    assert seen == [1, 3]
+
+
 def test_vmap_with_float32_and_a_start():
     samples = datasets()[:2]
     results = fit_batch(samples, "ward", strategy="vmap", dtype="float32", start=WARD[0])

@@ -68,6 +68,8 @@ def fit_many(
     if threads is None:  # one thread per core; on a GPU one, whose programs fill the device
         threads = 1 if strategy == "vmap" else usable_cores()
     threads = whole_number("threads", threads)
+    if strategy == "vmap":  # its programs fill the device; two at once on a 2-core CPU hung in XLA (512 texels)
+        threads = 1
     samples = list(samples)
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")

@@ -16,6 +16,7 @@
 * a sheen fitted to data of one incidence near the normal: the data cannot tell it from the base.
 """
 
+import functools
 import re
 from collections.abc import Sequence
 from dataclasses import replace
@@ -242,29 +243,70 @@ def _implausible(
     """A line for each parameter on an end of its domain or beyond its plausible range; not for those ``held`` (the
     fit did not move them) nor those whose ends are values of their own (``Lobe.meaningful_ends``)."""
     values = np.asarray(model.physical.from_params(params))
+    table = _domain_table(model, channels)
+    on_end = (table.unit_interval & (np.minimum(values, 1.0 - values) < EDGE)) | (table.zero_end & (values < EDGE))
+    suspect = table.checked & (on_end | (values > table.high) | (values < table.low))
+    if not suspect.any():  # the common case, decided for every parameter at once
+        return []
     found = []
-    # The albedos come first; a shape parameter of a domain ≥ 0 (a conductor's k) ends on its lower end as an
-    # albedo of 0 does not: its map exp(u) reaches 0 only in the limit, where the fit compensates elsewhere.
-    n_albedos = albedo_size(model, len(channels)) if isinstance(model, LobeModel) else len(values)
-    meaningful_ends = model.lobe.meaningful_ends if isinstance(model, LobeModel) and model.lobe is not None else ()
-    for index, (label, value, domain) in enumerate(
-        zip(model.physical.labels(channels), values, model.physical.domains(len(channels)), strict=True)
-    ):
-        low, high = domain.plausible
-        name = re.sub(r"\[[^\]]*\]$", "", label)  # without its channel: specular_reflectance[r]
-        if name in meaningful_ends or name in held:  # a value of its own (glTF's metallic 0), or the user's
+    for index in np.flatnonzero(suspect):
+        label, name, domain, value = table.labels[index], table.names[index], table.domains[index], values[index]
+        if name in held:
             continue
-        at_zero = index >= n_albedos and isinstance(domain, Positive) and domain.allow_zero and value < EDGE
-        if (isinstance(domain, UnitInterval) and min(value, 1.0 - value) < EDGE) or at_zero:
+        low, high = domain.plausible
+        if on_end[index]:
             found.append(
                 f"{label} = {value:.10g} lies on an end of its domain {domain.text}: the fit ended against the bound,"
                 " where the model may not describe the data"
             )
         elif value > high:
             found.append(f"{label} = {value:.4g} is beyond its plausible range (≤ {high:g})")
-        elif value < low:
+        else:
             found.append(f"{label} = {value:.10g} is below its plausible range (≥ {low:.10g})")
     return found
+
+
+class DomainTable(NamedTuple):
+    """What :func:`_implausible` checks of each entry of a model's physical vector (``labels`` order): its label,
+    its name without a channel (``specular_reflectance[r]`` → ``specular_reflectance``), its domain, its plausible
+    range (``low``, ``high``), whether it is checked at all (not a parameter whose ends are values of their own),
+    whether its domain is the unit interval, and whether its lower end is 0 as an end of the fit (``zero_end``)."""
+
+    labels: list[str]
+    names: list[str]
+    domains: list
+    low: np.ndarray
+    high: np.ndarray
+    checked: np.ndarray
+    unit_interval: np.ndarray
+    zero_end: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _domain_table(model: Model, channels: tuple[str, ...]) -> DomainTable:
+    """:class:`DomainTable` of ``model`` in ``channels``, made once: a fit per texel checks thousands alike."""
+    labels = model.physical.labels(channels)
+    domains = model.physical.domains(len(channels))
+    # The albedos come first; a shape parameter of a domain ≥ 0 (a conductor's k) ends on its lower end as an
+    # albedo of 0 does not: its map exp(u) reaches 0 only in the limit, where the fit compensates elsewhere.
+    n_albedos = albedo_size(model, len(channels)) if isinstance(model, LobeModel) else len(labels)
+    meaningful_ends = model.lobe.meaningful_ends if isinstance(model, LobeModel) and model.lobe is not None else ()
+    names = [re.sub(r"\[[^\]]*\]$", "", label) for label in labels]
+    return DomainTable(
+        labels,
+        names,
+        domains,
+        np.array([domain.plausible[0] for domain in domains], float),
+        np.array([domain.plausible[1] for domain in domains], float),
+        np.array([name not in meaningful_ends for name in names]),
+        np.array([isinstance(domain, UnitInterval) for domain in domains]),
+        np.array(
+            [
+                index >= n_albedos and isinstance(domain, Positive) and domain.allow_zero
+                for index, domain in enumerate(domains)
+            ]
+        ),
+    )
 
 
 def _albedo_above_one(
@@ -311,8 +353,10 @@ def screen_bucket(model: LobeModel, params: list[Params], samples: Sequence[Samp
     stacked = jax.tree.map(lambda *leaves: np.stack(leaves), *rows)
     directions = stacked_directions(samples, "float64", stack)
     bounds, shares = (np.asarray(out) for out in _bucket_screens(model, stacked, *directions))
-    opened = [_open_incidences(one) if _screenable(model) else ALBEDO_INCIDENCE for one in bounds]
-    return [Screened(opened[d], shares[d]) for d in range(len(params))]
+    if not _screenable(model):
+        return [Screened(ALBEDO_INCIDENCE, shares[d]) for d in range(len(params))]
+    patterns = _open_patterns(bounds[: len(params)])  # the whole bucket's at once: one comparison, not one a fit
+    return [Screened(_incidences_of(pattern), shares[d]) for d, pattern in enumerate(patterns)]
 
 
 def screen_program(model: LobeModel, samples: Sequence[Samples], stack: int) -> tuple:
@@ -342,7 +386,20 @@ def _bucket_screens(model: LobeModel, stacked: Params, wi, wo, real):
 
 def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
     """The incidences whose screen bound (incidences, C) reaches :data:`SCREEN_BELOW` in some channel."""
-    return tuple(theta for theta, bound in zip(ALBEDO_INCIDENCE, bounds, strict=True) if np.any(bound >= SCREEN_BELOW))
+    return _incidences_of(_open_patterns(bounds[None])[0])
+
+
+def _open_patterns(bounds: np.ndarray) -> list[tuple[bool, ...]]:
+    """For each of a stack of screen bounds (D, incidences, C), which incidences reach :data:`SCREEN_BELOW` in some
+    channel."""
+    reached = np.any(np.asarray(bounds) >= SCREEN_BELOW, axis=2)  # (D, incidences)
+    return [tuple(bool(value) for value in row) for row in reached]
+
+
+@functools.cache
+def _incidences_of(pattern: tuple[bool, ...]) -> tuple[float, ...]:
+    """The incidences (degrees) a pattern (:func:`_open_patterns`) leaves open: one of few, made once each."""
+    return tuple(theta for theta, is_open in zip(ALBEDO_INCIDENCE, pattern, strict=True) if is_open)
 
 
 def _screenable(model: Model) -> TypeGuard[LobeModel]:

@@ -5,6 +5,7 @@ Every fit ends here, whichever way it was solved: one dataset or a batch of many
 lobes (``fit.py``), the data-driven model's own solve (``datadriven/fit.py``).
 """
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -25,12 +26,20 @@ def final_params(model: Model, solved: Solved, n_channels: int) -> Params:
     """A solve's parameters (numpy), each moved onto its domain where the solver's coordinates reached its edge
     only in the limit."""
     physical = np.asarray(model.physical.from_params(jax.tree.map(np.asarray, solved.params)))
-    domains = model.physical.domains(n_channels)
-    low, high = np.array([domain.bounds for domain in domains]).T
+    low, high = _domain_bounds(model, n_channels)
     if not np.all(np.isfinite(physical) & (physical > low) & (physical < high)):  # else every domain holds it
+        domains = model.physical.domains(n_channels)
         physical = np.array([domain.nearest_inside(value) for value, domain in zip(physical, domains, strict=True)])
     params = model.physical.to_params(physical, n_channels)
     return _onto_meaningful_ends(model, params)
+
+
+@functools.lru_cache(maxsize=64)
+def _domain_bounds(model: Model, n_channels: int) -> tuple[np.ndarray, np.ndarray]:
+    """The lower and upper bounds of each entry of ``model``'s physical vector, made once: a fit per texel asks
+    thousands of times."""
+    low, high = np.array([domain.bounds for domain in model.physical.domains(n_channels)], float).T
+    return low, high
 
 
 def _onto_meaningful_ends(model: Model, params: Params) -> Params:

@@ -168,7 +168,8 @@ class StackedFit:
     ) -> list[FitResult]:
         """The :class:`FitResult` of each dataset's ``solved`` (:meth:`solve`), with its caveats: the screens of all
         of them in one program, compiled while they were solved."""
-        each = [jax.tree.map(lambda leaf, p=position: leaf[p], solved) for position in range(len(self.samples))]
+        leaves, structure = jax.tree.flatten(solved)  # flattened once, not once a dataset: a tile has thousands
+        each = [structure.unflatten([leaf[p] for leaf in leaves]) for p in range(len(self.samples))]
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
         screens: Sequence[Screened | None] = [None] * len(params)
