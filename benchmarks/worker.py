@@ -159,6 +159,20 @@ def steps(args) -> dict:
     )
 
 
+def float64_product_rate(size: int = 1024, repeats: int = 5) -> float:
+    """The machine's float64 rate (FLOP/s): a ``size``² numpy float64 matrix product (BLAS, on every core), the
+    median of ``repeats`` after one to warm up. (``jax.numpy.dot`` of the same arrays computes in float32 unless JAX's
+    float64 is on: 143–162 GFLOP/s here, against numpy's ~100 in float64.)"""
+    a = np.random.default_rng(0).standard_normal((size, size))
+    a @ a
+    seconds = []
+    for _ in range(repeats):
+        began = time.perf_counter()
+        a @ a
+        seconds.append(time.perf_counter() - began)
+    return 2 * size**3 / float(np.median(seconds))
+
+
 def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
     """(e)'s lower bound of one normal-equation pass on this machine, the larger of two:
 
@@ -166,8 +180,8 @@ def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
       256 MB numpy sum;
     * its arithmetic at the machine's float64 rate: XLA's count of the flops (``cost_analysis``) of the pass over
       one chunk of samples, times the chunks (XLA counts a loop's body once, so the count is taken on a problem of
-      one chunk), at the rate of a 1024² float64 matrix product on every core (no elementwise work runs faster;
-      XLA counts a transcendental function as one flop, so the bound is generous).
+      one chunk), at the rate of a float64 matrix product on every core (:func:`float64_product_rate`: no
+      elementwise work runs faster; XLA counts a transcendental function as one flop, so the bound is generous).
     """
     import jax
 
@@ -183,9 +197,7 @@ def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
     chunk_flops = jax.jit(normal_pass).lower(theta, one_chunk).compile().cost_analysis()
     chunk_flops = (chunk_flops[0] if isinstance(chunk_flops, list) else chunk_flops)["flops"]
     flops = float(chunk_flops) * (n // size)
-    square = np.random.default_rng(0).random((1024, 1024))
-    product_seconds, _ = median_seconds(lambda: jax.numpy.dot(square, square), 5)
-    rate = 2 * 1024**3 / product_seconds
+    rate = float64_product_rate()
     return {
         "pass_bytes": bytes_read,
         "bandwidth_bytes_per_second": bandwidth,

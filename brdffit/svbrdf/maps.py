@@ -55,9 +55,10 @@ class Maps:
     ``neighbour_starts``: how many texels were fitted again from a neighbour's parameters, and how many ended lower
     (``neighbours.py``); ``notes``: what a user must know of the fit as a whole (the capture's values far below the
     relative loss's floor); ``normals``: the capture's normal map (H, W, 3), where it had one, which relighting
-    needs; ``exports``: what ``maps.json`` says of the ``material.glb`` (``"glb"``) and the ``mitsuba/`` folder
-    (``"mitsuba"``) written beside the maps (``gltf_maps.write_glb``, ``mitsuba_maps.write_mitsuba_maps``; None:
-    not made)."""
+    needs; ``exports``: what the fit that made the maps wrote beside them, the ``material.glb`` (``"glb"``) and the
+    ``mitsuba/`` folder (``"mitsuba"``), as ``maps.json`` says of them (``gltf_maps.write_glb``,
+    ``mitsuba_maps.write_mitsuba_maps``; None: not made). Maps read from a folder have none: written elsewhere, or
+    changed, they no longer have those files beside them."""
 
     model: str
     model_options: dict[str, Any]
@@ -254,5 +255,4 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         dict(description.get("neighbour_starts") or {}),
         list(description.get("notes") or []),
         loaded.get(NORMALS),
-        {"glb": description.get("glb"), "mitsuba": description.get("mitsuba")},
     )

@@ -147,14 +147,19 @@ def test_the_screen_changes_no_verdict(name):
         assert bool(module._albedo_above_one(model, params, ("y",))) is expected, params
         above += expected
         per_incidence = (fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)
-        for bound in (
-            module._screen_bound(model, params),
-            module._grid_bound(model, params, module.FIRST_SCREEN_GRID),
-            module._grid_bound(model, params, module.SCREEN_GRID),
-        ):
-            cleared = np.all(np.asarray(bound) < module.SCREEN_BELOW, axis=1)
+        screen, first, second = (
+            np.all(np.asarray(bound) < module.SCREEN_BELOW, axis=1)
+            for bound in (
+                module._screen_bound(model, params),
+                module._grid_bound(model, params, module.FIRST_SCREEN_GRID),
+                module._grid_bound(model, params, module.SCREEN_GRID),
+            )
+        )
+        for cleared in (screen, first, second):
             assert not np.any(per_incidence.any(axis=1) & cleared), params
-        skipped += bool(cleared.all())
+        if first.all():  # the first grid decides alone: the screen clears what it cleared
+            assert screen.all(), params
+        skipped += bool(screen.all())
     print(f"{name}: the screen skipped {skipped} of 40, {above} above 1")
     assert skipped >= 5 and above >= 1
 
@@ -184,6 +189,7 @@ def test_neither_screen_grid_clears_an_albedo_above_one_over_the_whole_domain(na
     bounds = [
         jax.jit(lambda p, n=n: module._grid_bound(model, p, n)) for n in (module.FIRST_SCREEN_GRID, module.SCREEN_GRID)
     ]
+    checked = found_above = 0
     for _ in range(400):
         params = model.unconstrained.to_params(rng.normal(0.0, 2.0, model.unconstrained.size(1)), 1)
         fine, coarse = (np.asarray(a) for a in module._albedo_estimates(model, params, 256))
@@ -193,6 +199,11 @@ def test_neither_screen_grid_clears_an_albedo_above_one_over_the_whole_domain(na
         for bound in bounds:
             cleared = np.all(np.asarray(bound(params)) < module.SCREEN_BELOW, axis=1)
             assert not np.any(above & cleared), model.physical.from_params(params)
+        checked += 1
+        found_above += bool(above.any())
+    assert checked >= 300  # the draw did test the grids
+    # Albedos above 1 occur, so the clearances are tested where they matter; roughplastic conserves energy by design.
+    assert found_above >= 1 or name == "roughplastic", found_above
 
 
 @pytest.mark.parametrize("n", [1.0, 30.0, 1000.0, 10000.0])

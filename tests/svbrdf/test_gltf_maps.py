@@ -55,7 +55,18 @@ def test_the_maps_glb_holds_the_maps_as_textures(gltf_fit):
     assert np.max(np.abs(metallic_roughness[..., 2] - maps.params["metallic"])[fitted]) <= 0.5 / 255 + 1e-12
     assert exported.quantization["roughness"] <= 0.5 / 255 + 1e-12
     described = json.loads((folder / "maps.json").read_text())
-    assert described["glb"]["file"] == "material.glb"
+    assert described["glb"]["file"] == "material.glb" and maps.exports["glb"] == described["glb"]
+
+
+def test_maps_read_back_and_written_elsewhere_claim_no_glb(gltf_fit, tmp_path):
+    """Maps read from a folder do not carry its .glb: written into another folder, their maps.json names none, and
+    the files written are the maps' own."""
+    _, _, folder = gltf_fit
+    again = svbrdf.read_maps(folder)
+    assert again.exports == {"glb": None, "mitsuba": None}
+    written = svbrdf.write_maps(tmp_path / "copy", again, textures=False)
+    assert sorted(path.name for path in written) == ["maps.json", "params.npz"]
+    assert json.loads((tmp_path / "copy" / "maps.json").read_text())["glb"] is None
 
 
 @needs_validator

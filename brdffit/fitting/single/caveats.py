@@ -317,8 +317,9 @@ def _albedo_above_one(
     i.e. where the grid resolves the lobe.
 
     The fine grid (256 × 512 viewing directions per incidence; half that for an isotropic model) is evaluated only
-    at the incidences where a screen (:func:`_screen_bound`, 64 × 128 directions) cannot rule an albedo above the
-    limit out; ``open_incidences``: those incidences, when :func:`screen_bucket` screened many fits at once."""
+    at the incidences where a screen (:func:`_screen_bound`: 16 × 32 directions, then 64 × 128) cannot rule an albedo
+    above the limit out; ``open_incidences``: those incidences, when :func:`screen_bucket` screened many fits at
+    once."""
     if open_incidences is None:
         screened = _screen_bound(model, params) if _screenable(model) else None
         open_incidences = ALBEDO_INCIDENCE if screened is None else _open_incidences(np.asarray(screened))
