@@ -111,7 +111,7 @@ _pairing: dict[tuple, threading.Event] = {}  # the geometries being paired now, 
 def reciprocity(samples: Samples) -> Reciprocity | None:
     """The reciprocity of ``samples`` (None when they hold fewer than :data:`MIN_PAIRS` pairs: at once where fewer
     samples than that have ``θi < θo``, each pair's first, as a capture's texel seen from above has)."""
-    if np.count_nonzero(samples.wi[:, 2] > samples.wo[:, 2]) < MIN_PAIRS:
+    if len(_firsts(samples)) < MIN_PAIRS:
         return None
     provenance = samples.provenance
     in_force = provenance.quantity if provenance is not None else "brdf"
@@ -166,6 +166,11 @@ def _geometry_key(samples: Samples) -> tuple:
     digest.update(np.ascontiguousarray(samples.wi).data)
     digest.update(np.ascontiguousarray(samples.wo).data)
     return digest.digest(), len(samples.wi)
+
+
+def _firsts(samples: Samples) -> np.ndarray:
+    """Indices of the samples that can be a pair's first: ``θi < θo`` (each pair is found once, from its first)."""
+    return np.flatnonzero(samples.wi[:, 2] > samples.wo[:, 2])
 
 
 def _pairs(geometry: tuple, samples: Samples, general: bool) -> Pairs:
@@ -300,7 +305,7 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     points = _points(samples.wi, samples.wo, general)
     tree = _tree(points, balanced_tree=False, compact_nodes=False)  # ~2× faster to build, as fast to query
     within = tolerance(points, tree)
-    queries = np.flatnonzero(samples.wi[:, 2] > samples.wo[:, 2])  # θi < θo
+    queries = _firsts(samples)
     if len(queries) > MAX_QUERIES:
         queries = np.sort(np.random.default_rng(0).choice(queries, MAX_QUERIES, replace=False))
     informative = samples.wi[queries, 2] >= INFORMATIVE * samples.wo[queries, 2]

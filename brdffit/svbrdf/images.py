@@ -117,7 +117,7 @@ def _sixteen_bit(path: Path) -> np.ndarray:
             array = tifffile.imread(path)
         except (ValueError, tifffile.TiffFileError) as error:
             raise BrdfInputError(f"{path}: not a TIFF image ({error})") from None
-        depth = array.dtype.itemsize * 8 if array.dtype.kind == "u" else f"{array.dtype.name}"
+        depth = array.dtype.itemsize * 8 if array.dtype.kind == "u" else array.dtype.name
         image = np.asarray(array, dtype=float)
         image = image[..., :3] if image.ndim == 3 and image.shape[-1] >= 3 else image
     if depth != 16:

@@ -8,9 +8,9 @@ A maps folder holds:
   fitted), ``n_caveats`` (H, W: how many caveats its fit and its uncertainty have, as a result's warnings) and, with
   ``uncertainty="laplace"``, ``<parameter>_stderr`` for each parameter (the Laplace standard error, same shape), and
   ``normal`` (H, W, 3), the capture's normal map, where it had one. A texel that was not fitted (masked out, or with
-  fewer samples than its model has parameters) holds NaN; * ``maps.json``: what the arrays are: the model and its
-  options, the loss, the channels, the texel grid and the plane's size, the capture they came from, and counts (texels
-  fitted, converged; the rmse's median);
+  fewer samples than its model has parameters) holds NaN;
+* ``maps.json``: what the arrays are: the model and its options, the loss, the channels, the texel grid and the
+  plane's size, the capture they came from, and counts (texels fitted, converged; the rmse's median);
 * ``material.glb``, for the maps of a ``gltf`` fit: a quad the size of the sample with the maps as its material's
   textures (``gltf_maps.py``), which ``maps.json``'s ``glb`` describes (its notes, the 8-bit textures' rounding, or
   why it was not written);

@@ -21,7 +21,7 @@ RESTART_ABOVE = 2.0
 PASSES = 3
 #: A refit replaces a fit when its cost is lower by more than this (relative).
 SAME_COST = 1e-9
-#: The flat offsets of a texel's neighbours up, down, left and right, for a grid ``width`` texels wide.
+#: A texel's four neighbours, in the order :func:`_lowest_neighbour` stacks them.
 DIRECTIONS = ("up", "down", "left", "right")
 
 
@@ -34,11 +34,12 @@ def neighbour_starts(
     rows, width = capture.shape
     names = [name for name in columns if name not in FIT_ARRAYS and not name.endswith(STDERR_SUFFIX)]
     offsets = np.array([-width, width, -1, 1])  # the order of DIRECTIONS, as ``_lowest_neighbour`` stacks them
+    fitted = columns["n_samples"].reshape(rows, width) > 0  # a refit keeps a texel's samples
     retried = improved = 0
     for _ in range(PASSES):
         cost = columns["cost"].reshape(rows, width)
-        best, lowest = _lowest_neighbour(np.where(columns["n_samples"].reshape(rows, width) > 0, cost, np.inf))
-        again = np.isfinite(cost) & (columns["n_samples"].reshape(rows, width) > 0) & (cost > RESTART_ABOVE * lowest)
+        best, lowest = _lowest_neighbour(np.where(fitted, cost, np.inf))
+        again = np.isfinite(cost) & fitted & (cost > RESTART_ABOVE * lowest)
         if not again.any():
             break
         texels = np.flatnonzero(again.ravel())
