@@ -3,6 +3,7 @@ grid starts of stacked datasets, each dataset's own."""
 
 from dataclasses import dataclass
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -81,3 +82,42 @@ def test_the_starts_ask_the_models_diffuse_term():
     # Exact but for the least squares' relative ridge of 1e-12 and float64 rounding.
     assert float(start.diffuse[0]) == pytest.approx(0.4, rel=1e-9)
     assert float(start.specular[0, 0]) == pytest.approx(0.05, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("options", "fixed", "bounds"),
+    [
+        ({"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith"}, None, None),
+        ({"fresnel": "conductor", "shadowing": "smith"}, {"eta": [1.5, 1.2, 0.9]}, {"m": [0.05, 0.2]}),
+        ({"fresnel": "conductor", "distribution": "ggx", "shadowing": "smith", "anisotropic": True}, None, None),
+        ({"fresnel": "conductor", "anisotropic": True}, {"ks": None}, {"k": [0.5, 4.0], "alpha_u": [0.02, 0.3]}),
+    ],
+)
+def test_a_separable_lobes_search_equals_the_whole_lobes(monkeypatch, options, fixed, bounds):
+    """A conductor's grid searched by its distinct factors (``_Separated``: each microfacet term and each index once)
+    scores every grid shape as the search of whole lobes does, holds and all. Tolerance: the two sum the same terms in
+    another order (``Σ w F² U²`` against ``Σ w (F U)²``), a few ulps a term over ~10³ terms: 1e-11 relative."""
+    from brdffit.fitting.single.constraints import constraints_for
+    from brdffit.fitting.starts import grid
+
+    model = get_model("cook-torrance", **options)
+    truth = {"kd": [0.1, 0.05, 0.02], "ks": [1.0] * 3, "eta": [0.2, 0.9, 1.1], "k": [3.5, 2.6, 2.3]}
+    truth |= {"alpha_u": 0.05, "alpha_v": 0.2, "phi_t": 30.0} if options.get("anisotropic") else {"m": 0.1}
+    wi, wo = data_synth.uniform_random(400, seed=3)
+    samples = data_synth.synthesize(model, truth, wi, wo, noise=0.01, seed=4)
+    problem = build_problems([samples])
+    constraints = constraints_for(model, 3, fixed, bounds)
+    hold = None if constraints is None else jax.tree.map(lambda leaf: jnp.asarray(leaf)[None], constraints.hold())
+    channels = grid.grid_channels(model, samples.channels)
+    assert grid._Separated.of(model, grid._grid(model, channels), {}, (400, 3)) is not None
+    first = lambda tree: None if tree is None else jax.tree.map(lambda leaf: leaf[0], tree)  # the one dataset's
+    search = lambda: jax.jit(lambda p, h: grid.grid_starts(model, get_loss("log"), 5, p, h, channels))(problem, hold)
+    candidates = lambda: jax.jit(lambda p, h: grid._candidates(model, get_loss("log"), p, h, {}, channels))(
+        first(problem), first(hold)
+    )
+    separated, separated_starts = candidates(), search()
+    monkeypatch.setattr(grid, "SEPARATED_BYTES", 0)  # every lobe whole
+    whole, whole_starts = candidates(), search()
+    np.testing.assert_allclose(separated[0], whole[0], rtol=1e-11)
+    np.testing.assert_allclose(separated[1], whole[1], rtol=1e-11, atol=1e-11)
+    np.testing.assert_allclose(separated_starts, whole_starts, rtol=1e-11, atol=1e-11)

@@ -186,7 +186,11 @@ def residuals(model: Model, loss: Loss, theta: Float[Array, " k"], problem: Prob
 def residuals_at(model: Model, loss: Loss, params: Params, problem: Problem) -> Float[Array, "N C"]:
     """Residuals (N, C) at the parameters ``params`` (arrays), computed in the problem's dtype."""
     params = jax.tree.map(lambda leaf: leaf.astype(problem.wi.dtype), params)
-    predicted = model.brdf(params, problem.wi, problem.wo)
+    return residuals_of_values(loss, model.brdf(params, problem.wi, problem.wo), problem)
+
+
+def residuals_of_values(loss: Loss, predicted: Float[Array, "N C"], problem: Problem) -> Float[Array, "N C"]:
+    """Residuals (N, C) of a model whose values at ``problem``'s directions are ``predicted`` (N, C), 1/sr."""
     transformed = loss.transform(predicted, problem.measured, problem.wi[:, 2:3])
     target, scale = target_and_scale(loss, problem)
     return (transformed - target) * scale

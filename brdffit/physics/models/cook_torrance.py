@@ -109,17 +109,41 @@ class CookTorranceLobe(MappedLobe):
             return ()
         return tuple({"m": m} | metal for m in ROUGHNESS_GRID for metal in metal_grid(channels))
 
+    @property
+    def separable(self) -> bool:
+        """A conductor's lobe is ``F(cos β; eta, k)`` (N, C) times ``D·G/(4 ci co)`` (N,), and ``cos β`` depends on
+        the directions alone."""
+        return bool(self.channel_names)
+
+    def shared_factor(self, shape, wi, wo):
+        """``D·G/(4 ci co)`` (N,): the lobe without its Fresnel term."""
+        return self._unit_and_cos_beta(shape, wi, wo)[0]
+
+    def channel_factor(self, shape, wi, wo):
+        """The Fresnel term ``F(cos β)`` (N, C) of an index per channel."""
+        return FRESNEL[self.fresnel].reflectance(cos_beta_of(wi, wo)[:, None], shape)
+
     def __call__(self, shape, wi, wo):
+        unit, cos_beta = self._unit_and_cos_beta(shape, wi, wo)
+        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
+            return FRESNEL[self.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
+        return FRESNEL[self.fresnel].reflectance(cos_beta, shape) * unit
+
+    def _unit_and_cos_beta(self, shape, wi, wo):
+        """``D·G/(4 ci co)`` (N,) and ``cos β`` (N,), which the Fresnel term takes (one half vector for both: the lobe
+        is evaluated in every step of a fit)."""
         cos_i, cos_o = wi[:, 2], wo[:, 2]
         h = half_vector(wi, wo)
         cos_theta_h = h[:, 2]
         cos_beta = jnp.sum(wi * h, axis=-1)
         distribution = DISTRIBUTIONS[self.distribution]
         masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cos_beta)
-        unit = distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o)
-        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
-            return FRESNEL[self.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
-        return FRESNEL[self.fresnel].reflectance(cos_beta, shape) * unit
+        return distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o), cos_beta
+
+
+def cos_beta_of(wi, wo):
+    """``cos β = wi·h`` (N,), the cosine a Fresnel term takes: the same in every frame turned about the normal."""
+    return jnp.sum(wi * half_vector(wi, wo), axis=-1)
 
 
 @final
@@ -184,7 +208,25 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
             "phi_t": turned,
         }
 
+    @property
+    def separable(self) -> bool:
+        return self.terms.separable
+
+    def shared_factor(self, shape, wi, wo):
+        """``D·G/(4 ci co)`` (N,) in the tangent frame: the lobe without its Fresnel term."""
+        return self._unit_and_cos_beta(shape, wi, wo)[0]
+
+    def channel_factor(self, shape, wi, wo):
+        return self.terms.channel_factor(shape, wi, wo)
+
     def __call__(self, shape, wi, wo):
+        unit, cos_beta = self._unit_and_cos_beta(shape, wi, wo)
+        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
+            return FRESNEL[self.terms.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
+        return FRESNEL[self.terms.fresnel].reflectance(cos_beta, shape) * unit
+
+    def _unit_and_cos_beta(self, shape, wi, wo):
+        """``D·G/(4 ci co)`` (N,) and ``cos β`` (N,) (``CookTorranceLobe._unit_and_cos_beta``), in the tangent frame."""
         alpha_u, alpha_v = shape["alpha_u"], shape["alpha_v"]
         azimuth = jnp.radians(shape["phi_t"])
         wi, wo = in_turned_frame(wi, azimuth), in_turned_frame(wo, azimuth)  # the tangent frame
@@ -193,10 +235,7 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
         distribution = DISTRIBUTIONS[self.terms.distribution]
         density = distribution.anisotropic_density(h[:, 0], h[:, 1], h[:, 2], alpha_u, alpha_v)
         masking = anisotropic_shadowing(self.terms.shadowing, distribution, alpha_u, alpha_v, wi, wo, h[:, 2], cos_beta)
-        unit = density * masking / (4.0 * wi[:, 2] * wo[:, 2])
-        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
-            return FRESNEL[self.terms.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
-        return FRESNEL[self.terms.fresnel].reflectance(cos_beta, shape) * unit
+        return density * masking / (4.0 * wi[:, 2] * wo[:, 2]), cos_beta
 
 
 def cook_torrance(

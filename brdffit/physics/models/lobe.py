@@ -149,6 +149,22 @@ class Lobe(ABC):
         return ()
 
     @property
+    def separable(self) -> bool:
+        """Whether the lobe, one with :attr:`channel_names`, is the product of a factor of its other parameters alone
+        (:meth:`shared_factor`, (N,)) and one of its per-channel parameters alone (:meth:`channel_factor`, (N, C)): a
+        microfacet lobe's ``D·G/(4 ci co)`` and its Fresnel term. A start search then evaluates each distinct factor
+        of its grid once, not once a grid shape (``fitting/starts/grid.py``). False by default."""
+        return False
+
+    def shared_factor(self, shape: Shape, wi: Directions, wo: Directions) -> Float[Array, " n"]:
+        """The factor (N,) of a :attr:`separable` lobe that its shared (not per-channel) parameters determine."""
+        raise NotImplementedError(f"{type(self).__name__} is not separable")
+
+    def channel_factor(self, shape: Shape, wi: Directions, wo: Directions) -> Float[Array, "n C"]:
+        """The factor (N, C) of a :attr:`separable` lobe that its :attr:`channel_names` determine."""
+        raise NotImplementedError(f"{type(self).__name__} is not separable")
+
+    @property
     @abstractmethod
     def summary(self) -> str:
         """The lobe's formula in a line, for ``brdffit models``."""

@@ -163,9 +163,15 @@ class LobeModel(Model):
     # ------------------------------------------------------------------ evaluation
     def brdf(self, params: Params, wi, wo):
         visible, wi, wo = above_horizon(jnp.asarray(wi), jnp.asarray(wo))
-        values = self.diffuse({}, wi, wo)[:, None] * jnp.asarray(params.diffuse)
-        if self.n_lobes:
-            lobes = self.lobe_values(params.shape, wi, wo)
+        lobes = self.lobe_values(params.shape, wi, wo) if self.n_lobes else None
+        return self.combined(params, visible, self.diffuse({}, wi, wo), lobes)
+
+    def combined(self, params: Params, visible, diffuse, lobes) -> Float[Array, "n C"]:
+        """:meth:`brdf` (N, C) from its parts at directions :func:`above_horizon` made: which pairs are ``visible``
+        (N,), the diffuse term's basis (N,) and the lobes' unit-albedo values (:meth:`lobe_values`, or None without
+        lobes), weighted by the albedos of ``params``."""
+        values = diffuse[:, None] * jnp.asarray(params.diffuse)
+        if lobes is not None:
             if lobes.ndim == 3:  # one lobe per channel (K, N, C)
                 values = values + jnp.einsum("knc,kc->nc", lobes, jnp.asarray(params.specular))
             else:
