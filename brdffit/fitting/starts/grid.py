@@ -251,7 +251,7 @@ def _candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | Non
 
 
 #: A :class:`_Separated` search holds its Fresnel factors (F, N, C) in memory at once where they take at most this many
-#: bytes (the 38 of a conductor's grid on RGB data: 15 MB at the search's 16,384 samples); else each grid shape's lobe
+#: bytes (the 40 of a conductor's grid on RGB data: 16 MB at the search's 16,384 samples); else each grid shape's lobe
 #: is computed whole, as for any other lobe.
 SEPARATED_BYTES = 2**28
 #: A :class:`_Separated` search scores this many grid shapes at a time (their values come from its factors).
@@ -264,8 +264,8 @@ class _Separated:
     β; eta, k)`` (N, C) times ``D·G/(4 ci co)`` (N,)) as its distinct factors: ``shared`` (U,) shapes of the shared
     parameters, ``channel`` (F, C) values of the per-channel ones, and which of each grid shape ``g`` takes
     (``shared_of[g]``, ``channel_of[g]``). The grid is every roughness with every index (and measured metals at a few
-    roughnesses): a conductor's 2,240 anisotropic shapes have 80 distinct microfacet factors and 38 distinct indices,
-    so the search evaluates 118 lobes' worth of the costly Fresnel and Smith terms, not 2,240. The normal equations
+    roughnesses): a conductor's 2,240 anisotropic shapes have 72 distinct microfacet factors and 40 distinct indices,
+    so the search evaluates 112 lobes' worth of the costly Fresnel and Smith terms, not 2,240. The normal equations
     of every grid shape come from three contractions of the factors (``Σ_n w F² U²`` etc.), and each shape's values
     for its cost from a product of two of them. The search of an export's anisotropic GGX stand-in (8,640 pairs) took
     1.75 s whole, 0.44 s so; of an isotropic Beckmann one, 0.22 and 0.09 s (2-core x86-64)."""
