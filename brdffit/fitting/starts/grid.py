@@ -184,7 +184,10 @@ def _candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | Non
         fixed = jnp.broadcast_to(fixed[:, :, None], (*fixed.shape, n_channels))
     if chosen:
         fixed = jnp.concatenate([fixed, model.lobe_values(chosen, problem.wi, problem.wo)])
-    if lobe_of is not None:
+    separated = _Separated.of(model, grid, chosen, problem.measured.shape)  # None for whole lobes too
+    if separated is not None:  # each distinct factor of the lobe computed once (_Separated)
+        stacked, grams, rhs, cost_at = separated.search(model, loss, problem, hold, fixed, weight)
+    elif lobe_of is not None:
         stacked = {
             name: jnp.asarray(
                 [np.broadcast_to(shape[name], (n_channels,)) if name in per_channel else shape[name] for shape in grid]
@@ -196,17 +199,14 @@ def _candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | Non
     cost_of = lambda theta: jnp.sum(residuals(model, loss, theta, problem) ** 2)
     if model.whole:  # a renderer's own model: no albedos to solve for, each grid shape is scored as it is
         return _whole_candidates(model, stacked, n_channels, hold, cost_of)
-    separated = _Separated.of(model, grid, chosen, problem.measured.shape)
-    if separated is not None:  # each distinct factor of the lobe computed once (_Separated)
-        stacked, grams, rhs, cost_at = separated.search(model, loss, problem, hold, fixed, weight)
-    elif per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
+    if separated is None and per_channel:  # bases (B, N, C) built and reduced a few shapes at a time (below)
 
         def normal_equations_of(shape):
             lobe = lobe_family(model)(shape, problem.wi, problem.wo)  # (N, C)
             return _normal_equations(jnp.concatenate([fixed, lobe[None]]), weight, problem.measured)
 
         grams, rhs = jax.lax.map(normal_equations_of, stacked, batch_size=PER_CHANNEL_BATCH)
-    else:
+    elif separated is None:
         if model.n_lobes:
             lobes = jax.vmap(lambda shape: lobe_family(model)(shape, problem.wi, problem.wo))(stacked)  # (G, N)
             bases = jax.vmap(lambda lobe: jnp.concatenate([fixed, lobe[None]]))(lobes)  # (G, B, N)
@@ -250,9 +250,10 @@ def _candidates(model: LobeModel, loss: Loss, problem: Problem, hold: Hold | Non
     return costs, thetas
 
 
-#: A :class:`_Separated` search holds its Fresnel factors (F, N, C) in memory at once where they take at most this many
-#: bytes (the 40 of a conductor's grid on RGB data: 16 MB at the search's 16,384 samples); else each grid shape's lobe
-#: is computed whole, as for any other lobe.
+#: A :class:`_Separated` search holds its factors in memory at once, four arrays (F, N, C) of its indices' Fresnel terms
+#: and their products with the weights and data, and one (U, N) of its microfacet terms, where they take at most this
+#: many bytes (the 40 indices and 72 shapes of an anisotropic conductor's grid on RGB data: 72 MB at the search's
+#: 16,384 samples); else each grid shape's lobe is computed whole, as for any other lobe.
 SEPARATED_BYTES = 2**28
 #: A :class:`_Separated` search scores this many grid shapes at a time (their values come from its factors).
 SEPARATED_BATCH = 16
@@ -267,8 +268,9 @@ class _Separated:
     roughnesses): a conductor's 2,240 anisotropic shapes have 72 distinct microfacet factors and 40 distinct indices,
     so the search evaluates 112 lobes' worth of the costly Fresnel and Smith terms, not 2,240. The normal equations
     of every grid shape come from three contractions of the factors (``Σ_n w F² U²`` etc.), and each shape's values
-    for its cost from a product of two of them. The search of an export's anisotropic GGX stand-in (8,640 pairs) took
-    1.75 s whole, 0.44 s so; of an isotropic Beckmann one, 0.22 and 0.09 s (2-core x86-64)."""
+    for its cost from a product of two of them. The start search (grid and race) of an export's anisotropic stand-ins
+    (8,640 pairs, in a warm process) took 1.3–1.7 s whole, 0.29–0.34 s so; the grid alone of an isotropic Beckmann
+    one, 0.22 and 0.09 s (2-core x86-64)."""
 
     shared: dict
     channel: dict
@@ -296,7 +298,7 @@ class _Separated:
             )
             shared_of.append(shared_keys.setdefault(shared_key, len(shared_keys)))
             channel_of.append(channel_keys.setdefault(channel_key, len(channel_keys)))
-        if len(channel_keys) * n * n_channels * 8 > SEPARATED_BYTES:
+        if (4 * len(channel_keys) * n_channels + len(shared_keys)) * n * 8 > SEPARATED_BYTES:
             return None
         columns = lambda keys, names: {name: np.array([key[i] for key in keys]) for i, name in enumerate(names)}
         return _Separated(
@@ -319,7 +321,7 @@ class _Separated:
         stacked = {name: jnp.asarray(values)[self.shared_of] for name, values in shared.items()}
         stacked |= {name: jnp.asarray(values)[self.channel_of] for name, values in channel.items()}
         visible, wi, wo = above_horizon(problem.wi, problem.wo)
-        units = jax.vmap(lambda shape: lobe.shared_factor(shape, wi, wo))(shared)  # (U, N)
+        units = jnp.where(visible, jax.vmap(lambda shape: lobe.shared_factor(shape, wi, wo))(shared), 0.0)  # (U, N)
         factors = jax.vmap(lambda shape: lobe.channel_factor(shape, wi, wo))(channel)  # (F, N, C)
         weighted = weight[None] * factors  # (F, N, C)
         squares = jnp.einsum("fnc,un->fuc", weighted * factors, units * units)  # Σ_n w F² U²
@@ -335,9 +337,11 @@ class _Separated:
         diffuse = model.diffuse({}, wi, wo)
         shared_of, channel_of = jnp.asarray(self.shared_of), jnp.asarray(self.channel_of)
 
+        dtype = problem.wi.dtype  # the model evaluated in the problem's precision, as ``residuals`` does
+
         def cost_at(index, theta):
-            params = model.unconstrained.to_params(theta, n_channels)
-            lobes = (factors[channel_of[index]] * units[shared_of[index]][:, None])[None]
+            params = jax.tree.map(lambda leaf: leaf.astype(dtype), model.unconstrained.to_params(theta, n_channels))
+            lobes = (factors[channel_of[index]] * units[shared_of[index]][:, None])[None].astype(dtype)
             predicted = model.combined(params, visible, diffuse, lobes)
             return jnp.sum(residuals_of_values(loss, predicted, problem) ** 2)
 

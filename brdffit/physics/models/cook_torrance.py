@@ -121,13 +121,18 @@ class CookTorranceLobe(MappedLobe):
 
     def channel_factor(self, shape, wi, wo):
         """The Fresnel term ``F(cos β)`` (N, C) of an index per channel."""
-        return FRESNEL[self.fresnel].reflectance(cos_beta_of(wi, wo)[:, None], shape)
+        return self.fresnel_term(cos_beta(wi, half_vector(wi, wo)), shape)
 
     def __call__(self, shape, wi, wo):
-        unit, cos_beta = self._unit_and_cos_beta(shape, wi, wo)
-        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
-            return FRESNEL[self.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
-        return FRESNEL[self.fresnel].reflectance(cos_beta, shape) * unit
+        unit, cosine = self._unit_and_cos_beta(shape, wi, wo)
+        return self.fresnel_term(cosine, shape) * (unit[:, None] if self.channel_names else unit)  # (N, C) or (N,)
+
+    def fresnel_term(self, cosine, shape):
+        """``F(cos β)`` at ``cosine`` (N,): (N, C) for an index per channel (:attr:`channel_names`: one lobe per
+        channel), else (N,)."""
+        if self.channel_names:
+            return FRESNEL[self.fresnel].reflectance(cosine[:, None], shape)
+        return FRESNEL[self.fresnel].reflectance(cosine, shape)
 
     def _unit_and_cos_beta(self, shape, wi, wo):
         """``D·G/(4 ci co)`` (N,) and ``cos β`` (N,), which the Fresnel term takes (one half vector for both: the lobe
@@ -135,15 +140,16 @@ class CookTorranceLobe(MappedLobe):
         cos_i, cos_o = wi[:, 2], wo[:, 2]
         h = half_vector(wi, wo)
         cos_theta_h = h[:, 2]
-        cos_beta = jnp.sum(wi * h, axis=-1)
+        cosine = cos_beta(wi, h)
         distribution = DISTRIBUTIONS[self.distribution]
-        masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cos_beta)
-        return distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o), cos_beta
+        masking = shadowing(self.shadowing, distribution, shape["m"], cos_i, cos_o, cos_theta_h, cosine)
+        return distribution.density(cos_theta_h, shape["m"]) * masking / (4.0 * cos_i * cos_o), cosine
 
 
-def cos_beta_of(wi, wo):
-    """``cos β = wi·h`` (N,), the cosine a Fresnel term takes: the same in every frame turned about the normal."""
-    return jnp.sum(wi * half_vector(wi, wo), axis=-1)
+def cos_beta(wi, h):
+    """``cos β = wi·h`` (N,) of directions ``wi`` and their half vectors ``h`` (N, 3), the cosine a Fresnel term takes:
+    the same in every frame turned about the normal."""
+    return jnp.sum(wi * h, axis=-1)
 
 
 @final
@@ -210,6 +216,7 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
 
     @property
     def separable(self) -> bool:
+        """As the isotropic lobe's (``CookTorranceLobe.separable``): ``cos β`` is the same in the tangent frame."""
         return self.terms.separable
 
     def shared_factor(self, shape, wi, wo):
@@ -217,13 +224,12 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
         return self._unit_and_cos_beta(shape, wi, wo)[0]
 
     def channel_factor(self, shape, wi, wo):
+        """The Fresnel term ``F(cos β)`` (N, C) of an index per channel (``CookTorranceLobe.channel_factor``)."""
         return self.terms.channel_factor(shape, wi, wo)
 
     def __call__(self, shape, wi, wo):
-        unit, cos_beta = self._unit_and_cos_beta(shape, wi, wo)
-        if self.channel_names:  # an index per channel: F (N, C), one lobe per channel
-            return FRESNEL[self.terms.fresnel].reflectance(cos_beta[:, None], shape) * unit[:, None]
-        return FRESNEL[self.terms.fresnel].reflectance(cos_beta, shape) * unit
+        unit, cosine = self._unit_and_cos_beta(shape, wi, wo)
+        return self.terms.fresnel_term(cosine, shape) * (unit[:, None] if self.channel_names else unit)
 
     def _unit_and_cos_beta(self, shape, wi, wo):
         """``D·G/(4 ci co)`` (N,) and ``cos β`` (N,) (``CookTorranceLobe._unit_and_cos_beta``), in the tangent frame."""
@@ -231,11 +237,11 @@ class AnisotropicCookTorranceLobe(MappedShapeLobe):
         azimuth = jnp.radians(shape["phi_t"])
         wi, wo = in_turned_frame(wi, azimuth), in_turned_frame(wo, azimuth)  # the tangent frame
         h = half_vector(wi, wo)
-        cos_beta = jnp.sum(wi * h, axis=-1)
+        cosine = cos_beta(wi, h)
         distribution = DISTRIBUTIONS[self.terms.distribution]
         density = distribution.anisotropic_density(h[:, 0], h[:, 1], h[:, 2], alpha_u, alpha_v)
-        masking = anisotropic_shadowing(self.terms.shadowing, distribution, alpha_u, alpha_v, wi, wo, h[:, 2], cos_beta)
-        return density * masking / (4.0 * wi[:, 2] * wo[:, 2]), cos_beta
+        masking = anisotropic_shadowing(self.terms.shadowing, distribution, alpha_u, alpha_v, wi, wo, h[:, 2], cosine)
+        return density * masking / (4.0 * wi[:, 2] * wo[:, 2]), cosine
 
 
 def cook_torrance(
