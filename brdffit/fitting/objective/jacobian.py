@@ -144,10 +144,8 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
         derivatives = jnp.concatenate([factor[None] * d_unit[:, :, None], d_factor * unit[None, :, None]])
         return factor * unit[:, None], derivatives.astype(dtype)
 
-    if family.separable:
-        lobe_and_derivatives = separated_lobe_and_derivatives
-
-    lobes, derivatives = jax.vmap(lobe_and_derivatives)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
+    by_lobe = separated_lobe_and_derivatives if family.separable else lobe_and_derivatives
+    lobes, derivatives = jax.vmap(by_lobe)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
     values = diffuse_term[:, None] * diffuse + jnp.einsum("knc,kc->nc", lobes, specular)
     n = wi.shape[0]
     columns = [
