@@ -96,6 +96,41 @@ def test_compiler_options_the_running_xla_does_not_know_are_left_out():
     jax.jit(lambda x: 2.0 * x, compiler_options=kept).lower(1.0).compile()
 
 
+def test_a_model_that_asks_for_xla_fusion_emitters_has_its_programs_compiled_with_them(monkeypatch):
+    """A program whose static arguments or bound values hold a model with ``fusion_emitters`` (glTF's material
+    without a sheen) compiles with :data:`EMITTER_COMPILER_OPTIONS`; one of another model (Ward, glTF's with a sheen)
+    with the usual :data:`CPU_COMPILER_OPTIONS`; each with its own program."""
+    import importlib
+    from functools import partial
+
+    from brdffit import get_model
+
+    jit_module = importlib.import_module("brdffit._programs.jit")  # the package's ``jit`` is the function
+
+    asked = []
+    options = jit_module.compiler_options
+    monkeypatch.setattr(
+        jit_module, "compiler_options", lambda emitters=False: asked.append(emitters) or options(emitters)
+    )
+
+    def scaled(model, x):
+        return (2.0 if model.fusion_emitters else 3.0) * x
+
+    for model, emitters in (
+        (get_model("gltf"), True),
+        (get_model("ward"), False),
+        (get_model("gltf", sheen=True), False),
+    ):
+        asked.clear()  # each model a program of its own, whose options are asked for when it is first compiled
+        assert float(jit(scaled, static_argnums=0)(model, np.float64(1.0))) == (2.0 if emitters else 3.0)
+        assert asked and set(asked) == {emitters}
+        asked.clear()
+        jit(partial(scaled, model), name=f"test.scaled.{model.name}", closes_over=(model,))(np.float64(1.0))
+        assert asked and set(asked) == {emitters}
+    if jax.default_backend() == "cpu":
+        assert options(True) == options(False) | {"xla_cpu_use_fusion_emitters": True}
+
+
 def _pinned(package: str) -> str | None:
     """The version ``constraints.txt`` pins ``package`` at (``make test``'s venv), or None."""
     path = Path(__file__).resolve().parents[1] / "constraints.txt"

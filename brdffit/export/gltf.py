@@ -25,7 +25,6 @@ from typing import Any, NamedTuple, cast
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
 from .._files import atomic_path, write_text_atomic
 from .._jax import float64
@@ -37,7 +36,6 @@ from ..fitting.objective.losses import get_loss
 from ..fitting.options import MAX_STEPS, Holding
 from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
-from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least_squares
 from ..physics.geometry import mirror_direction, spherical_to_direction
 from ..physics.models.registry import MODELS
 from ..physics.renderers.gltf import DEFAULT_F0, DEFAULT_IOR, ior_f0, material_brdf
@@ -136,6 +134,10 @@ def _solve(theta, wi, wo, measured, loss_name: str, n_channels: int, extended: b
     passed. Here such a column drops out of the step once it is below ``ε`` of the largest, and the fit stops on the
     cost's relative change.
     """
+    import optimistix as optx  # 0.3 s to import: an export that runs the stored program never traces this
+
+    from ..fitting.solver.levenberg_marquardt import ScaledTrustRegionDescent, least_squares
+
     ftol, gtol, atol = TOLERANCES["float64"]
     residual_fn = partial(_residuals, get_loss(loss_name).transform, n_channels, extended)
     solution = least_squares(

@@ -149,6 +149,13 @@ class Lobe(ABC):
         return ()
 
     @property
+    def fusion_emitters(self) -> bool:
+        """Whether XLA's CPU fusion emitters compile the programs that fit this lobe into faster code than the classic
+        emitters brdffit compiles with otherwise (``_programs/jit.py``, where the measurements are): glTF's and
+        ``roughplastic``'s whole-lobe materials. False by default."""
+        return False
+
+    @property
     def separable(self) -> bool:
         """Whether the lobe, one with :attr:`channel_names`, is the product of a factor of its other parameters alone
         (:meth:`shared_factor`, (N,)) and one of its per-channel parameters alone (:meth:`channel_factor`, (N, C)): a

@@ -93,6 +93,12 @@ class Model(ABC):
         vector ``v`` (0: none). Its ``W·Σ v²`` counts as that many more residuals wherever the cost is turned into a
         likelihood (``uncertainty/density.py``)."""
 
+    @property
+    def fusion_emitters(self) -> bool:
+        """Whether the model's programs compile with XLA's fusion emitters (``Lobe.fusion_emitters``). False by
+        default."""
+        return False
+
     # ------------------------------------------------------------ parameter forms
     @property
     @abstractmethod
@@ -190,6 +196,10 @@ class LobeModel(Model):
         with per-channel parameters (``Lobe.channel_names``)."""
         lobe = lobe_family(self)
         return jax.vmap(lambda one_shape: lobe(one_shape, wi, wo))(dict(shape))
+
+    @property
+    def fusion_emitters(self) -> bool:
+        return self.lobe is not None and self.lobe.fusion_emitters
 
     # ------------------------------------------------------------ parameter forms
     @property
