@@ -144,17 +144,32 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
         derivatives = jnp.concatenate([factor[None] * d_unit[:, :, None], d_factor * unit[None, :, None]])
         return factor * unit[:, None], derivatives.astype(dtype)
 
-    by_lobe = separated_lobe_and_derivatives if family.separable else lobe_and_derivatives
-    lobes, derivatives = jax.vmap(by_lobe)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
+    if family.separable:
+        # A lobe at a time, the basis written column by column: XLA then fuses each product F·∂U, ∂F·U into the
+        # column it writes. Batched over the lobes (a vmap, even of one) and transposed into place as below, a pass of
+        # an anisotropic GGX conductor on 155,520 pairs took 61 ms, a Beckmann one 116 ms; so, 32 ms each. The
+        # whole lobes' vmapped tangents (glTF's) run faster as below: 56 ms against 80 (2-core x86-64).
+        lobes, derivatives = _each_lobe(separated_lobe_and_derivatives, u_shared, u_channel)
+        columns = [jnp.broadcast_to(diffuse_term[:, None], lobes.shape[1:]), *lobes]
+        basis = jnp.stack(columns + [derivatives[lobe, t] for lobe in range(k) for t in range(s + p)], axis=2)
+    else:
+        lobes, derivatives = jax.vmap(lobe_and_derivatives)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
+        n = wi.shape[0]
+        columns = [
+            jnp.broadcast_to(diffuse_term[:, None, None], (n, c, 1)),
+            jnp.transpose(lobes, (1, 2, 0)),
+            jnp.transpose(derivatives, (2, 3, 0, 1)).reshape(n, c, k * (s + p)),
+        ]
+        basis = jnp.concatenate(columns, axis=2)
     values = diffuse_term[:, None] * diffuse + jnp.einsum("knc,kc->nc", lobes, specular)
-    n = wi.shape[0]
-    columns = [
-        jnp.broadcast_to(diffuse_term[:, None, None], (n, c, 1)),
-        jnp.transpose(lobes, (1, 2, 0)),
-        jnp.transpose(derivatives, (2, 3, 0, 1)).reshape(n, c, k * (s + p)),
-    ]
-    basis = jnp.concatenate(columns, axis=2)
     return jnp.where(visible[:, None], values, 0.0), jnp.where(visible[:, None, None], basis, 0.0)
+
+
+def _each_lobe(function, *per_lobe):
+    """``jax.vmap(function)(*per_lobe)`` (arguments with the lobes on axis 0) as a loop over the lobes, the results
+    stacked: code XLA compiles per lobe, not for a batch of them."""
+    results = [function(*(argument[lobe] for argument in per_lobe)) for lobe in range(per_lobe[0].shape[0])]
+    return jax.tree.map(lambda *leaves: jnp.stack(leaves), *results)
 
 
 def _albedos(model: LobeModel, theta, c: int, dtype):
