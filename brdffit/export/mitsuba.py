@@ -38,6 +38,7 @@ the other's is not refined) to the fitted BRDF (``approximate.py``) and reports 
 
 import dataclasses
 import pprint
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -200,16 +201,19 @@ def _best_stand_in(known: "Reference") -> "tuple[FitResult, Approximation]":
     """The stand-in of :data:`STAND_INS` (:data:`ANISOTROPIC_STAND_INS` for an anisotropic fit, whose grids have the
     light at several azimuths) that lies nearest the fit of ``known`` (``approximate.Reference``), within Mitsuba's
     range, and how far it lies: each fitted on the coarse grid (``approximate.coarse_refit``; refitted within the range
-    where it ends beyond it), and those that can win (:data:`CANNOT_WIN`) refined on the fine one."""
+    where it ends beyond it; the stand-ins in two threads), and those that can win (:data:`CANNOT_WIN`) refined on the
+    fine one."""
     from .approximate import approximation_error, coarse_refit, grid_rmse, refined
 
-    coarse = []
-    for options in STAND_INS if known.turns == 1 else ANISOTROPIC_STAND_INS:
+    def coarse_fit(options):
         fitted, holding = coarse_refit(known, "cook-torrance", **options), Holding()
         if not _in_range(fitted):
             holding = _range_holding(fitted)
             fitted = coarse_refit(known, "cook-torrance", holding, **options)
-        coarse.append((fitted, holding))
+        return fitted, holding
+
+    with ThreadPoolExecutor(2) as pool:  # side by side: each one's programs load while the other computes
+        coarse = list(pool.map(coarse_fit, STAND_INS if known.turns == 1 else ANISOTROPIC_STAND_INS))
     rmse = [grid_rmse(known, fitted.predict) for fitted, _ in coarse]
     chosen = [pair for pair, error in zip(coarse, rmse, strict=True) if error <= CANNOT_WIN * min(rmse)]
     candidates = []
