@@ -19,6 +19,7 @@ the *sampling* vector (where a Lafortune direction stays on ``2 cxy² + cz² = 1
 reported in the *physical* one (labels ``rho_d[r]``, ``alpha``, ``lobes[0].cxy``).
 """
 
+import functools
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, replace
 from typing import TypeVar, final
@@ -51,14 +52,17 @@ class FlatCoordinates(ABC):
     @property
     def shared(self) -> ShapeCoordinates:
         """The coordinates of the shape parameters all channels share (all of them, but a lobe's ``channel_names``)."""
-        return self._split()[0]
+        return self._parts[0]
 
     @property
     def per_channel(self) -> ShapeCoordinates | None:
         """The coordinates of the shape parameters with one value per channel, or None for a lobe without any."""
-        return self._split()[1]
+        return self._parts[1]
 
-    def _split(self) -> tuple[ShapeCoordinates, ShapeCoordinates | None]:
+    @functools.cached_property
+    def _parts(self) -> tuple[ShapeCoordinates, ShapeCoordinates | None]:
+        """The shared and the per-channel shape coordinates (None for a lobe without per-channel parameters), made
+        once: a capture's texels ask for them several times each."""
         lobe = self.model.lobe
         if lobe is None or not lobe.channel_names:
             return self.shape, None
@@ -98,7 +102,7 @@ class FlatCoordinates(ABC):
             [] if self.model.whole else [self.albedo_to_vector(params.diffuse), self.albedo_to_vector(params.specular)]
         )
         if self.model.n_lobes:
-            shared, per_channel = self._split()
+            shared, per_channel = self._parts
             pieces.append(xp.transpose(shared.to_vector(params.shape)))  # (S, K) → lobe by lobe
             if per_channel is not None:  # (P, K, C) → lobe, parameter, channel
                 pieces.append(xp.transpose(per_channel.to_vector(params.shape), (1, 0, 2)))
@@ -114,7 +118,7 @@ class FlatCoordinates(ABC):
             specular = self.albedo_from_vector(vector[n_channels:n_albedos]).reshape(k, n_channels)
         if not k:
             return Params(diffuse, specular, {})
-        shared, per_channel = self._split()
+        shared, per_channel = self._parts
         n_shared = k * len(shared.names)
         per_lobe = vector[n_albedos : n_albedos + n_shared].reshape(k, len(shared.names))
         shape = shared.from_vector(per_lobe.T)
@@ -154,7 +158,7 @@ class BoundedFlatCoordinates(FlatCoordinates):
         if not k:
             return diffuse
         specular = [lobe_family(self.model).albedo_domain] * (k * n_channels)
-        shared, per_channel_shape = self._split()  # bounded, as self.shape is
+        shared, per_channel_shape = self._parts  # bounded, as self.shape is
         assert isinstance(shared, BoundedShapeCoordinates)
         assert per_channel_shape is None or isinstance(per_channel_shape, BoundedShapeCoordinates)
         per_channel = [d for d in per_channel_shape.domains for _ in range(n_channels)] if per_channel_shape else []

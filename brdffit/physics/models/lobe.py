@@ -16,6 +16,7 @@ BRDF as one lobe, a :class:`WholeLobe` (``physics/renderers``).
 
 from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
 
+import functools
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -75,7 +76,7 @@ class PhysicalShape(BoundedShapeCoordinates):
 
     parameters: tuple[tuple[str, Domain], ...]
 
-    @property
+    @functools.cached_property
     def names(self) -> tuple[str, ...]:
         return tuple(name for name, _ in self.parameters)
 
@@ -238,8 +239,9 @@ class Lobe(ABC):
         """Which of the solver's (and the walkers') shape coordinates carries the shape parameter ``name``: a user
         who fixes or bounds ``name`` holds that coordinate."""
 
-    @property
+    @functools.cached_property
     def names(self) -> tuple[str, ...]:
+        """The shape parameters' names, made once a lobe: a capture's texels ask for them ~50 times each."""
         return tuple(name for name, _ in self.parameters)
 
     @property

@@ -25,6 +25,7 @@ exact exports to renderers.
 
 from __future__ import annotations  # jaxtyping's Array imports JAX: the annotations stay unevaluated
 
+import functools
 import importlib
 import inspect
 from abc import ABC, abstractmethod
@@ -202,19 +203,21 @@ class LobeModel(Model):
         return self.lobe is not None and self.lobe.fusion_emitters
 
     # ------------------------------------------------------------ parameter forms
-    @property
+    # Each made once a model (cached_property writes past the frozen dataclass's guard): a capture's texels ask for
+    # them tens of times each.
+    @functools.cached_property
     def dictionary(self) -> ParameterDictionary:
         return ParameterDictionary(self)
 
-    @property
+    @functools.cached_property
     def unconstrained(self) -> UnconstrainedCoordinates:
         return UnconstrainedCoordinates(self)
 
-    @property
+    @functools.cached_property
     def sampling(self) -> SamplingCoordinates:
         return SamplingCoordinates(self)
 
-    @property
+    @functools.cached_property
     def physical(self) -> PhysicalCoordinates:
         return PhysicalCoordinates(self)
 
