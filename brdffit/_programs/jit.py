@@ -28,7 +28,7 @@ CPU_COMPILER_OPTIONS = {
 }
 #: :data:`CPU_COMPILER_OPTIONS` with XLA's fusion emitters on, for the programs of a model that says it is compiled
 #: better so (``Lobe.fusion_emitters``). The classic emitters compile the forward-mode basis of a whole-lobe material
-#: with per-channel colours (glTF's, Mitsuba's ``roughplastic``) into code 2.5–3.7 times slower: a Levenberg-Marquardt
+#: with per-channel colours (glTF's, Mitsuba's ``roughplastic``) into code 2.1–3.7 times slower: a Levenberg-Marquardt
 #: step of glTF's model on 155,520 pairs took 142 ms so and 39 ms with the emitters (``roughplastic`` 102 and 48 ms).
 #: The others keep the classic ones: Ward 4.6 and 4.8 ms, Cook-Torrance 4.7 and 5.3, an anisotropic conductor 60 and
 #: 64, principled's whole Jacobian 138 and 373. Compiling takes 0.5–1.2 s longer a program.
@@ -71,8 +71,8 @@ def compiler_options(fusion_emitters: bool = False) -> dict | None:
 def known_options(options: dict) -> dict:
     """``options`` less those the running XLA does not know: they are private flags, which XLA adds, renames and
     removes between releases (jax 0.8's refuses ``xla_cpu_experimental_ynn_fusion_type``: "No such compile option").
-    Found by compiling a one-operation program with them (~20 ms, once per process), each on its own where all
-    together are refused; an option that is not known only costs its speed-up."""
+    Found by compiling a one-operation program with them (~20 ms, once per process for each set of options), each on
+    its own where all together are refused; an option that is not known only costs its speed-up."""
 
     def accepted(chosen: dict) -> bool:
         try:
@@ -125,9 +125,11 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         return jax.jit(fun, compiler_options=compiler_options(emitters), **jit_arguments)
 
     def emitters_for(args) -> bool:
-        """Whether the call's program compiles with XLA's fusion emitters (the docstring)."""
+        """Whether the call's program compiles with XLA's fusion emitters (the docstring); a value bound by keyword
+        is a ``(name, value)`` pair of ``closes_over``."""
         statics = (*closes_over, *stored.static_arguments(args, static_argnums))
-        return any(getattr(value, "fusion_emitters", False) is True for value in statics)
+        values = [item for value in statics for item in (value if isinstance(value, tuple) else (value,))]
+        return any(getattr(value, "fusion_emitters", False) is True for value in values)
 
     def stored_for(args, kwargs):
         """The stored program for a top-level call, or None (``stored.stored_program``)."""
@@ -135,7 +137,12 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
             return None
         emitters = emitters_for(args)
         jitted, options = (lambda: top_level(emitters)), (lambda: compiler_options(emitters))
-        return stored.stored_program(identity, jitted, args, static_argnums, options)
+        return stored.stored_program(stored_identity(args), jitted, args, static_argnums, options)
+
+    def stored_identity(args) -> list:
+        """What names the call's stored program: the function's identity and the options it compiles with."""
+        assert identity is not None  # a stored program is only ever found for a function with an identity
+        return [*identity, {"fusion_emitters": emitters_for(args)}]
 
     def with_stored(args, kwargs, key, use, otherwise, runs: bool = True):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
@@ -150,8 +157,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         try:
             result = use(program)
         except Exception as error:
-            assert identity is not None  # a stored program is only ever found for a function with an identity
-            stored.discard(identity, args, static_argnums, error)
+            stored.discard(stored_identity(args), args, static_argnums, error)
             program = stored_for(args, kwargs)
             if program is None:
                 return otherwise()

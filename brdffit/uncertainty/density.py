@@ -178,7 +178,10 @@ def compiled_log_density(model: Model, loss: Loss, has_sigma: bool):
         return jnp.where(jnp.isfinite(total), total, -jnp.inf)
 
     walkers = jax.vmap(one, in_axes=(0, None, None, None, None))
-    return jit(lambda x, problem, n_values, w, frame: walkers(x, prepared(loss, problem), n_values, w, frame))
+    return jit(
+        lambda x, problem, n_values, w, frame: walkers(x, prepared(loss, problem), n_values, w, frame),
+        closes_over=(model, loss),  # the model's compiler options (``_programs/jit.py``)
+    )
 
 
 def log_probability_function(density: Density):
@@ -197,5 +200,7 @@ def log_probability_function(density: Density):
 @float64
 def physical_draws(model: Model, draws: np.ndarray, n_channels: int) -> np.ndarray:
     """Sampling-vector draws (S, k) as flat physical vectors (S, p) in ``model.physical.labels`` order."""
-    convert = jit(jax.vmap(lambda v: model.physical.from_params(model.sampling.to_params(v, n_channels))))
+    convert = jit(
+        jax.vmap(lambda v: model.physical.from_params(model.sampling.to_params(v, n_channels))), closes_over=(model,)
+    )
     return np.asarray(convert(jnp.asarray(draws, dtype=jnp.float64)))

@@ -89,7 +89,7 @@ def gauss_newton_and_meat(density: Density, v) -> tuple[np.ndarray, np.ndarray]:
 def compiled_gauss_newton(model: Model, loss: Loss):
     """``(v, problem) -> (JᵀJ, Σ r² JᵢᵀJᵢ)``, compiled once per model and loss (and problem shape)."""
 
-    @jit
+    @jit(closes_over=(model, loss))  # the model's compiler options (``_programs/jit.py``)
     def gauss_newton(v, problem: Problem):
         c = problem.measured.shape[1]
 

@@ -151,7 +151,7 @@ def _per_channel_value_and_basis(model: LobeModel, theta, wi, wo, n_channels: in
         # whole lobes' vmapped tangents (glTF's) run faster as below: 56 ms against 80 (2-core x86-64).
         lobes, derivatives = _each_lobe(separated_lobe_and_derivatives, u_shared, u_channel)
         columns = [jnp.broadcast_to(diffuse_term[:, None], lobes.shape[1:]), *lobes]
-        basis = jnp.stack(columns + [derivatives[lobe, t] for lobe in range(k) for t in range(s + p)], axis=2)
+        basis = jnp.stack(columns + [derivatives[index, t] for index in range(k) for t in range(s + p)], axis=2)
     else:
         lobes, derivatives = jax.vmap(lobe_and_derivatives)(u_shared, u_channel)  # (K, N, C), (K, S + P, N, C)
         n = wi.shape[0]

@@ -78,6 +78,7 @@ class PhysicalShape(BoundedShapeCoordinates):
 
     @functools.cached_property
     def names(self) -> tuple[str, ...]:
+        """The parameters' names, made once (a capture's texels ask for them several times each)."""
         return tuple(name for name, _ in self.parameters)
 
     @property
