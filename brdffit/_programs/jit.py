@@ -137,12 +137,12 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
             return None
         emitters = emitters_for(args)
         jitted, options = (lambda: top_level(emitters)), (lambda: compiler_options(emitters))
-        return stored.stored_program(stored_identity(args), jitted, args, static_argnums, options)
+        return stored.stored_program(stored_identity(emitters), jitted, args, static_argnums, options)
 
-    def stored_identity(args) -> list:
-        """What names the call's stored program: the function's identity and the options it compiles with."""
+    def stored_identity(emitters: bool) -> list:
+        """What names a call's stored program: the function's identity and the options it compiles with."""
         assert identity is not None  # a stored program is only ever found for a function with an identity
-        return [*identity, {"fusion_emitters": emitters_for(args)}]
+        return [*identity, {"fusion_emitters": emitters}]
 
     def with_stored(args, kwargs, key, use, otherwise, runs: bool = True):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
@@ -157,7 +157,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         try:
             result = use(program)
         except Exception as error:
-            stored.discard(stored_identity(args), args, static_argnums, error)
+            stored.discard(stored_identity(emitters_for(args)), args, static_argnums, error)
             program = stored_for(args, kwargs)
             if program is None:
                 return otherwise()
