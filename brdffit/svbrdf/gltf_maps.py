@@ -9,12 +9,20 @@ glTF's metallic-roughness material takes textures for exactly the parameters brd
 * ``clearcoat`` and ``clearcoat_roughness`` (where any texel has a coat): ``KHR_materials_clearcoat``'s
   ``clearcoatTexture`` (red) and ``clearcoatRoughnessTexture`` (green), linear;
 * ``ior``: ``KHR_materials_ior``'s one number (glTF has no texture for it): the maps' median, with a note when the
-  texels' values differ.
+  texels' values differ;
+* ``anisotropy_strength`` and ``anisotropy_rotation`` (where any texel is anisotropic): ``KHR_materials_anisotropy``'s
+  ``anisotropyTexture``, linear: red and green the lobe's direction ``(cos r, sin r)`` in [-1, 1] (stored as
+  ``(d + 1)/2``) in the tangent-bitangent plane, blue the strength; the quad then carries glTF's ``TANGENT``
+  attribute, ``(1, 0, 0, 1)``: the tangent is the capture's ``+x`` and the bitangent ``cross(normal, tangent)``
+  its ``+y``, the frame the ``gltf`` model's rotation is measured in (``physics/renderers/gltf.py``);
+* ``sheen_color`` and ``sheen_roughness`` (a ``gltf:sheen=true`` fit where any texel has a sheen):
+  ``KHR_materials_sheen``'s ``sheenColorTexture`` (red, green, blue, sRGB-encoded as the extension requires) and
+  ``sheenRoughnessTexture`` (alpha, linear), one RGBA image.
 
 Textures are 8-bit PNG images inside the file (the only depth glTF viewers read alike), so each value is rounded to
-1/255 (the base colour in sRGB's steps): the export says how far that moves each map (``GltfMaps.quantization``).
-The anisotropy and the sheen, which need tangents and more textures, are not exported yet: a fit that freed them is
-refused in one line. A texel that was not fitted is black (base colour 0) and rough (roughness 1).
+1/255 (the colours in sRGB's steps; the rotation to the angle of its rounded direction): the export says how far that
+moves each map (``GltfMaps.quantization``). A texel that was not fitted is black (base colour 0), rough (roughness
+1), isotropic and without a sheen.
 
 The quad lies in glTF's x-y plane (metres, the capture's frame: x to the right, y up), facing +z, where a viewer's
 default camera looks; texture coordinate (0, 0) is the images' top left (§3.8.4), texel (0, 0).
@@ -37,8 +45,6 @@ from .maps import GLB_FILE, Maps
 _FLOAT, _UNSIGNED_SHORT = 5126, 5123
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _LINEAR, _CLAMP_TO_EDGE = 9729, 33071
-#: Parameters the quad's material cannot hold texel by texel, and what a fit must hold them at.
-NOT_EXPORTED = {"anisotropy_strength": 0.0, "sheen_roughness": None, "sheen_color": None}
 
 
 @dataclass
@@ -63,10 +69,6 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
         raise BrdfInputError(f"glTF's textures are RGB; these maps have {len(maps.channels)} channel(s)")
     if not maps.fitted.any():
         raise BrdfInputError("no texel was fitted: there is no material to export")
-    for parameter, held in NOT_EXPORTED.items():
-        values = maps.params.get(parameter)
-        if values is not None and not (held is not None and np.all(values[maps.fitted] == held)):
-            raise BrdfInputError(f"the maps' {parameter} varies: glTF textures for it are not exported yet")
     fitted, notes = maps.fitted, []
     base = np.where(fitted[..., None], maps.params["base_color"], 0.0)
     roughness = np.where(fitted, maps.params["roughness"], 1.0)
@@ -92,12 +94,13 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
     extensions: dict[str, Any] = {}
     if np.any(coat > 0):
         coat_roughness = np.where(fitted, maps.params["clearcoat_roughness"], 0.0)
+        index = len(images)
         images["clearcoat"] = png_bytes(np.stack([coat, coat_roughness, zeros], -1))
         extensions["KHR_materials_clearcoat"] = {
             "clearcoatFactor": 1.0,
-            "clearcoatTexture": {"index": 2},
+            "clearcoatTexture": {"index": index},
             "clearcoatRoughnessFactor": 1.0,
-            "clearcoatRoughnessTexture": {"index": 2},
+            "clearcoatRoughnessTexture": {"index": index},
         }
         quantization["clearcoat"] = _largest(np.round(coat * 255) / 255, coat)
         quantization["clearcoat_roughness"] = _largest(np.round(coat_roughness * 255) / 255, coat_roughness)
@@ -110,9 +113,43 @@ def gltf_maps(maps: Maps, name: str = "brdffit maps") -> GltfMaps:
         )
     if abs(median_ior - 1.5) > 1e-12:
         extensions["KHR_materials_ior"] = {"ior": median_ior}
+    strength = np.where(fitted, maps.params.get("anisotropy_strength", zeros), 0.0)
+    anisotropic = bool(np.any(strength > 0))
+    if anisotropic:
+        rotation = np.where(fitted, maps.params["anisotropy_rotation"], 0.0)
+        direction = np.stack([np.cos(rotation), np.sin(rotation)], -1)
+        index = len(images)
+        images["anisotropy"] = png_bytes(np.concatenate([(direction + 1.0) / 2.0, strength[..., None]], -1))
+        extensions["KHR_materials_anisotropy"] = {
+            "anisotropyStrength": 1.0,
+            "anisotropyRotation": 0.0,
+            "anisotropyTexture": {"index": index},
+        }
+        rounded = np.round((direction + 1.0) / 2.0 * 255) / 255 * 2.0 - 1.0
+        turned = np.arctan2(rounded[..., 1], rounded[..., 0]) - rotation
+        quantization["anisotropy_strength"] = _largest(np.round(strength * 255) / 255, strength)
+        quantization["anisotropy_rotation"] = float(np.max(np.abs((turned + np.pi / 2) % np.pi - np.pi / 2)))
+        notes.append(
+            "anisotropic (KHR_materials_anisotropy): the texture's directions are turned from the mesh's tangent, which"
+            " the quad has along the capture's +x; on another mesh the tangents must lie where the capture's +x lay"
+        )
+    sheen = maps.params.get("sheen_color")
+    if sheen is not None and np.any(sheen[fitted] > 0):
+        color = np.where(fitted[..., None], sheen, 0.0)
+        sheen_roughness = np.where(fitted, maps.params["sheen_roughness"], 0.0)
+        index = len(images)
+        images["sheen"] = png_bytes(np.concatenate([srgb_encoded(color), sheen_roughness[..., None]], -1))
+        extensions["KHR_materials_sheen"] = {
+            "sheenColorFactor": [1.0, 1.0, 1.0],
+            "sheenColorTexture": {"index": index},
+            "sheenRoughnessFactor": 1.0,
+            "sheenRoughnessTexture": {"index": index},
+        }
+        quantization["sheen_color"] = _largest(srgb_decoded(np.round(srgb_encoded(color) * 255) / 255), color)
+        quantization["sheen_roughness"] = _largest(np.round(sheen_roughness * 255) / 255, sheen_roughness)
     if extensions:
         material["extensions"] = extensions
-    return GltfMaps(_glb(maps, material, images, sorted(extensions)), notes, quantization)
+    return GltfMaps(_glb(maps, material, images, sorted(extensions), anisotropic), notes, quantization)
 
 
 def write_glb(folder: str | os.PathLike, maps: Maps) -> dict[str, Any]:
@@ -133,19 +170,25 @@ def _largest(rounded: np.ndarray, values: np.ndarray) -> float:
     return float(np.max(np.abs(rounded - values), initial=0.0))
 
 
-def _accessors(positions: np.ndarray) -> list[dict[str, Any]]:
-    """The quad's accessors: positions (with their bounds, §3.6.2.4), normals, texture coordinates, indices."""
+def _accessors(positions: np.ndarray, tangents: bool) -> list[dict[str, Any]]:
+    """The quad's accessors, one per buffer view in order: positions (with their bounds, §3.6.2.4), normals, texture
+    coordinates, tangents where ``tangents``, indices."""
     bounds = {"min": positions.min(axis=0).tolist(), "max": positions.max(axis=0).tolist()}
-    return [
-        {"bufferView": 0, "componentType": _FLOAT, "count": 4, "type": "VEC3", **bounds},
-        {"bufferView": 1, "componentType": _FLOAT, "count": 4, "type": "VEC3"},
-        {"bufferView": 2, "componentType": _FLOAT, "count": 4, "type": "VEC2"},
-        {"bufferView": 3, "componentType": _UNSIGNED_SHORT, "count": 6, "type": "SCALAR"},
+    kinds = [("VEC3", _FLOAT), ("VEC3", _FLOAT), ("VEC2", _FLOAT)] + [("VEC4", _FLOAT)] * tangents
+    accessors: list[dict[str, Any]] = [
+        {"bufferView": view, "componentType": component, "count": 4, "type": kind}
+        for view, (kind, component) in enumerate(kinds)
     ]
+    accessors[0] |= bounds
+    accessors.append({"bufferView": len(kinds), "componentType": _UNSIGNED_SHORT, "count": 6, "type": "SCALAR"})
+    return accessors
 
 
-def _glb(maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensions: list[str]) -> bytes:
-    """The quad (module docstring) with ``material`` and its PNG ``images`` (in texture order) in one buffer."""
+def _glb(
+    maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensions: list[str], tangents: bool = False
+) -> bytes:
+    """The quad (module docstring) with ``material`` and its PNG ``images`` (in texture order) in one buffer, and
+    per-vertex tangents along ``+x`` where ``tangents`` (an anisotropic material's)."""
     half_width, half_height = maps.width_mm / 2000.0, maps.height_mm / 2000.0  # metres
     positions = np.array(
         [[-half_width, half_height, 0], [-half_width, -half_height, 0], [half_width, -half_height, 0],
@@ -153,18 +196,20 @@ def _glb(maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensi
     )  # fmt: skip
     normals = np.tile(np.array([0.0, 0.0, 1.0], dtype="<f4"), (4, 1))
     coordinates = np.array([[0, 0], [0, 1], [1, 1], [1, 0]], dtype="<f4")
+    tangent = np.tile(np.array([1.0, 0.0, 0.0, 1.0], dtype="<f4"), (4, 1))  # w = 1: bitangent cross(z, x) = +y
     indices = np.array([0, 1, 2, 0, 2, 3, 0, 0], dtype="<u2")  # two triangles, counter-clockwise seen from +z; padded
-    pieces = [positions.tobytes(), normals.tobytes(), coordinates.tobytes(), indices.tobytes()]
+    arrays = [positions, normals, coordinates] + [tangent] * tangents
+    pieces = [array.tobytes() for array in arrays] + [indices.tobytes()]
     pieces += [image + b"\0" * (-len(image) % 4) for image in images.values()]
     offsets = np.concatenate([[0], np.cumsum([len(piece) for piece in pieces])[:-1]]).tolist()
+    lengths = [len(piece) for piece in pieces[: len(arrays)]] + [12] + list(map(len, images.values()))
     views = [
         {"buffer": 0, "byteOffset": offset, "byteLength": length}
-        for offset, length in zip(
-            offsets, [len(p) for p in pieces[:3]] + [12] + list(map(len, images.values())), strict=True
-        )
+        for offset, length in zip(offsets, lengths, strict=True)
     ]
-    for view, target in zip(views[:4], [_ARRAY_BUFFER] * 3 + [_ELEMENT_ARRAY_BUFFER], strict=True):
+    for view, target in zip(views, [_ARRAY_BUFFER] * len(arrays) + [_ELEMENT_ARRAY_BUFFER], strict=False):
         view["target"] = target
+    attributes = {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2} | ({"TANGENT": 3} if tangents else {})
     document: dict[str, Any] = {
         "asset": {"version": "2.0", "generator": f"brdffit {__version__}"},
         **({"extensionsUsed": extensions} if extensions else {}),
@@ -174,17 +219,16 @@ def _glb(maps: Maps, material: dict[str, Any], images: dict[str, bytes], extensi
         "meshes": [
             {
                 "name": "the sample",
-                "primitives": [
-                    {"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}
-                ],
+                "primitives": [{"attributes": attributes, "indices": len(arrays), "material": 0}],
             }
         ],
         "materials": [material],
-        "accessors": _accessors(positions),
+        "accessors": _accessors(positions, tangents),
         "bufferViews": views,
         "buffers": [{"byteLength": sum(len(piece) for piece in pieces)}],
         "images": [
-            {"name": name, "bufferView": 4 + index, "mimeType": "image/png"} for index, name in enumerate(images)
+            {"name": name, "bufferView": len(arrays) + 1 + index, "mimeType": "image/png"}
+            for index, name in enumerate(images)
         ],
         "samplers": [{"magFilter": _LINEAR, "minFilter": _LINEAR, "wrapS": _CLAMP_TO_EDGE, "wrapT": _CLAMP_TO_EDGE}],
         "textures": [{"sampler": 0, "source": index} for index in range(len(images))],

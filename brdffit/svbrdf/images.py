@@ -159,7 +159,8 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> None:
 
 
 def png_bytes(image: np.ndarray) -> bytes:
-    """``image`` ((H, W), (H, W, 1) or (H, W, 3), values in [0, 1], clipped; NaN as 0) as an 8-bit PNG's bytes."""
+    """``image`` ((H, W), (H, W, 1), (H, W, 3) or (H, W, 4): RGBA, values in [0, 1], clipped; NaN as 0) as an 8-bit
+    PNG's bytes."""
     from PIL import Image
 
     image = image[..., 0] if image.ndim == 3 and image.shape[-1] == 1 else image

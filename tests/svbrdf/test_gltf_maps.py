@@ -1,5 +1,6 @@
 """The maps of a ``gltf`` fit as a glTF binary: a quad with the maps as textures, valid for the Khronos validator
-(0 errors, 0 warnings), whose textures decode to the maps within their 8-bit rounding; other maps say why not."""
+(0 errors, 0 warnings), whose textures decode to the maps within their 8-bit rounding (the anisotropy and the sheen
+too); other maps say why not."""
 
 import json
 import struct
@@ -12,6 +13,7 @@ import brdffit.svbrdf as svbrdf
 from brdffit.data_synth.capture import synth_capture
 from brdffit.errors import BrdfInputError
 from brdffit.svbrdf.gltf_maps import gltf_maps
+from brdffit.svbrdf.images import srgb_decoded
 
 
 @pytest.fixture(scope="module")
@@ -33,23 +35,33 @@ def _chunks(data: bytes) -> tuple[dict, bytes]:
     return document, data[28 + json_length : 28 + json_length + binary_length]
 
 
+def _image(document: dict, binary: bytes, index: int) -> np.ndarray:
+    """Texture ``index`` of a .glb, decoded to values in [0, 1] (H, W, channels)."""
+    from io import BytesIO
+
+    from PIL import Image
+
+    view = document["bufferViews"][document["images"][document["textures"][index]["source"]]["bufferView"]]
+    raw = binary[view["byteOffset"] : view["byteOffset"] + view["byteLength"]]
+    return np.asarray(Image.open(BytesIO(raw)), dtype=float) / 255.0
+
+
+def _accessor(document: dict, binary: bytes, index: int) -> np.ndarray:
+    """Accessor ``index`` of a .glb's float attributes, (count, components)."""
+    accessor = document["accessors"][index]
+    view = document["bufferViews"][accessor["bufferView"]]
+    raw = binary[view["byteOffset"] : view["byteOffset"] + view["byteLength"]]
+    return np.frombuffer(raw, "<f4").reshape(accessor["count"], -1)
+
+
 def test_the_maps_glb_holds_the_maps_as_textures(gltf_fit):
     maps, _, folder = gltf_fit
     data = (folder / "material.glb").read_bytes()
     document, binary = _chunks(data)
     material = document["materials"][0]["pbrMetallicRoughness"]
     assert material["baseColorTexture"] == {"index": 0} and material["metallicRoughnessTexture"] == {"index": 1}
-    from io import BytesIO
-
-    from PIL import Image
-
-    def image(index):
-        view = document["bufferViews"][document["images"][index]["bufferView"]]
-        raw = binary[view["byteOffset"] : view["byteOffset"] + view["byteLength"]]
-        return np.asarray(Image.open(BytesIO(raw)), dtype=float) / 255.0
-
     exported = gltf_maps(maps)
-    metallic_roughness = image(1)
+    metallic_roughness = _image(document, binary, 1)
     fitted = maps.fitted
     assert np.max(np.abs(metallic_roughness[..., 1] - maps.params["roughness"])[fitted]) <= 0.5 / 255 + 1e-12
     assert np.max(np.abs(metallic_roughness[..., 2] - maps.params["metallic"])[fitted]) <= 0.5 / 255 + 1e-12
@@ -88,3 +100,82 @@ def test_maps_of_another_model_have_no_glb(tmp_path):
     maps = svbrdf.Maps("ward", {}, "relative", ("r", "g", "b"), {}, {"n_samples": np.ones((2, 2))}, 10.0, 10.0)
     with pytest.raises(BrdfInputError, match="the maps of a ward fit do not map onto glTF's material"):
         gltf_maps(maps)
+
+
+def _textured_maps(tmp_path) -> svbrdf.Maps:
+    """Maps of a ``gltf:sheen=true`` fit made by hand, 5 × 7 texels: an anisotropy turning through every direction
+    (the lobe is the same turned by π) with a strength rising across the rows, a sheen whose colour and roughness
+    vary, one texel not fitted."""
+    rows, columns = 5, 7
+    row, column = np.meshgrid(np.arange(rows), np.arange(columns), indexing="ij")
+    rng = np.random.default_rng(3)
+    n_samples = np.full((rows, columns), 24.0)
+    n_samples[2, 3] = 0.0
+    params = {
+        "base_color": rng.uniform(0.05, 0.9, (rows, columns, 3)),
+        "roughness": rng.uniform(0.1, 0.9, (rows, columns)),
+        "metallic": rng.uniform(0.0, 1.0, (rows, columns)),
+        "clearcoat": np.zeros((rows, columns)),
+        "clearcoat_roughness": np.zeros((rows, columns)),
+        "ior": np.full((rows, columns), 1.5),
+        "anisotropy_strength": (row + 1) / rows * rng.uniform(0.2, 1.0, (rows, columns)),
+        "anisotropy_rotation": (row * columns + column) / (rows * columns) * np.pi - np.pi / 2 + 1e-3,
+        "sheen_color": rng.uniform(0.0, 1.0, (rows, columns, 3)),
+        "sheen_roughness": rng.uniform(0.0, 1.0, (rows, columns)),
+    }
+    return svbrdf.Maps(
+        "gltf", {"sheen": True}, "relative", ("r", "g", "b"), params, {"n_samples": n_samples}, 30.0, 20.0
+    )
+
+
+def test_anisotropy_and_sheen_maps_are_textures_that_decode_to_the_maps(tmp_path):
+    """KHR_materials_anisotropy's texture (direction in red and green, strength in blue, linear) and
+    KHR_materials_sheen's (sRGB colour, linear roughness in alpha) give back each fitted texel's parameters within
+    the rounding the export reports, and that report is what a user measures: 8-bit steps, 0.5/255 for a linear
+    value, the angle of a direction rounded to 1/255 in each of its two components (under √2/255 rad)."""
+    maps = _textured_maps(tmp_path)
+    exported = gltf_maps(maps)
+    document, binary = _chunks(exported.data)
+    extensions = document["materials"][0]["extensions"]
+    assert set(document["extensionsUsed"]) == {"KHR_materials_anisotropy", "KHR_materials_sheen"}
+    anisotropy, sheen = extensions["KHR_materials_anisotropy"], extensions["KHR_materials_sheen"]
+    assert anisotropy["anisotropyStrength"] == 1.0 and anisotropy["anisotropyRotation"] == 0.0
+    assert sheen["sheenColorFactor"] == [1.0, 1.0, 1.0] and sheen["sheenRoughnessFactor"] == 1.0
+    fitted = maps.fitted
+    texture = _image(document, binary, anisotropy["anisotropyTexture"]["index"])
+    direction = texture[..., :2] * 2.0 - 1.0
+    rotation = np.arctan2(direction[..., 1], direction[..., 0])
+    turned = (rotation - maps.params["anisotropy_rotation"] + np.pi / 2) % np.pi - np.pi / 2
+    assert np.max(np.abs(turned)[fitted]) == pytest.approx(exported.quantization["anisotropy_rotation"], abs=1e-12)
+    assert exported.quantization["anisotropy_rotation"] < np.sqrt(2) / 255
+    strength = texture[..., 2]
+    assert np.max(np.abs(strength - maps.params["anisotropy_strength"])[fitted]) <= 0.5 / 255 + 1e-12
+    assert strength[2, 3] == 0.0  # the texel not fitted is isotropic
+    colour_texture = _image(document, binary, sheen["sheenColorTexture"]["index"])
+    assert sheen["sheenRoughnessTexture"] == sheen["sheenColorTexture"]  # one RGBA image
+    colour = srgb_decoded(colour_texture[..., :3])
+    colour_error = np.max(np.abs(colour - maps.params["sheen_color"])[fitted])
+    assert colour_error == pytest.approx(exported.quantization["sheen_color"], abs=1e-12)
+    roughness_error = np.max(np.abs(colour_texture[..., 3] - maps.params["sheen_roughness"])[fitted])
+    assert roughness_error == pytest.approx(exported.quantization["sheen_roughness"], abs=1e-12)
+    assert roughness_error <= 0.5 / 255 + 1e-12
+    primitive = document["meshes"][0]["primitives"][0]
+    tangents = _accessor(document, binary, primitive["attributes"]["TANGENT"])
+    np.testing.assert_array_equal(tangents, np.tile([1.0, 0.0, 0.0, 1.0], (4, 1)))  # +x; bitangent cross(z, x) = +y
+    assert any("capture's +x" in note for note in exported.notes)
+
+
+def test_isotropic_maps_without_a_sheen_have_no_tangents_and_no_such_textures(tmp_path):
+    maps = _textured_maps(tmp_path)
+    maps.params["anisotropy_strength"][:] = 0.0
+    maps.params["sheen_color"][:] = 0.0
+    document, _ = _chunks(gltf_maps(maps).data)
+    assert "extensions" not in document["materials"][0] and len(document["textures"]) == 2
+    assert "TANGENT" not in document["meshes"][0]["primitives"][0]["attributes"]
+
+
+@needs_validator
+def test_the_anisotropy_and_sheen_maps_glb_is_valid(tmp_path):
+    path = tmp_path / "material.glb"
+    path.write_bytes(gltf_maps(_textured_maps(tmp_path)).data)
+    assert_valid(path)
