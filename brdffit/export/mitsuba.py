@@ -162,7 +162,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     (``approximate.py``). Nothing is ever scaled: a material Mitsuba cannot hold is refitted, and the error said."""
     source = spec_of(result.model, result.model_options)
     notes = _channel_notes(result)
-    exact = _exact_bsdf(result)
+    exact = exact_bsdf(result)
     if exact is not None and _in_range(result):
         return MitsubaExport(exact, source, result, None, notes + _tangent_notes(result))
     from .approximate import approximation_error, reference, refit
@@ -289,7 +289,7 @@ def _range_holding(result: FitResult) -> Holding:
     return Holding(bounds={model.diffuse_name: (0.0, (1.0 - share) * top), model.specular_name: (0.0, share * top)})
 
 
-def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
+def exact_bsdf(result: FitResult) -> dict[str, Any] | None:
     """The BSDF of ``result`` by its model's exact mapping onto Mitsuba (its registry entry's ``exports``); None where
     the model, or these options of it, have no exact counterpart."""
     mapping = MODELS[result.model].exact_export("mitsuba") if result.model in MODELS else None
@@ -297,8 +297,8 @@ def _exact_bsdf(result: FitResult) -> dict[str, Any] | None:
 
 
 def exact_bsdf_of(result: FitResult) -> dict[str, Any]:
-    """:func:`_exact_bsdf` of a result whose model has an exact mapping (Mitsuba's own, or one of the model's)."""
-    bsdf = _exact_bsdf(result)
+    """:func:`exact_bsdf` of a result whose model has an exact mapping (Mitsuba's own, or one of the model's)."""
+    bsdf = exact_bsdf(result)
     assert bsdf is not None, f"no exact Mitsuba BSDF for {result.model}"
     return bsdf
 

@@ -1,17 +1,29 @@
-"""The maps of a fit of one of Mitsuba 3's own models as a Mitsuba BSDF with ``bitmap`` textures, and a scene that
+"""The maps of a fit whose Mitsuba 3 export is exact as a Mitsuba BSDF with ``bitmap`` textures, and a scene that
 renders the sample as the capture photographed it.
 
-A model whose Mitsuba export is exact (``principled``, ``roughplastic``: the same plugin with the same numbers,
-``export/mitsuba.py``) exports texel by texel where Mitsuba takes a texture for a parameter: every map that varies
-over the fitted texels becomes a ``bitmap`` of its OpenEXR image (linear float32; nearest-texel lookup, so a texel is
-its own value), the others stay numbers. Some parameters Mitsuba takes as one number only (:data:`TEXTURED` lists the
-others): ``roughplastic``'s ``alpha``, ``principled``'s ``specular``. Maps where one of those varies are not exported
-(``maps.json`` says why): hold it (``fixed={"specular": 0.5}``, ``--fix specular=0.5``) to export them.
+A model whose Mitsuba export is exact (``export/mitsuba.py``) exports texel by texel where Mitsuba takes a texture for
+a parameter: every map of the BSDF that varies over the fitted texels becomes a ``bitmap`` of its OpenEXR image (linear
+float32; nearest-texel lookup, so a texel is its own value), the others stay numbers.
+
+* Mitsuba's own ``principled`` and ``roughplastic``: the same plugin with the same numbers. Some parameters Mitsuba
+  takes as one number only (:data:`TEXTURED` lists the others): ``roughplastic``'s ``alpha``, ``principled``'s
+  ``specular``. Maps where one of those varies are not exported (``maps.json`` says why): hold it
+  (``fixed={"specular": 0.5}``, ``--fix specular=0.5``) to export them.
+* ``lambert``: a ``diffuse`` BSDF, ``reflectance`` the map of ``rho_d``.
+* ``cook-torrance`` with Smith shadowing (and a conductor, dielectric or no Fresnel term): the ``export/mitsuba.py``
+  mapping texel by texel, a ``roughconductor`` (``alpha``, or ``alpha_u`` and ``alpha_v``; ``eta`` and ``k``) and a
+  ``diffuse`` joined by a ``blendbsdf`` whose ``weight`` is a map too: each texel's ``w = max ks / (max kd + max
+  ks)``, ``reflectance = kd/(1 − w)``, ``specular_reflectance = ks/w``. Mitsuba's reflectances are at most 1, so
+  every texel must have ``max kd + max ks ≤ 1`` (a metal's ``ks`` held at 1 with ``kd`` held at 0); maps beyond it
+  are not exported, as maps of a model Mitsuba does not have (Ward, Lafortune, the V-groove shadowing) are not:
+  ``maps.json`` says why. Mitsuba's anisotropic ``alpha_u`` lies along the rectangle's ``dp/du``, the capture's
+  ``+x``: an anisotropic fit exports where every texel's tangent lies along ``x`` or ``y`` (``phi_t`` 0 or 90°,
+  ``fixed={"phi_t": 0}``), its two roughnesses exchanged where it lies along ``y``.
 
 ``MAPS/mitsuba/`` then holds:
 
 * ``bsdf.xml``: the BSDF (``<bsdf type="principled" id="material">``), its textures named relative to it;
-* ``<parameter>.exr``: those textures, a texel that was not fitted as 0;
+* ``<parameter>.exr``: those textures, named by the BSDF's parameter, a texel that was not fitted as 0;
 * ``scene.xml``: the sample (a ``rectangle`` the plane's size, in mm, its texture coordinates turned so that
   texel (0, 0) is the top left seen from +z), lit by a point light and seen by a perspective camera looking straight
   down at its centre, whose field of view is the sample's width: its image is the capture's rectified image for a
@@ -31,12 +43,15 @@ import numpy as np
 from .._files import write_text_atomic
 from ..errors import Argument, BrdfInputError
 from ..fitting.single.result import FitResult
+from ..physics.models.registry import get_model
 from .images import write_exr
 from .maps import Maps
 
 FOLDER = "mitsuba"
 #: The models whose maps export, and the Mitsuba parameters each takes as a texture (None: all of them).
 TEXTURED: dict[str, frozenset[str] | None] = {
+    "lambert": None,
+    "cook-torrance": None,  # with Smith shadowing: export/mitsuba.py's exact mapping
     "principled": frozenset(
         {
             "base_color",
@@ -53,19 +68,24 @@ TEXTURED: dict[str, frozenset[str] | None] = {
     "roughplastic": frozenset({"diffuse_reflectance", "specular_reflectance"}),
 }
 #: Parameters Mitsuba takes as a colour (an RGB bitmap); the others are numbers (one-channel bitmaps, ``raw``).
-COLOURS = ("base_color", "diffuse_reflectance", "specular_reflectance")
+COLOURS = ("base_color", "diffuse_reflectance", "specular_reflectance", "reflectance")
+#: How far above 1 a texel's largest reflectance may lie and still be 1 (the blend's division rounds).
+RANGE_TOLERANCE = 1e-9
+#: How far (degrees) an anisotropic texel's tangent may lie from the capture's x or y axis and still lie along it.
+AXIS_TOLERANCE = 1e-9
 XML_VERSION = "3.0.0"
 
 
-def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
+def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """The Mitsuba BSDF (the dictionary ``mitsuba.load_dict`` takes, textures named ``<parameter>.exr``) of
-    ``maps`` and the names of its textured parameters (module docstring); one line where it cannot be made."""
-    from ..export.mitsuba import exact_bsdf_of
+    ``maps`` and its textures, each parameter's map (H, W) or (H, W, 3) (module docstring); one line where it
+    cannot be made."""
+    from ..export.mitsuba import exact_bsdf
 
     if maps.model not in TEXTURED:
         raise BrdfInputError(
-            f"the maps of a {maps.model} fit have no Mitsuba texture export: fit the capture with one of Mitsuba's"
-            f" own models ({', '.join(TEXTURED)})"
+            f"the maps of a {maps.model} fit have no Mitsuba texture export: fit the capture with a model whose"
+            f" Mitsuba export is exact ({', '.join(TEXTURED)})"
         )
     fitted = maps.fitted
     if not fitted.any():
@@ -85,9 +105,16 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
         n_steps=0,
         converged=True,
     )
-    bsdf = exact_bsdf_of(first)
+    bsdf = exact_bsdf(first)
+    if bsdf is None:
+        raise BrdfInputError(
+            f"the maps of this {maps.model} fit have no Mitsuba counterpart: Mitsuba's roughconductor has Smith"
+            " shadowing and a conductor, dielectric or no Fresnel term: fit the capture with Smith shadowing"
+        )
+    textures: dict[str, np.ndarray] = {}
+    if maps.model in ("lambert", "cook-torrance"):
+        return _texturised(_mapped(maps), fitted, textures), textures
     allowed = TEXTURED[maps.model]
-    textured = []
     for name, array in maps.params.items():
         values = array[fitted]
         if name not in bsdf or np.all(values == values[0]):
@@ -99,11 +126,96 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], list[str]]:
                 Argument("fixed", f"{name}=…"),
                 ") to export",
             )
-        bsdf[name] = {"type": "bitmap", "filename": f"{name}.exr", "filter_type": "nearest"} | (
-            {} if name in COLOURS else {"raw": True}
+        bsdf[name] = _bitmap(name)
+        textures[name] = _rgb(array) if name in COLOURS else array
+    return bsdf, textures
+
+
+def _bitmap(name: str) -> dict[str, Any]:
+    """The ``bitmap`` texture of parameter ``name``: a colour as stored, any other number ``raw``."""
+    return {"type": "bitmap", "filename": f"{name}.exr", "filter_type": "nearest"} | (
+        {} if name in COLOURS else {"raw": True}
+    )
+
+
+def _mapped(maps: Maps) -> dict[str, Any]:
+    """The Mitsuba BSDF of ``lambert`` or Smith ``cook-torrance`` maps with each texel's value, (H, W) or (H, W, 3),
+    at its leaves: ``export/mitsuba.py``'s exact mapping texel by texel (module docstring); a one-line error where a
+    texel lies beyond Mitsuba's reflectances or an anisotropic tangent off the capture's axes."""
+    params, fitted = maps.params, maps.fitted
+    if maps.model == "lambert":
+        reflectance = _rgb(params["rho_d"])
+        _within_range(np.max(reflectance, axis=-1), fitted, "rho_d")
+        return {"type": "diffuse", "reflectance": reflectance}
+    options = get_model(maps.model, **maps.model_options).model_options
+    kd, ks = _rgb(params["kd"]), _rgb(params["ks"])
+    specular: dict[str, Any] = {"type": "roughconductor", "distribution": options["distribution"]}
+    if options["anisotropic"]:
+        specular["alpha_u"], specular["alpha_v"] = _along_the_axes(params, fitted)
+    else:
+        specular["alpha"] = params["m"]
+    if options["fresnel"] == "none":
+        specular["material"] = "none"
+    elif options["fresnel"] == "conductor":
+        specular["eta"], specular["k"] = _rgb(params["eta"]), _rgb(params["k"])
+    else:
+        specular["eta"], specular["k"] = params["eta"], 0.0
+    largest_kd, largest_ks = np.max(kd, axis=-1), np.max(ks, axis=-1)
+    total = largest_kd + largest_ks
+    _within_range(total, fitted, "max kd + max ks")
+    if not np.any(largest_kd[fitted] > 0):
+        return specular | {"specular_reflectance": np.minimum(ks, 1.0)}
+    if not np.any(largest_ks[fitted] > 0):
+        return {"type": "diffuse", "reflectance": np.minimum(kd, 1.0)}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        weight = np.where(total > 0, largest_ks / total, 0.0)
+        reflectance = np.where((weight < 1)[..., None], kd / (1.0 - weight)[..., None], 0.0)
+        specular["specular_reflectance"] = np.minimum(np.where((weight > 0)[..., None], ks / weight[..., None], 0.0), 1)
+    diffuse = {"type": "diffuse", "reflectance": np.minimum(reflectance, 1.0)}
+    return {"type": "blendbsdf", "weight": weight, "diffuse": diffuse, "specular": specular}
+
+
+def _within_range(largest: np.ndarray, fitted: np.ndarray, what: str) -> None:
+    """One line where a fitted texel's ``largest`` reflectance (H, W) lies above Mitsuba's 1."""
+    beyond = fitted & (largest > 1.0 + RANGE_TOLERANCE)
+    if beyond.any():
+        raise BrdfInputError(
+            f"{int(beyond.sum())} of {int(fitted.sum())} texels have {what} above 1"
+            f" (up to {largest[beyond].max():.4g}), beyond Mitsuba's reflectances: fit with the albedos held within"
+            " them (a metal's kd held at 0)"
         )
-        textured.append(name)
-    return bsdf, textured
+
+
+def _along_the_axes(params: dict[str, np.ndarray], fitted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``alpha_u`` and ``alpha_v`` along the capture's ``x`` and ``y`` (Mitsuba's ``dp/du`` and ``dp/dv`` on the
+    scene's rectangle): a texel's two exchanged where its tangent lies along ``y`` (``phi_t`` 90°); one line where a
+    fitted texel's tangent lies along neither."""
+    alpha_u, alpha_v, phi_t = params["alpha_u"], params["alpha_v"], params["phi_t"]
+    along_y = np.abs(np.abs(phi_t) - 90.0) <= AXIS_TOLERANCE
+    off = fitted & ~along_y & ~(np.abs(phi_t) <= AXIS_TOLERANCE)
+    if off.any():
+        raise BrdfInputError(
+            f"{int(off.sum())} of {int(fitted.sum())} texels have their tangent at phi_t = {phi_t[off][0]:.4g}°, and"
+            " Mitsuba's anisotropic roughconductor stretches alpha_u along the capture's x: hold phi_t at 0 to export"
+        )
+    return np.where(along_y, alpha_v, alpha_u), np.where(along_y, alpha_u, alpha_v)
+
+
+def _texturised(node: dict[str, Any], fitted: np.ndarray, textures: dict[str, np.ndarray]) -> dict[str, Any]:
+    """The BSDF ``node`` (:func:`_mapped`) with each map that varies over the ``fitted`` texels a :func:`_bitmap`
+    (added to ``textures``) and each other one its number (a colour as ``rgb``)."""
+    done: dict[str, Any] = {}
+    for key, value in node.items():
+        if isinstance(value, dict):
+            done[key] = _texturised(value, fitted, textures)
+        elif not isinstance(value, np.ndarray):
+            done[key] = value
+        elif np.all(value[fitted] == value[fitted][0]):
+            first = value[fitted][0]
+            done[key] = {"type": "rgb", "value": [float(v) for v in first]} if value.ndim == 3 else float(first)
+        else:
+            done[key], textures[key] = _bitmap(key), value
+    return done
 
 
 def write_mitsuba_maps(folder: str | os.PathLike, maps: Maps, light_mm, intensity, camera_mm) -> dict[str, Any]:
@@ -111,18 +223,22 @@ def write_mitsuba_maps(folder: str | os.PathLike, maps: Maps, light_mm, intensit
     light at ``light_mm`` of ``intensity`` (per channel: one, or r, g, b) and a camera at the height of
     ``camera_mm``; what ``maps.json`` says of it (the files), or why nothing was written."""
     try:
-        bsdf, textured = mitsuba_bsdf_of_maps(maps)
+        bsdf, textures = mitsuba_bsdf_of_maps(maps)
     except BrdfInputError as error:
         return {"folder": None, "not_written": str(error)}
     out = Path(folder) / FOLDER
     out.mkdir(parents=True, exist_ok=True)
-    for name in textured:
-        array = maps.params[name]
-        image = array if array.ndim == 2 or name not in COLOURS else _rgb(array)
-        write_exr(out / f"{name}.exr", np.nan_to_num(image, nan=0.0))
+    textured = list(textures)
+    for name, image in textures.items():
+        write_exr(out / f"{name}.exr", np.nan_to_num(np.where(_fitted(maps, image), image, 0.0), nan=0.0))
     write_text_atomic(out / "bsdf.xml", "\n".join(_bsdf_xml(bsdf, "", version=XML_VERSION, id_="material")) + "\n")
     write_text_atomic(out / "scene.xml", _scene_xml(maps, light_mm, intensity, camera_mm))
     return {"folder": FOLDER, "textured": textured, "files": ["bsdf.xml", "scene.xml", *(f"{n}.exr" for n in textured)]}
+
+
+def _fitted(maps: Maps, image: np.ndarray) -> np.ndarray:
+    """Which texels of ``image`` (H, W) or (H, W, C) were fitted, broadcast to its shape."""
+    return maps.fitted if image.ndim == 2 else maps.fitted[..., None]
 
 
 def _rgb(array: np.ndarray) -> np.ndarray:
@@ -138,7 +254,9 @@ def _bsdf_xml(node: dict[str, Any], indent: str, version: str | None = None, id_
     for key, value in node.items():
         if key == "type":
             continue
-        if isinstance(value, dict) and value.get("type") == "rgb":
+        if isinstance(value, dict) and value.get("type") not in ("rgb", "bitmap"):  # a nested BSDF (a blend's)
+            lines += _bsdf_xml(value, inner)
+        elif isinstance(value, dict) and value.get("type") == "rgb":
             lines.append(f'{inner}<rgb name="{key}" value="{", ".join(repr(float(v)) for v in value["value"])}"/>')
         elif isinstance(value, dict) and value.get("type") == "bitmap":
             lines += [
