@@ -22,7 +22,8 @@ float32; nearest-texel lookup, so a texel is its own value), the others stay num
 
 ``MAPS/mitsuba/`` then holds:
 
-* ``bsdf.xml``: the BSDF (``<bsdf type="principled" id="material">``), its textures named relative to it;
+* ``bsdf.xml``: the BSDF (``<bsdf type="principled" id="material">``, or the model's), its textures named relative to
+  it;
 * ``<parameter>.exr``: those textures, named by the BSDF's parameter, a texel that was not fitted as 0;
 * ``scene.xml``: the sample (a ``rectangle`` the plane's size, in mm, its texture coordinates turned so that
   texel (0, 0) is the top left seen from +z), lit by a point light and seen by a perspective camera looking straight
@@ -107,9 +108,11 @@ def mitsuba_bsdf_of_maps(maps: Maps) -> tuple[dict[str, Any], dict[str, np.ndarr
     )
     bsdf = exact_bsdf(first)
     if bsdf is None:
+        options = get_model(maps.model, **maps.model_options).model_options
         raise BrdfInputError(
-            f"the maps of this {maps.model} fit have no Mitsuba counterpart: Mitsuba's roughconductor has Smith"
-            " shadowing and a conductor, dielectric or no Fresnel term: fit the capture with Smith shadowing"
+            f"the maps of this {maps.model} fit (shadowing {options['shadowing']}, fresnel {options['fresnel']}) have"
+            " no Mitsuba counterpart: Mitsuba's roughconductor has Smith shadowing and a conductor, dielectric or no"
+            " Fresnel term"
         )
     textures: dict[str, np.ndarray] = {}
     if maps.model in ("lambert", "cook-torrance"):
@@ -233,7 +236,27 @@ def write_mitsuba_maps(folder: str | os.PathLike, maps: Maps, light_mm, intensit
         write_exr(out / f"{name}.exr", np.nan_to_num(np.where(_fitted(maps, image), image, 0.0), nan=0.0))
     write_text_atomic(out / "bsdf.xml", "\n".join(_bsdf_xml(bsdf, "", version=XML_VERSION, id_="material")) + "\n")
     write_text_atomic(out / "scene.xml", _scene_xml(maps, light_mm, intensity, camera_mm))
-    return {"folder": FOLDER, "textured": textured, "files": ["bsdf.xml", "scene.xml", *(f"{n}.exr" for n in textured)]}
+    files = ["bsdf.xml", "scene.xml", *(f"{n}.exr" for n in textured)]
+    return {"folder": FOLDER, "textured": textured, "files": files, "notes": _notes(maps, textures)}
+
+
+def _notes(maps: Maps, textures: dict[str, np.ndarray]) -> list[str]:
+    """What a user of the Mitsuba maps must know: where an anisotropic BSDF's tangent lies, and that raw colour
+    textures (a conductor's index per channel) load in Mitsuba's RGB variants only."""
+    notes = []
+    raw_colours = [name for name, image in textures.items() if image.ndim == 3 and name not in COLOURS]
+    if raw_colours:
+        notes.append(
+            f"{' and '.join(f'{name}.exr' for name in raw_colours)} hold one value per RGB channel, as the fit does"
+            " (raw textures): render in an RGB variant of Mitsuba (scalar_rgb, llvm_ad_rgb); its spectral variants"
+            " refuse raw colour textures"
+        )
+    if maps.model == "cook-torrance" and get_model(maps.model, **maps.model_options).model_options["anisotropic"]:
+        notes.append(
+            "anisotropic: Mitsuba's alpha_u lies along the shape's dp/du, on the scene's rectangle the capture's +x;"
+            " on another mesh its u direction must lie where the capture's +x lay"
+        )
+    return notes
 
 
 def _fitted(maps: Maps, image: np.ndarray) -> np.ndarray:

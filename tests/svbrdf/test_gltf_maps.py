@@ -102,7 +102,7 @@ def test_maps_of_another_model_have_no_glb(tmp_path):
         gltf_maps(maps)
 
 
-def _textured_maps(tmp_path) -> svbrdf.Maps:
+def _textured_maps() -> svbrdf.Maps:
     """Maps of a ``gltf:sheen=true`` fit made by hand, 5 × 7 texels: an anisotropy turning through every direction
     (the lobe is the same turned by π) with a strength rising across the rows, a sheen whose colour and roughness
     vary, one texel not fitted."""
@@ -133,7 +133,7 @@ def test_anisotropy_and_sheen_maps_are_textures_that_decode_to_the_maps(tmp_path
     KHR_materials_sheen's (sRGB colour, linear roughness in alpha) give back each fitted texel's parameters within
     the rounding the export reports, and that report is what a user measures: 8-bit steps, 0.5/255 for a linear
     value, the angle of a direction rounded to 1/255 in each of its two components (under √2/255 rad)."""
-    maps = _textured_maps(tmp_path)
+    maps = _textured_maps()
     exported = gltf_maps(maps)
     document, binary = _chunks(exported.data)
     extensions = document["materials"][0]["extensions"]
@@ -163,10 +163,21 @@ def test_anisotropy_and_sheen_maps_are_textures_that_decode_to_the_maps(tmp_path
     tangents = _accessor(document, binary, primitive["attributes"]["TANGENT"])
     np.testing.assert_array_equal(tangents, np.tile([1.0, 0.0, 0.0, 1.0], (4, 1)))  # +x; bitangent cross(z, x) = +y
     assert any("capture's +x" in note for note in exported.notes)
+    assert not any("are isotropic" in note for note in exported.notes)  # every fitted texel is anisotropic
+
+
+def test_isotropic_texels_of_an_anisotropic_glb_are_said_to_render_clamped():
+    """A viewer shades every texel of a material with KHR_materials_anisotropy by the extension's clamped lobe; the
+    gltf model's isotropic texels (strength below MIN_ANISOTROPY) were fitted with the core one: the notes count
+    them."""
+    maps = _textured_maps()
+    maps.params["anisotropy_strength"][0, :3] = 0.0
+    notes = gltf_maps(maps).notes
+    assert any(note.startswith("3 of 34 texels are isotropic") for note in notes), notes
 
 
 def test_isotropic_maps_without_a_sheen_have_no_tangents_and_no_such_textures(tmp_path):
-    maps = _textured_maps(tmp_path)
+    maps = _textured_maps()
     maps.params["anisotropy_strength"][:] = 0.0
     maps.params["sheen_color"][:] = 0.0
     document, _ = _chunks(gltf_maps(maps).data)
@@ -177,5 +188,5 @@ def test_isotropic_maps_without_a_sheen_have_no_tangents_and_no_such_textures(tm
 @needs_validator
 def test_the_anisotropy_and_sheen_maps_glb_is_valid(tmp_path):
     path = tmp_path / "material.glb"
-    path.write_bytes(gltf_maps(_textured_maps(tmp_path)).data)
+    path.write_bytes(gltf_maps(_textured_maps()).data)
     assert_valid(path)

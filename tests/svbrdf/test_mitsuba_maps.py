@@ -1,6 +1,7 @@
-"""The maps of a ``principled`` fit as a Mitsuba BSDF with bitmap textures and a scene: Mitsuba renders the scene at
-a capture's own light as the photograph it took (the issue's acceptance), and maps Mitsuba cannot hold say why.
-Also the neighbour starts: texels whose start search ended in a local minimum are fitted again from a neighbour's
+"""The maps of fits whose Mitsuba export is exact (``principled``; ``lambert`` and Smith ``cook-torrance``) as a
+Mitsuba BSDF with bitmap textures and a scene: Mitsuba renders the scene at a capture's own light as the photograph it
+took (the issue's acceptance), its BSDF is the maps' model texel by texel, and maps Mitsuba cannot hold say why. Also
+the neighbour starts: texels whose start search ended in a local minimum are fitted again from a neighbour's
 parameters, and every texel of noise-free photographs ends at the truth's cost."""
 
 import json
@@ -103,11 +104,19 @@ def _true_maps(folder, name: str) -> svbrdf.Maps:
     return svbrdf.Maps(model, options, "relative", ("r", "g", "b"), dict(truth), fit, 100.0, 100.0)
 
 
-def _written(folder, name: str) -> tuple[svbrdf.Maps, object]:
+def _written(folder, name: str, edited: bool = False) -> tuple[svbrdf.Maps, object, dict]:
     """:func:`_true_maps` of ``name`` (the anisotropic one with its tangent along y in every other texel, its
     roughnesses exchanged: the same lobes, which Mitsuba's alpha_u along x holds only so), written to Mitsuba in
-    ``folder/maps``; and the capture."""
+    ``folder/maps``; the capture; what maps.json says of them. ``edited``: texel (5, 5) not fitted and, for a blend,
+    the first row without a diffuse albedo and texel (1, 0) without a specular one (a blend's weight of 1 and 0)."""
     maps = _true_maps(folder, name)
+    if edited:
+        maps.fit["n_samples"][5, 5] = 0
+        for values in maps.params.values():
+            values[5, 5] = np.nan
+        if "kd" in maps.params and np.any(maps.params["kd"] > 0):
+            maps.params["kd"][0] = 0.0
+            maps.params["ks"][1, 0] = 0.0
     if name == "brushed-ggx":
         along_y = (np.arange(36).reshape(6, 6) % 2).astype(bool)
         u, v = maps.params["alpha_u"].copy(), maps.params["alpha_v"].copy()
@@ -117,7 +126,7 @@ def _written(folder, name: str) -> tuple[svbrdf.Maps, object]:
     first = capture.shots[0]
     described = write_mitsuba_maps(folder / "maps", maps, first.light_mm, first.intensity, first.camera_mm)
     assert described.get("folder") == "mitsuba", described
-    return maps, capture
+    return maps, capture, described
 
 
 #: How far Mitsuba's BSDF may lie from the maps' model (relative): float32 textures and arithmetic for GGX; for
@@ -131,9 +140,11 @@ def test_mitsubas_bsdf_of_exact_maps_is_the_maps_model_at_every_texel(tmp_path, 
     of a diffuse and a roughconductor whose weight is a map too, a metal's roughconductor alone, an anisotropic one)
     evaluated by Mitsuba at each texel (its texture coordinates on the scene's rectangle) and the capture's
     directions there: the model's BRDF at the texel's parameters."""
-    maps, capture = _written(tmp_path, name)
+    maps, capture, described = _written(tmp_path, name, edited=True)
     mi.set_variant("scalar_rgb")
     bsdf = mi.load_file(str(tmp_path / "maps" / "mitsuba" / "bsdf.xml"))
+    for texture in described["textured"]:  # a texel not fitted is 0
+        assert np.all(read_image(tmp_path / "maps" / "mitsuba" / f"{texture}.exr")[5, 5] == 0.0)
     model = get_model(maps.model, **maps.model_options)
     rows, columns = maps.shape
     texels = np.arange(rows * columns)
@@ -141,10 +152,13 @@ def test_mitsubas_bsdf_of_exact_maps_is_the_maps_model_at_every_texel(tmp_path, 
     lights = np.stack([shot.light_mm for shot in capture.shots])
     cameras = np.stack([shot.camera_mm for shot in capture.shots])
     wi, wo, _ = point_light(capture.texel_centres(), lights, cameras)
-    stacked = stacked_params(model, flat, texels)
-    expected = np.stack([texel_brdf(model, stacked, wi[:, k], wo[:, k]) for k in range(len(lights))], 1)  # (T, K, C)
+    fitted = texels[maps.fitted.ravel()]
+    stacked = stacked_params(model, flat, fitted)
+    expected = np.full((len(texels), len(lights), 3), np.nan)
+    for k in range(len(lights)):
+        expected[fitted, k] = texel_brdf(model, stacked, wi[fitted, k], wo[fitted, k])
     tolerance = MITSUBA_AGREES[maps.model_options.get("distribution", "ggx")]
-    for texel in texels:
+    for texel in texels[maps.fitted.ravel()]:
         row, column = divmod(int(texel), columns)
         interaction = mi.SurfaceInteraction3f()
         interaction.uv = mi.Point2f((column + 0.5) / columns, 1.0 - (row + 0.5) / rows)  # the rectangle's
@@ -160,7 +174,7 @@ def test_mitsuba_renders_exact_cook_torrance_maps_as_photographed(tmp_path):
     noise-free photograph, within 1% (median; measured 0.26–0.41%: each pixel averages the BRDF over its 17 mm
     footprint, where the photograph holds the value at the texel's centre: 2.6% for the anisotropic capture's narrow
     lobes, whose BSDF the test above checks texel by texel)."""
-    _, capture = _written(tmp_path, "blended-ggx")
+    _, capture, _ = _written(tmp_path, "blended-ggx")
     mi.set_variant("scalar_rgb")
     errors = []
     for shot in capture.shots[::3]:
@@ -179,9 +193,18 @@ def test_maps_mitsuba_cannot_hold_say_why(tmp_path):
     with pytest.raises(BrdfInputError, match=r"36 of 36 texels have max kd \+ max ks above 1 .* albedos held within"):
         mitsuba_bsdf_of_maps(bright)
     vgroove = svbrdf.Maps(**{**vars(maps), "model_options": {"fresnel": "dielectric"}})
-    with pytest.raises(BrdfInputError, match="no Mitsuba counterpart: Mitsuba's roughconductor has Smith shadowing"):
+    with pytest.raises(BrdfInputError, match=r"\(shadowing v-groove, fresnel dielectric\) have no Mitsuba counterpart"):
         mitsuba_bsdf_of_maps(vgroove)
     brushed = _true_maps(tmp_path / "brushed", "brushed-ggx")
     turned = svbrdf.Maps(**{**vars(brushed), "params": brushed.params | {"phi_t": np.full((6, 6), 30.0)}})
     with pytest.raises(BrdfInputError, match=r"36 of 36 texels have their tangent at phi_t = 30°"):
         mitsuba_bsdf_of_maps(turned)
+
+
+def test_the_notes_say_where_the_tangent_lies_and_which_variants_load_an_index_per_channel(tmp_path):
+    _, _, described = _written(tmp_path, "brushed-ggx")
+    notes = " ".join(described["notes"])
+    assert "eta.exr and k.exr hold one value per RGB channel" in notes and "RGB variant" in notes
+    assert "alpha_u lies along the shape's dp/du" in notes
+    _, _, described = _written(tmp_path / "blend", "blended-ggx")
+    assert described["notes"] == []  # a dielectric's one index: a number; isotropic
