@@ -44,6 +44,13 @@ def boolean(name: str, value) -> bool:
     raise not_allowed(name, value, "give true or false")
 
 
+def positive_number(name: str, value) -> float:
+    """``value`` as a float if it is a finite number above 0, else a one-line error naming the argument ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < float(value) < float("inf"):
+        raise not_allowed(name, value, "give a finite number above 0")
+    return float(value)
+
+
 def angle_up_to_90(name: str, value: float) -> float:
     """An angle in degrees in (0, 90]: a zenith limit, a spread about a direction."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 90:

@@ -62,6 +62,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
         "--uncertainty", metavar="METHOD", help="laplace: a standard-error map per parameter (<name>_stderr)"
     )
     fit.add_argument(
+        "--smoothness",
+        type=float,
+        metavar="TAU",
+        help="draw neighbouring texels' shape parameters together: TAU is how far one typically differs from a"
+        " neighbour's, in its fit coordinate (0.1 on a roughness's logarithm: 10%%); default: each texel its own",
+    )
+    fit.add_argument(
         "--threads", type=int, metavar="N", help="fit N batches of texels at once (default: one per CPU core)"
     )
     fit.add_argument(
@@ -160,6 +167,7 @@ def _fit(args: argparse.Namespace) -> int:
             max_steps=args.max_steps,
             seed=args.seed,
             uncertainty=args.uncertainty,
+            smoothness=args.smoothness,
             textures=not args.no_textures,
             fixed=held["fixed"],
             bounds=held["bounds"],
@@ -176,11 +184,20 @@ def _fit(args: argparse.Namespace) -> int:
         + ")"
     )
     print(_table(maps))
+    if maps.smoothing:
+        said = maps.smoothing
+        print(
+            f"  smoothness prior τ = {said['tau']:g} (λ = {said['lambda']:.3g}): {said['passes']} pass(es), the last"
+            f" moving a shape coordinate by at most {said['largest_change']:.2g}"
+        )
     glb, mitsuba = maps.exports.get("glb") or {}, maps.exports.get("mitsuba") or {}
     if glb.get("file"):
         print(f"  {glb['file']}: the maps on a quad for glTF viewers" + "".join(f"; {n}" for n in glb["notes"]))
     if mitsuba.get("folder"):
-        print(f"  {mitsuba['folder']}/: bsdf.xml with {len(mitsuba['textured'])} bitmap texture(s), scene.xml")
+        print(
+            f"  {mitsuba['folder']}/: bsdf.xml with {len(mitsuba['textured'])} bitmap texture(s), scene.xml"
+            + "".join(f"; {note}" for note in mitsuba.get("notes", []))
+        )
     for what, said in (("material.glb", glb), ("Mitsuba scene", mitsuba)):
         if said.get("not_written"):
             print(f"brdffit: note: no {what}: {said['not_written']}", file=sys.stderr)

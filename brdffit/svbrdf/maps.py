@@ -58,7 +58,9 @@ class Maps:
     needs; ``exports``: what the fit that made the maps wrote beside them, the ``material.glb`` (``"glb"``) and the
     ``mitsuba/`` folder (``"mitsuba"``), as ``maps.json`` says of them (``gltf_maps.write_glb``,
     ``mitsuba_maps.write_mitsuba_maps``; None: not made). Maps read from a folder have none: written elsewhere, or
-    changed, they no longer have those files beside them."""
+    changed, they no longer have those files beside them. ``smoothing``: the smoothness prior the texels were fitted
+    under (``smoothing.smoothed``: ``tau``, ``lambda``, ``passes``, ``largest_change``, ``converged``), empty for
+    none."""
 
     model: str
     model_options: dict[str, Any]
@@ -75,6 +77,7 @@ class Maps:
     notes: list[str] = field(default_factory=list)
     normals: np.ndarray | None = None
     exports: dict[str, dict[str, Any] | None] = field(default_factory=lambda: {"glb": None, "mitsuba": None})
+    smoothing: dict[str, Any] = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -185,6 +188,7 @@ def write_maps(folder: str | os.PathLike, maps: Maps, textures: bool = True) -> 
         "preview_range": ranges,
         "caveat_examples": maps.caveat_examples,
         "neighbour_starts": maps.neighbour_starts,
+        "smoothing": maps.smoothing or None,
         "notes": maps.notes,
         "glb": glb,
         "mitsuba": mitsuba,
@@ -255,4 +259,5 @@ def read_maps(folder: str | os.PathLike) -> Maps:
         dict(description.get("neighbour_starts") or {}),
         list(description.get("notes") or []),
         loaded.get(NORMALS),
+        smoothing=dict(description.get("smoothing") or {}),
     )

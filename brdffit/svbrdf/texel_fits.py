@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .._progress import progress_bar
-from ..checks import choice, whole_number
+from ..checks import choice, positive_number, whole_number
 from ..errors import BrdfInputError, FitWarning, UncertaintyWarning, warn
 from ..fitting.many.cluster import fit_here, fit_on_cluster
 from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
@@ -39,6 +39,7 @@ from .gltf_maps import write_glb
 from .maps import FIT_ARRAYS, Maps, flat_params, write_maps
 from .mitsuba_maps import TEXTURED, write_mitsuba_maps
 from .neighbours import neighbour_starts
+from .smoothing import shape_mask, smoothed
 from .texels import TexelSamples, read_photographs, texel_samples
 from .tiles import TileStore
 
@@ -64,6 +65,7 @@ def fit_capture(
     fixed: dict[str, Any] | None = None,
     bounds: dict[str, Any] | None = None,
     uncertainty: str | None = None,
+    smoothness: float | None = None,
     textures: bool = True,
     tile_texels: int = TILE_TEXELS,
     client=None,
@@ -72,15 +74,20 @@ def fit_capture(
     """Fit ``model`` to every texel of ``capture`` (a capture folder, its ``capture.json``, or a read
     :class:`~brdffit.svbrdf.capture.Capture`) and return the :class:`~brdffit.svbrdf.maps.Maps`, written to
     ``output`` (a folder) where one is given (module docstring). The options are those of :func:`brdffit.fit`;
-    ``uncertainty="laplace"`` adds a standard-error map per parameter; ``textures``: write the ``textures/`` images
-    too; ``progress``: a bar over the texels on stderr (default: when stderr is a terminal); ``client``: a
-    ``dask.distributed.Client`` whose workers fit each tile's texels (this process reads the photographs and writes
-    the maps; the results are this process's, ``fitting/many/cluster.py``)."""
+    ``uncertainty="laplace"`` adds a standard-error map per parameter (each texel's own photographs'); ``smoothness``:
+    τ of a smoothness prior on the texels' shape parameters (``smoothing.py``; None: each texel its own data's);
+    ``textures``: write the ``textures/`` images too; ``progress``: a bar over the texels on stderr (default: when
+    stderr is a terminal); ``client``: a ``dask.distributed.Client`` whose workers fit each tile's texels (this
+    process reads the photographs and writes the maps; the results are this process's, ``fitting/many/cluster.py``;
+    the smoothness prior's passes run here)."""
     capture = capture if isinstance(capture, Capture) else read_capture(capture)
     if uncertainty is not None:
         choice("uncertainty", uncertainty, UNCERTAINTIES)
     tile_texels = whole_number("tile_texels", tile_texels)
     built = get_model(model, **model_options)
+    if smoothness is not None:
+        smoothness = positive_number("smoothness", smoothness)
+        shape_mask(built, len(capture.channels))  # a model without shape parameters, refused before any fit
     solving = solving_of(None, n_starts=n_starts, max_steps=max_steps, seed=seed)
     holding = holding_of(None, fixed=fixed, bounds=bounds)
     if resume and output is None:
@@ -90,7 +97,7 @@ def fit_capture(
         _check_output(Path(output), capture)
     photographs = read_photographs(capture)  # every photograph checked before anything is written
     how = {"model": built.name, "options": built.model_options, "loss": loss, "solving": solving, "holding": holding}
-    how |= {"uncertainty": uncertainty, "tile_texels": tile_texels}
+    how |= {"uncertainty": uncertainty, "tile_texels": tile_texels}  # the smoothing runs after the tiles
     store = TileStore(None if output is None else Path(output), capture, how, resume)
     least = built.physical.size(1) + 1  # a texel with fewer samples than one channel's parameters is not fitted
     notes = _scale_notes(photographs, loss)
@@ -134,7 +141,24 @@ def fit_capture(
         return tile
 
     retried = neighbour_starts(columns, capture, refit)
+    smoothing: dict[str, Any] = {}
+    if smoothness is not None:
+
+        def refit_under(texels: np.ndarray, starts: list[dict[str, Any]], priors: list) -> dict[str, Any]:
+            samples = texel_samples(photographs, texels, positive)
+            tile = fit_tile(samples, starts=starts, priors=priors, client=None)  # fitted here: a pass is quick
+            tile.pop(EXAMPLES)
+            return tile
+
+        smoothing = smoothed(columns, capture, built, smoothness, refit_under)
+        if not smoothing["converged"]:
+            notes.append(
+                f"the smoothness prior's descent stopped after {smoothing['passes']} passes, the last moving a shape"
+                f" coordinate by {smoothing['largest_change']:.2g}: the maps lie between the texels' own fits and the"
+                " prior's optimum"
+            )
     maps = _maps(columns, capture, built, loss, examples, retried, notes, photographs.normals)
+    maps.smoothing = smoothing
     for note in notes:
         warn(FitWarning(note))
     caveats = maps.caveats()
@@ -160,13 +184,15 @@ def _fit_tile(
     least: int,
     then: Callable | None,
     starts: list[dict[str, Any]] | None = None,
+    priors: list[tuple[np.ndarray, np.ndarray]] | None = None,
     client=None,
     **options,
 ) -> dict[str, Any]:  # arrays; Any: savez's stubs take allow_pickle among its keywords
     """The flat arrays (one row per texel of ``run``) of its texels' fits: every parameter, its standard error
     (``then`` adding Laplace's), ``cost``, ``rmse``, ``converged``, ``n_samples``, ``n_caveats``; NaN where a texel
     has fewer than ``least`` samples; and :data:`EXAMPLES`, the caveats of its first texel that has any. ``starts``:
-    one start per texel of ``run`` (``neighbour_starts``), in place of the start search."""
+    one start per texel of ``run`` (``neighbour_starts``), in place of the start search; ``priors``: one prior per
+    texel of ``run`` (``smoothing.py``), fitted in this process."""
     counts = run.kept.sum(axis=1)
     fitted = np.flatnonzero(counts >= least)
     file, width = str(capture.file), capture.shape[1]  # once, not once a texel
@@ -175,6 +201,8 @@ def _fit_tile(
     ]
     if starts is not None:
         options["start"] = [starts[index] for index in fitted]
+    if priors is not None:
+        options["priors"] = [priors[index] for index in fitted]
     with warnings.catch_warnings():  # a texel's caveats are counted (n_caveats) and summed up once (_caveats)
         warnings.simplefilter("ignore", FitWarning)
         warnings.simplefilter("ignore", UncertaintyWarning)

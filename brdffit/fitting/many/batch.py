@@ -38,6 +38,7 @@ from ..options import HOLDING_NOTHING, SOLVING, Holding, Solving
 from ..single.fit import Setup, checked, fit_checked, start_vector
 from ..single.result import FitResult
 from ..single.stacked import StackedFit, default_strategy
+from ..solver.hold import free_hold
 from .buckets import WorkUnit, fitted_alone, work_units
 from .threads import run_units, usable_cores
 
@@ -58,11 +59,14 @@ def fit_many(
     holding: Holding = HOLDING_NOTHING,
     threads: int | None = None,
     on_checked: Callable[[Setup], None] = lambda setup: None,
+    priors: Sequence[tuple[np.ndarray, np.ndarray]] | None = None,
     **model_options: Any,
 ) -> list[FitResult]:
     """Fit ``model`` to each of ``samples``; the arguments are those of :func:`brdffit.fit_batch` (``solving`` and
     ``holding`` the objects its keywords make, ``fitting/options.py``); ``on_checked`` is called with each dataset's
-    :class:`~brdffit.fitting.single.fit.Setup` before any fit (``brdffit.fit_batch`` checks an MCMC's walkers so)."""
+    :class:`~brdffit.fitting.single.fit.Setup` before any fit (``brdffit.fit_batch`` checks an MCMC's walkers so).
+    ``priors``: for each dataset a Gaussian prior on the solver's vector, its mean and weight (k,) each
+    (``solver/hold.py``; a spatially varying fit's smoothness, ``svbrdf/smoothing.py``), or None."""
     choice("strategy", strategy, STRATEGIES)
     strategy = default_strategy() if strategy == "auto" else strategy
     if threads is None:  # one thread per core; on a GPU one, whose programs fill the device
@@ -74,6 +78,8 @@ def fit_many(
     if not samples:
         raise BrdfInputError("fit_batch needs at least one dataset")
     starts = starts_per_dataset(start, len(samples))
+    if priors is not None and len(priors) != len(samples):
+        raise BrdfInputError(f"{len(priors)} priors for {len(samples)} datasets; give one per dataset")
     setups = [checked(one, model, loss, max_theta, holding, **model_options) for one in samples]
     for setup in setups:  # what the caller checks of every dataset before any fit (the walkers of an MCMC)
         on_checked(setup)
@@ -90,6 +96,8 @@ def fit_many(
     def fit_unit(unit: WorkUnit, on_stage: Callable[[str], None] | None) -> int:
         """Fit the datasets of ``unit`` into ``results``; how many they were."""
         if fitted_alone(built, unit.given):
+            if priors is not None:
+                raise BrdfInputError(f"a {built.name} fit takes no prior on its parameters")
             (index,) = unit.indices
             results[index] = fit_checked(setups[index], solving, starts[index])
             return 1
@@ -97,6 +105,11 @@ def fit_many(
         given = np.stack(present) if unit.given else None  # a unit given starts has one for each dataset
         constraints = setups[unit.indices[0]].constraints  # one per channel count; a bucket has one
         hold = None if constraints is None else constraints.hold()
+        if priors is not None:  # each dataset's own: arrays (D, k) beside the hold's (k,)
+            means, weights = (np.stack([priors[i][part] for i in unit.indices]) for part in (0, 1))
+            hold = (free_hold(means.shape[1]) if hold is None else hold)._replace(
+                prior_mean=means, prior_weight=weights
+            )
         unit_samples = [kept[i] for i in unit.indices]
         options = dict(solving=solving, strategy=strategy, stack=unit.stack, on_stage=on_stage)
         fit = StackedFit(built, built_loss, unit_samples, hold, **options)

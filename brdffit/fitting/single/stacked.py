@@ -87,9 +87,7 @@ class StackedFit:
         self.on_stage = on_stage or (lambda stage: None)
         self.count = stack_size([len(samples)]) if stack is None else stack  # few distinct counts, few programs
         self.problems = build_problems(samples, dtype, self.count)
-        self.holds = (
-            None if hold is None else jax.tree.map(lambda leaf: np.broadcast_to(leaf, (self.count, leaf.size)), hold)
-        )
+        self.holds = None if hold is None else jax.tree.map(partial(_stacked_leaf, count=self.count), hold)
         self.solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
         self.budget = step_budget(max_steps)
         self.caveats = caveats
@@ -205,6 +203,15 @@ def onto_bounds(solve, solved, holds):
     return jax.tree.map(
         lambda new, old: np.where(better.reshape(-1, *[1] * (np.ndim(old) - 1)), new, old), again, solved
     )
+
+
+def _stacked_leaf(leaf, count: int) -> np.ndarray:
+    """A hold's array for ``count`` stacked datasets: one (k,) for every dataset, or one row per dataset (D, k) and
+    then, for the rows beyond D (copies of the first dataset, ``problem.build_problems``), its first row."""
+    leaf = np.asarray(leaf, dtype=float)
+    if leaf.ndim == 1:
+        return np.broadcast_to(leaf, (count, leaf.size))
+    return np.concatenate([leaf, np.repeat(leaf[:1], count - len(leaf), axis=0)])
 
 
 def _best(solved):

@@ -24,7 +24,7 @@ from ...physics.models.model import LobeModel
 from ...physics.models.params import Params
 from ..objective.losses import Loss
 from ..objective.problem import Problem, Sums, chunks, cost, normal_equations, prepared, residuals
-from .hold import Hold, slopes, theta_of, z_of
+from .hold import Hold, prior_cost, slopes, theta_of, z_of
 
 #: Stopping tolerances (``levenberg_marquardt.py``) per dtype: MINPACK's ftol (relative cost reduction), gtol (largest
 #: cosine between a Jacobian column and the residuals) and the residual norm of an exact fit. In float64, ftol 1e-10
@@ -162,7 +162,8 @@ def solved_from(
     n_channels = problem.measured.shape[1]
     params = model.unconstrained.to_params(theta, n_channels)
     sum_of_squares = partial(cost, partial(residuals, model, loss))
-    total = computed_as(sum_of_squares, 2.0 * solution.state.f_info.f, theta, problem)
+    # The data's rᵀr: the solver's last pass less the prior's part (hold.py), which the reported cost leaves out.
+    total = computed_as(sum_of_squares, 2.0 * solution.state.f_info.f - prior_cost(theta, hold), theta, problem)
     # rmse: sqrt(mean((f - y)²)) over the real samples, from the pass at the point returned (the residuals' aux).
     n_values = jnp.sum(problem.real) * n_channels
     squared_error = partial(cost, partial(_brdf_error, model))
@@ -199,16 +200,30 @@ def _brdf_error(model: LobeModel, theta, problem: Problem):
 
 
 def _held_residuals(residual_fn, z, data):
-    """``residual_fn`` in the coordinates ``z`` of a hold."""
+    """``residual_fn`` in the coordinates ``z`` of a hold, with the prior's residuals ``√w·(θ − mean)`` beside the
+    data's where the hold has one (``hold.py``)."""
     problem, hold = data
-    return residual_fn(theta_of(z, hold), problem)
+    theta = theta_of(z, hold)
+    residuals, aux = residual_fn(theta, problem)
+    if hold.prior_weight is None:
+        return residuals, aux
+    return (residuals, jnp.sqrt(hold.prior_weight) * (theta - hold.prior_mean)), aux
 
 
 def _held_equations(equations, z, data) -> Sums:
-    """The normal equations in the coordinates ``z`` of a hold: those of ``θ`` by the chain rule, ``θ`` mapping
+    """The normal equations in the coordinates ``z`` of a hold: those of ``θ`` (with the prior's rows, where the
+    hold has one: ``w·d²``, ``w·d`` and ``diag(w)`` added, ``d = θ − mean``) by the chain rule, ``θ`` mapping
     elementwise (``Jz = Jθ · diag(dθ/dz)``); a fixed entry's row and column are 0."""
     problem, hold = data
-    sums = equations(theta_of(z, hold), problem)
+    theta = theta_of(z, hold)
+    sums = equations(theta, problem)
+    if hold.prior_weight is not None:
+        weight, apart = hold.prior_weight, theta - hold.prior_mean
+        sums = sums._replace(
+            cost=sums.cost + jnp.sum(weight * apart**2),
+            gradient=sums.gradient + weight * apart,
+            gram=sums.gram + jnp.diag(weight),
+        )
     slope = slopes(z, hold)
     return sums._replace(gradient=slope * sums.gradient, gram=slope[:, None] * sums.gram * slope[None, :])
 

@@ -15,6 +15,11 @@ stopping tests, so it never moves and costs nothing but its share of the normal 
 Everything in a hold is a float array (masks as 0 and 1), so it is data to a compiled program: changing a fixed
 value, a bound, or which entries are held runs the same compiled solver. The maps are elementwise, so the
 Jacobian ``dθ/dz`` is the diagonal :func:`slopes`.
+
+A hold may also draw entries softly towards values, a Gaussian prior on ``θ``: ``prior_weight · (θ − prior_mean)²``
+summed is added to the fit's ``rᵀr`` as residuals ``√prior_weight · (θ − prior_mean)`` (``solver/compiled.py``), which
+the cost a fit reports leaves out. A spatially varying fit's smoothness prior draws each texel towards its
+neighbours so (``svbrdf/smoothing.py``).
 """
 
 from typing import Any, NamedTuple
@@ -39,6 +44,21 @@ class Hold(NamedTuple):
     value: Any  # θ of each fixed entry (anything elsewhere)
     low: Any  # the bounds of θ on bounded entries (0 elsewhere)
     high: Any
+    prior_mean: Any = None  # θ the prior draws each entry towards (module docstring); None: no prior
+    prior_weight: Any = None  # the prior's weight on each entry, 0 where it has none
+
+
+def free_hold(k: int) -> Hold:
+    """The hold (arrays (k,)) of a fit that holds none of its ``k`` entries: every one free."""
+    zeros = np.zeros(k)
+    return Hold(np.ones(k), zeros, zeros, zeros, zeros)
+
+
+def prior_cost(theta, hold: Hold | None):
+    """``Σ prior_weight · (θ − prior_mean)²`` (JAX): the prior's part of the solver's ``rᵀr``; 0 without a prior."""
+    if hold is None or hold.prior_weight is None:
+        return 0.0
+    return jnp.sum(hold.prior_weight * (theta - hold.prior_mean) ** 2)
 
 
 def theta_of(z, hold: Hold):
@@ -82,7 +102,8 @@ def at_bounds(theta, hold: Hold) -> Hold:
         _as(leaf, side.shape) for leaf in (hold.low, hold.high, hold.value, hold.free, hold.bounded)
     )
     value = np.where(side < 0, low, np.where(side > 0, high, value))
-    return Hold(np.where(side != 0, 0.0, free), np.where(side != 0, 0.0, bounded), value, low, high)
+    moved = Hold(np.where(side != 0, 0.0, free), np.where(side != 0, 0.0, bounded), value, low, high)
+    return moved._replace(prior_mean=hold.prior_mean, prior_weight=hold.prior_weight)
 
 
 def on_bound(theta, hold: Hold, within: float = ON_BOUND) -> np.ndarray:
