@@ -129,6 +129,13 @@ def flat_params(params: dict[str, Any]) -> dict[str, Any]:
     return flat
 
 
+def column_params(columns: dict[str, np.ndarray], texel: int) -> dict[str, Any]:
+    """Texel ``texel``'s parameters (a result file's ``params``) from a capture's flat arrays ``columns`` (name →
+    (H·W[, C]); the fit's own arrays and standard errors beside them are not parameters)."""
+    names = [name for name in columns if name not in FIT_ARRAYS and not name.endswith(STDERR_SUFFIX)]
+    return nested_params({name: columns[name][texel].tolist() for name in names})
+
+
 def nested_params(flat: dict[str, Any]) -> dict[str, Any]:
     """The inverse of :func:`flat_params`."""
     lobes: dict[int, dict[str, Any]] = {}

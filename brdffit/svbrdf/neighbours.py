@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .capture import Capture
-from .maps import FIT_ARRAYS, STDERR_SUFFIX, nested_params
+from .maps import column_params
 
 #: A texel whose cost is above this many times a neighbour's is fitted again from the neighbour's parameters: a fit
 #: stuck in a local minimum ends far above, while neighbours' costs at one noise level differ by tens of percent.
@@ -32,7 +32,6 @@ def neighbour_starts(
     parameters, ``refit(texels, starts) -> arrays`` (module docstring); how many fits were ``retried`` and
     ``improved``."""
     rows, width = capture.shape
-    names = [name for name in columns if name not in FIT_ARRAYS and not name.endswith(STDERR_SUFFIX)]
     offsets = np.array([-width, width, -1, 1])  # the order of DIRECTIONS, as ``_lowest_neighbour`` stacks them
     fitted = columns["n_samples"].reshape(rows, width) > 0  # a refit keeps a texel's samples
     retried = improved = 0
@@ -44,7 +43,7 @@ def neighbour_starts(
             break
         texels = np.flatnonzero(again.ravel())
         sources = texels + offsets[best.ravel()[texels]]
-        starts = [nested_params({name: columns[name][source].tolist() for name in names}) for source in sources]
+        starts = [column_params(columns, source) for source in sources]
         tile = refit(texels, starts)
         lower = tile["cost"] < columns["cost"][texels] * (1.0 - SAME_COST)
         for name, values in tile.items():

@@ -144,13 +144,14 @@ def fit_capture(
     smoothing: dict[str, Any] = {}
     if smoothness is not None:
 
-        def refit_under(texels: np.ndarray, starts: list[dict[str, Any]], priors: list) -> dict[str, Any]:
+        def refit_under(texels: np.ndarray, starts: list, priors: list, errors: bool) -> dict[str, Any]:
             samples = texel_samples(photographs, texels, positive)
-            tile = fit_tile(samples, starts=starts, priors=priors, client=None)  # fitted here: a pass is quick
+            # fitted here (a pass is quick), and their Laplace errors only where asked for: at the descent's end
+            tile = fit_tile(samples, starts=starts, priors=priors, client=None, then=then if errors else None)
             tile.pop(EXAMPLES)
             return tile
 
-        smoothing = smoothed(columns, capture, built, smoothness, refit_under)
+        smoothing = smoothed(columns, capture, built, smoothness, refit_under, tile_texels, then is not None)
         if not smoothing["converged"]:
             notes.append(
                 f"the smoothness prior's descent stopped after {smoothing['passes']} passes, the last moving a shape"

@@ -66,6 +66,35 @@ def test_a_heavy_prior_holds_its_entries_at_its_mean_and_the_cost_is_the_datas(t
             assert fit.params["rho_d"] == pytest.approx(fixed["rho_d"], rel=1e-12)
 
 
+def test_each_dataset_has_its_own_prior(three):
+    """Three means, one per dataset: each ends at its own (a mix-up of the stacked rows would not)."""
+    plain = _fits(three)
+    size = get_model("ward").unconstrained.size(3)
+    priors = []
+    for alpha in (0.1, 0.2, 0.3):
+        mean, weight = np.zeros(size), np.zeros(size)
+        mean[-1], weight[-1] = np.log(alpha), 1e10
+        priors.append((mean, weight))
+    drawn = _fits(three, start=[fit.params for fit in plain], priors=priors)
+    assert [fit.params["alpha"] for fit in drawn] == pytest.approx([0.1, 0.2, 0.3], rel=1e-6)
+
+
+def test_a_prior_beyond_a_bound_ends_on_the_bound(three):
+    """alpha bounded to [0.05, 0.2] and drawn hard to 0.3: the fit ends on 0.2, the on-bound solve kept by the data's
+    cost and the prior's together."""
+    plain = _fits(three)
+    size = get_model("ward").unconstrained.size(3)
+    mean, weight = np.zeros(size), np.zeros(size)
+    mean[-1], weight[-1] = np.log(0.3), 1e6
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        drawn = fit_many(
+            three, "ward", "log", progress=False, holding=holding_of(None, bounds={"alpha": (0.05, 0.2)}),
+            start=[fit.params for fit in plain], priors=[(mean, weight)] * 3,
+        )  # fmt: skip
+    assert [fit.params["alpha"] for fit in drawn] == pytest.approx([0.2] * 3, rel=1e-9)
+
+
 def test_a_prior_of_weight_zero_changes_nothing(three):
     plain = _fits(three)
     model = get_model("ward")
@@ -99,7 +128,12 @@ def test_a_hold_moved_onto_its_bounds_keeps_its_prior():
     np.testing.assert_array_equal(moved.prior_mean, hold.prior_mean)
 
 
-def test_priors_must_be_one_per_dataset(three):
+def test_priors_must_be_one_per_dataset_with_a_start_and_the_vectors_length(three):
     size = get_model("ward").unconstrained.size(3)
+    starts = [{"rho_d": [0.3] * 3, "rho_s": [0.1] * 3, "alpha": 0.2}] * 3
     with pytest.raises(BrdfInputError, match="2 priors for 3 datasets"):
-        _fits(three, priors=[(np.zeros(size), np.zeros(size))] * 2)
+        _fits(three, start=starts, priors=[(np.zeros(size), np.zeros(size))] * 2)
+    with pytest.raises(BrdfInputError, match="dataset 0 has a prior but no start"):
+        _fits(three, priors=[(np.zeros(size), np.zeros(size))] * 3)
+    with pytest.raises(BrdfInputError, match=r"dataset 0's prior has a mean of shape \(3,\)"):
+        _fits(three, start=starts, priors=[(np.zeros(3), np.zeros(size))] * 3)

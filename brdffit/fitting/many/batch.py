@@ -91,13 +91,13 @@ def fit_many(
         None if one is None or not isinstance(built, LobeModel) else start_vector(built, one, data.n_channels)
         for one, data in zip(starts, kept, strict=True)
     ]
+    if priors is not None:
+        _check_priors(built, priors, vectors)
     results: list[FitResult | None] = [None] * len(kept)
 
     def fit_unit(unit: WorkUnit, on_stage: Callable[[str], None] | None) -> int:
         """Fit the datasets of ``unit`` into ``results``; how many they were."""
         if fitted_alone(built, unit.given):
-            if priors is not None:
-                raise BrdfInputError(f"a {built.name} fit takes no prior on its parameters")
             (index,) = unit.indices
             results[index] = fit_checked(setups[index], solving, starts[index])
             return 1
@@ -126,6 +126,21 @@ def fit_many(
     finally:
         bar.close()
     return every_fitted(results)
+
+
+def _check_priors(model, priors: Sequence[tuple[np.ndarray, np.ndarray]], vectors: list) -> None:
+    """A one-line error, before any fit, unless every dataset of a lobe model has a start (a prior's fit is not
+    raced from the grid: the race compares data costs) and a prior's mean and weight of its vector's length."""
+    if not isinstance(model, LobeModel):
+        raise BrdfInputError(f"a {model.name} fit takes no prior on its parameters")
+    for index, (vector, (mean, weight)) in enumerate(zip(vectors, priors, strict=True)):
+        if vector is None:
+            raise BrdfInputError(f"dataset {index} has a prior but no start: a prior's fit starts where it is given")
+        if np.shape(mean) != vector.shape or np.shape(weight) != vector.shape:
+            raise BrdfInputError(
+                f"dataset {index}'s prior has a mean of shape {np.shape(mean)} and a weight of shape"
+                f" {np.shape(weight)}; its vector has {vector.size} entries"
+            )
 
 
 def every_fitted(results: list[FitResult | None]) -> list[FitResult]:

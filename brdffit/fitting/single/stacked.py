@@ -101,7 +101,7 @@ class StackedFit:
         model, count, holds = self.model, self.count, self.holds
         if given is not None:
             self.on_stage("compiled")
-            return np.concatenate([given, np.repeat(given[:1], count - len(given), axis=0)])[:, None]
+            return padded_rows(given, count)[:, None]
         # The program that solves the winners compiles in the background, during the grid search; but when the
         # starts race on a subset, only after it (the race's program compiles then, and three compilations at
         # once on 2 cores cost 20 × 100k Ward ~1 s).
@@ -198,20 +198,33 @@ def onto_bounds(solve, solved, holds):
     data pull a parameter beyond its bound is on the bound, which the logistic map reaches only in the limit.
     ``solve(thetas (D, k), holds) -> Solved (D, 1, …)``."""
     again = _best(solve(solved.theta, at_bounds(solved.theta, holds)))
-    better = again.cost <= solved.cost * (1.0 + SAME_COST)
+    # Compared as the solver minimised them: a prior's part (hold.py) too, which the reported costs leave out.
+    objective = lambda run: run.cost + _prior_costs(run.theta, holds)
+    better = objective(again) <= objective(solved) * (1.0 + SAME_COST)
     again = again._replace(n_steps=solved.n_steps + again.n_steps)
     return jax.tree.map(
         lambda new, old: np.where(better.reshape(-1, *[1] * (np.ndim(old) - 1)), new, old), again, solved
     )
 
 
+def _prior_costs(thetas: np.ndarray, holds: Hold) -> np.ndarray | float:
+    """Each dataset's ``Σ prior_weight · (θ − prior_mean)²`` (``hold.prior_cost``) at ``thetas`` (D, k), numpy."""
+    if holds.prior_weight is None:
+        return 0.0
+    return np.sum(np.asarray(holds.prior_weight) * (np.asarray(thetas) - np.asarray(holds.prior_mean)) ** 2, axis=-1)
+
+
+def padded_rows(rows: np.ndarray, count: int) -> np.ndarray:
+    """``rows`` (D, …), one per dataset, then for the stack's rows beyond D (copies of the first dataset,
+    ``problem.build_problems``) its first row: (count, …)."""
+    return np.concatenate([rows, np.repeat(rows[:1], count - len(rows), axis=0)])
+
+
 def _stacked_leaf(leaf, count: int) -> np.ndarray:
-    """A hold's array for ``count`` stacked datasets: one (k,) for every dataset, or one row per dataset (D, k) and
-    then, for the rows beyond D (copies of the first dataset, ``problem.build_problems``), its first row."""
+    """A hold's array for ``count`` stacked datasets: one (k,) for every dataset, or one row per dataset (D, k)
+    (:func:`padded_rows`)."""
     leaf = np.asarray(leaf, dtype=float)
-    if leaf.ndim == 1:
-        return np.broadcast_to(leaf, (count, leaf.size))
-    return np.concatenate([leaf, np.repeat(leaf[:1], count - len(leaf), axis=0)])
+    return np.broadcast_to(leaf, (count, leaf.size)) if leaf.ndim == 1 else padded_rows(leaf, count)
 
 
 def _best(solved):

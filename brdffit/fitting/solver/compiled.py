@@ -207,7 +207,9 @@ def _held_residuals(residual_fn, z, data):
     residuals, aux = residual_fn(theta, problem)
     if hold.prior_weight is None:
         return residuals, aux
-    return (residuals, jnp.sqrt(hold.prior_weight) * (theta - hold.prior_mean)), aux
+    weight = hold.prior_weight
+    root = jnp.where(weight > 0, jnp.sqrt(jnp.where(weight > 0, weight, 1.0)), 0.0)  # √0's slope would be inf
+    return (residuals, root * (theta - hold.prior_mean)), aux
 
 
 def _held_equations(equations, z, data) -> Sums:
