@@ -18,7 +18,7 @@ from brdffit.data_synth.capture import synth_capture
 OTHER_METAVARS = {
     "NAME", "KIND", "K", "W", "DEG", "NAME=VALUE[,…]", "NAME=LO:HI[,…]", "Q", "UNIT", "T", "N", "M", "TYPE",
     "ADDRESS", "METHOD", "SPEC,…", "L", "DEG,…", "TARGET", "FORMAT", "PIXELS", "X", "LEVEL", "NAME[,…]", "true|false",
-    "ETA", "SHELL", "X,Y,Z", "E", "I[,I…]", "ROWS,COLUMNS", "MM",
+    "ETA", "SHELL", "X,Y,Z", "E", "I[,I…]", "ROWS,COLUMNS", "MM", "TAU",
 }  # fmt: skip
 
 
