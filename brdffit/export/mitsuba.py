@@ -383,14 +383,28 @@ def cook_torrance_bsdf(result: FitResult) -> dict[str, Any] | None:
     else:
         specular["eta"] = float(params["eta"])
         specular["k"] = 0.0
-    weight = ks.max() / max(kd.max() + ks.max(), 1e-300)
+    weight, reflectance, specular_reflectance = blend_split(kd, ks)
     if weight >= 1.0 or kd.max() == 0.0:
         return specular | {"specular_reflectance": _rgb_value(ks)}
-    diffuse = {"type": "diffuse", "reflectance": _rgb_value(kd / (1.0 - weight))}
+    diffuse = {"type": "diffuse", "reflectance": _rgb_value(reflectance)}
     if weight == 0.0:
         return diffuse
-    specular["specular_reflectance"] = _rgb_value(ks / weight)
+    specular["specular_reflectance"] = _rgb_value(specular_reflectance)
     return {"type": "blendbsdf", "weight": float(weight), "diffuse": diffuse, "specular": specular}
+
+
+def blend_split(kd: np.ndarray, ks: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mitsuba's ``blendbsdf`` of a diffuse albedo ``kd`` and a specular one ``ks`` (…, C), numpy over any leading
+    axes (a texel's maps): the ``weight`` (…) ``w = max ks / (max kd + max ks)`` over the channels (0 where both are
+    0), the diffuse's ``reflectance = kd/(1 − w)`` (0 where w is 1) and the specular's ``ks/w`` (0 where w is 0): all
+    within [0, 1] where ``max kd + max ks ≤ 1`` (module docstring)."""
+    largest_kd, largest_ks = np.max(kd, axis=-1), np.max(ks, axis=-1)
+    total = largest_kd + largest_ks
+    with np.errstate(invalid="ignore", divide="ignore"):
+        weight = np.where(total > 0, largest_ks / total, 0.0)
+        reflectance = np.where((weight < 1)[..., None], kd / (1.0 - weight)[..., None], 0.0)
+        specular = np.where((weight > 0)[..., None], ks / weight[..., None], 0.0)
+    return weight, reflectance, specular
 
 
 def principled_bsdf(result: FitResult) -> dict[str, Any]:

@@ -145,6 +145,8 @@ def _mapped(maps: Maps) -> dict[str, Any]:
     """The Mitsuba BSDF of ``lambert`` or Smith ``cook-torrance`` maps with each texel's value, (H, W) or (H, W, 3),
     at its leaves: ``export/mitsuba.py``'s exact mapping texel by texel (module docstring); a one-line error where a
     texel lies beyond Mitsuba's reflectances or an anisotropic tangent off the capture's axes."""
+    from ..export.mitsuba import blend_split
+
     params, fitted = maps.params, maps.fitted
     if maps.model == "lambert":
         reflectance = _rgb(params["rho_d"])
@@ -164,16 +166,13 @@ def _mapped(maps: Maps) -> dict[str, Any]:
     else:
         specular["eta"], specular["k"] = params["eta"], 0.0
     largest_kd, largest_ks = np.max(kd, axis=-1), np.max(ks, axis=-1)
-    total = largest_kd + largest_ks
-    _within_range(total, fitted, "max kd + max ks")
+    _within_range(largest_kd + largest_ks, fitted, "max kd + max ks")
     if not np.any(largest_kd[fitted] > 0):
         return specular | {"specular_reflectance": np.minimum(ks, 1.0)}
     if not np.any(largest_ks[fitted] > 0):
         return {"type": "diffuse", "reflectance": np.minimum(kd, 1.0)}
-    with np.errstate(invalid="ignore", divide="ignore"):
-        weight = np.where(total > 0, largest_ks / total, 0.0)
-        reflectance = np.where((weight < 1)[..., None], kd / (1.0 - weight)[..., None], 0.0)
-        specular["specular_reflectance"] = np.minimum(np.where((weight > 0)[..., None], ks / weight[..., None], 0.0), 1)
+    weight, reflectance, specular_reflectance = blend_split(kd, ks)  # each texel as a single fit's export splits it
+    specular["specular_reflectance"] = np.minimum(specular_reflectance, 1.0)
     diffuse = {"type": "diffuse", "reflectance": np.minimum(reflectance, 1.0)}
     return {"type": "blendbsdf", "weight": weight, "diffuse": diffuse, "specular": specular}
 

@@ -50,6 +50,15 @@ def test_the_prior_brings_an_under_determined_roughness_nearer_the_truth(sparse)
     assert drawn.smoothing["tau"] == TAU and not alone.smoothing
 
 
+def _shapes(maps) -> np.ndarray:
+    """Each texel's shape coordinates (H, W, S) that the prior draws together (``smoothing.shape_mask``)."""
+    model = get_model(maps.model, **maps.model_options)
+    rows, columns = maps.shape
+    n = len(maps.channels)
+    theta = np.array([[start_vector(model, maps.texel_params(r, c), n) for c in range(columns)] for r in range(rows)])
+    return theta[..., shape_mask(model, n)]
+
+
 def test_the_smoothed_maps_are_a_stationary_point_of_the_priors_objective(sparse):
     """At the descent's end every texel's part of the objective is at its minimum: the data's gradient Jᵀr at the
     texel plus the prior's, λ Σ_j (θ_i − θ_j) over its fitted neighbours, is 0 on the shape coordinates, here at the
@@ -63,33 +72,26 @@ def test_the_smoothed_maps_are_a_stationary_point_of_the_priors_objective(sparse
     photographs = read_photographs(capture)
     rows, columns = drawn.shape
     mask = shape_mask(model, 3)
-    theta = np.array([[start_vector(model, drawn.texel_params(r, c), 3) for c in range(columns)] for r in range(rows)])
-    pull = np.zeros((rows, columns, mask.sum()))
+    shapes = _shapes(drawn)
+    pull = np.zeros(shapes.shape)
     for r in range(rows):
         for c in range(columns):
             for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
                 if 0 <= r + dr < rows and 0 <= c + dc < columns:
-                    pull[r, c] += drawn.smoothing["lambda"] * (theta[r, c] - theta[r + dr, c + dc])[mask]
+                    pull[r, c] += drawn.smoothing["lambda"] * (shapes[r, c] - shapes[r + dr, c + dc])
     strongest = np.argsort(-np.abs(pull[..., 0]).ravel())[:8]
     for texel in strongest:
         r, c = divmod(int(texel), columns)
+        theta = start_vector(model, drawn.texel_params(r, c), 3)
         samples = texel_samples(photographs, np.array([texel]), positive=True).samples(0, capture.channels, "texel")
-        sums = normal_equations(model, loss, theta[r, c], prepared(loss, build_problem(samples)))
+        sums = normal_equations(model, loss, theta, prepared(loss, build_problem(samples)))
         gradient = np.asarray(sums.gradient)[mask]
         assert np.all(np.abs(gradient + pull[r, c]) <= 0.1 * np.abs(pull[r, c])), (r, c, gradient, pull[r, c])
 
 
 def _objective(maps, weight: float) -> float:
     """Σ texel costs + λ Σ over neighbouring pairs |S(θ_i − θ_j)|² (smoothing.py), computed here from the maps."""
-    model = get_model(maps.model, **maps.model_options)
-    rows, columns = maps.shape
-    mask = shape_mask(model, len(maps.channels))
-    theta = np.array(
-        [
-            [start_vector(model, maps.texel_params(r, c), len(maps.channels)) for c in range(columns)]
-            for r in range(rows)
-        ]
-    )[..., mask]
+    theta = _shapes(maps)
     pairs = np.sum((theta[1:] - theta[:-1]) ** 2) + np.sum((theta[:, 1:] - theta[:, :-1]) ** 2)
     return float(np.sum(maps.fit["cost"]) + weight * pairs)
 

@@ -28,7 +28,7 @@ from ..objective.losses import Loss
 from ..objective.problem import Problem, build_problems, padded_size
 from ..options import Solving
 from ..solver.compiled import SAME_COST, best_index, solved_from
-from ..solver.hold import Hold, at_bounds
+from ..solver.hold import Hold, at_bounds, prior_cost
 from ..starts.grid import grid_channels, grid_starts, search_subset
 from .caveats import Screened, screen_bucket, screen_program
 from .constraints import Constraints
@@ -199,19 +199,12 @@ def onto_bounds(solve, solved, holds):
     ``solve(thetas (D, k), holds) -> Solved (D, 1, …)``."""
     again = _best(solve(solved.theta, at_bounds(solved.theta, holds)))
     # Compared as the solver minimised them: a prior's part (hold.py) too, which the reported costs leave out.
-    objective = lambda run: run.cost + _prior_costs(run.theta, holds)
+    objective = lambda run: run.cost + prior_cost(run.theta, holds)
     better = objective(again) <= objective(solved) * (1.0 + SAME_COST)
     again = again._replace(n_steps=solved.n_steps + again.n_steps)
     return jax.tree.map(
         lambda new, old: np.where(better.reshape(-1, *[1] * (np.ndim(old) - 1)), new, old), again, solved
     )
-
-
-def _prior_costs(thetas: np.ndarray, holds: Hold) -> np.ndarray | float:
-    """Each dataset's ``Σ prior_weight · (θ − prior_mean)²`` (``hold.prior_cost``) at ``thetas`` (D, k), numpy."""
-    if holds.prior_weight is None:
-        return 0.0
-    return np.sum(np.asarray(holds.prior_weight) * (np.asarray(thetas) - np.asarray(holds.prior_mean)) ** 2, axis=-1)
 
 
 def padded_rows(rows: np.ndarray, count: int) -> np.ndarray:

@@ -220,10 +220,10 @@ def _held_equations(equations, z, data) -> Sums:
     theta = theta_of(z, hold)
     sums = equations(theta, problem)
     if hold.prior_weight is not None:
-        weight, apart = hold.prior_weight, theta - hold.prior_mean
+        weight = hold.prior_weight
         sums = sums._replace(
-            cost=sums.cost + jnp.sum(weight * apart**2),
-            gradient=sums.gradient + weight * apart,
+            cost=sums.cost + prior_cost(theta, hold),
+            gradient=sums.gradient + weight * (theta - hold.prior_mean),
             gram=sums.gram + jnp.diag(weight),
         )
     slope = slopes(z, hold)

@@ -26,7 +26,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..._jax import jax, jnp
+from ..._jax import jax, jnp, namespace
 
 #: A start is moved this far inside a bound (a fraction of the bounded range), where σ's slope is not 0.
 START_MARGIN = 1e-3
@@ -55,10 +55,13 @@ def free_hold(k: int) -> Hold:
 
 
 def prior_cost(theta, hold: Hold | None):
-    """``Σ prior_weight · (θ − prior_mean)²`` (JAX): the prior's part of the solver's ``rᵀr``; 0 without a prior."""
+    """``Σ prior_weight · (θ − prior_mean)²`` over the last axis, the prior's part of the solver's ``rᵀr``: a number
+    for ``theta`` (k,), one per dataset for (D, k) and a hold's (D, k) arrays; JAX or numpy as they are given; 0
+    without a prior."""
     if hold is None or hold.prior_weight is None:
         return 0.0
-    return jnp.sum(hold.prior_weight * (theta - hold.prior_mean) ** 2)
+    xp = namespace(theta, hold.prior_mean, hold.prior_weight)
+    return xp.sum(hold.prior_weight * (theta - hold.prior_mean) ** 2, axis=-1)
 
 
 def theta_of(z, hold: Hold):
