@@ -141,14 +141,106 @@ def test_the_command_line_spreads_a_library_over_local_workers(materials, tmp_pa
     assert status == 2 and "--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there" in capsys.readouterr().err
 
 
-def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_path):
-    """``brdffit.svbrdf.fit(…, client=)``: each tile's texels fitted by the workers, the maps the same as here."""
+def assert_same_maps(there, here):
+    for name in here.params:
+        np.testing.assert_allclose(there.params[name], here.params[name], rtol=SAME, atol=0)
+    np.testing.assert_allclose(there.fit["cost"], here.fit["cost"], rtol=SAME, atol=0)
+    np.testing.assert_array_equal(there.fit["converged"], here.fit["converged"])
+    assert (there.neighbour_starts, there.notes) == (here.neighbour_starts, here.notes)
+
+
+@pytest.fixture
+def read_here(monkeypatch):
+    """The texels this process reads the photographs at: one array a call, None for every texel."""
+    import brdffit.svbrdf.texel_fits as texel_fits
+
+    calls = []
+
+    def recorded(capture, texels=None):
+        calls.append(texels)
+        return read_photographs(capture, texels)
+
+    read_photographs = texel_fits.read_photographs
+    monkeypatch.setattr(texel_fits, "read_photographs", recorded)
+    return calls
+
+
+def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_path, read_here):
+    """``brdffit.svbrdf.fit(…, client=)``: each tile's texels fitted by the workers, the maps the same as here; the
+    workers read the photographs, this process checks them, keeping the texels its scale note looks at (every
+    one of a capture of 36)."""
     import brdffit.svbrdf as svbrdf
     from brdffit.data_synth.capture import synth_capture
 
     synth_capture(tmp_path / "capture", "ward", shape=(6, 6), n_images=16, noise=0.01, seed=1)
     here = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16)
+    assert len(read_here) == 1 and read_here.pop() is None
     there = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16, client=client)
-    for name in here.params:
-        np.testing.assert_allclose(there.params[name], here.params[name], rtol=SAME, atol=0)
-    np.testing.assert_array_equal(there.fit["converged"], here.fit["converged"])
+    assert len(read_here) == 1 and len(read_here[0]) == 36
+    assert_same_maps(there, here)
+
+
+def test_a_large_captures_photographs_are_read_by_the_workers_alone(client, tmp_path, read_here, monkeypatch):
+    """On a capture of 40 × 40 texels this process reads the photographs at the 267 texels its scale note looks at,
+    the workers at the rest; the neighbour starts' refits (every fitted texel here, RESTART_ABOVE at 0) run on the
+    workers too, each reading its own texels; the maps are this process's."""
+    import brdffit.svbrdf as svbrdf
+    import brdffit.svbrdf.neighbours as neighbours
+    from brdffit.data_synth.capture import synth_capture
+
+    synth_capture(tmp_path / "capture", "ward", shape=(40, 40), n_images=8, noise=0.01, seed=2)
+    monkeypatch.setattr(neighbours, "RESTART_ABOVE", 0.0)
+    monkeypatch.setattr(neighbours, "PASSES", 1)
+    here = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=400)
+    read_here.clear()
+    there = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=400, client=client)
+    assert [len(texels) for texels in read_here] == [267]
+    assert here.neighbour_starts["retried"] == 1600
+    assert_same_maps(there, here)
+
+
+def test_a_cluster_fit_interrupted_resumes_from_its_kept_tiles(client, tmp_path, monkeypatch):
+    """Ctrl-C after the first band's tile is kept: no maps, that tile kept; resumed on the cluster, the workers fit
+    the other tiles alone, and the maps are those of a fit here that was never interrupted."""
+    import brdffit.svbrdf as svbrdf
+    from brdffit.data_synth.capture import synth_capture
+    from brdffit.svbrdf.tiles import TileStore
+
+    synth_capture(tmp_path / "capture", "ward", shape=(6, 6), n_images=16, noise=0.01, seed=1)
+    keep, kept = TileStore.keep, []
+
+    def interrupted(store, number, tile):
+        if kept:
+            raise KeyboardInterrupt
+        kept.append(number)
+        keep(store, number, tile)
+
+    monkeypatch.setattr(TileStore, "keep", interrupted)
+    options = dict(output=tmp_path / "maps", progress=False, tile_texels=12, textures=False, client=client)
+    with pytest.raises(KeyboardInterrupt):
+        svbrdf.fit(tmp_path / "capture", "ward", **options)
+    assert not (tmp_path / "maps" / "params.npz").exists()
+    assert sorted(path.name for path in (tmp_path / "maps" / ".tiles").glob("0*.npz")) == [f"{kept[0]:06d}.npz"]
+    fitted = []
+
+    def recorded(store, number, tile):
+        fitted.append(number)
+        keep(store, number, tile)
+
+    monkeypatch.setattr(TileStore, "keep", recorded)
+    resumed = svbrdf.fit(tmp_path / "capture", "ward", resume=True, **options)
+    assert sorted(fitted) == sorted({0, 1, 2} - {kept[0]}) and (tmp_path / "maps" / "params.npz").exists()
+    assert_same_maps(resumed, svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=12))
+
+
+def test_a_bad_photograph_stops_a_cluster_fit_before_any_tile(client, tmp_path):
+    """A photograph of the wrong size is found by this process, which checks every photograph before a worker
+    starts: a one-line error, and nothing written."""
+    import brdffit.svbrdf as svbrdf
+    from brdffit.data_synth.capture import synth_capture
+
+    synth_capture(tmp_path / "capture", "ward", shape=(6, 6), n_images=4, noise=0.01, seed=1)
+    np.save(tmp_path / "capture" / sorted((tmp_path / "capture").glob("*.npy"))[-1].name, np.ones((5, 6, 3)))
+    with pytest.raises(BrdfInputError, match=r"\.npy: 5 × 6 pixels; the capture's plane has 6 × 6 texels"):
+        svbrdf.fit(tmp_path / "capture", "ward", progress=False, client=client, output=tmp_path / "maps")
+    assert not (tmp_path / "maps").exists()

@@ -81,10 +81,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
     spread.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="fit each tile's texels on the Dask cluster whose scheduler is at ADDRESS",
+        help="fit the tiles on the Dask cluster whose scheduler is at ADDRESS (its workers read the photographs)",
     )
     spread.add_argument(
-        "--workers", type=int, metavar="N", help="fit each tile's texels on a local Dask cluster of N worker processes"
+        "--workers",
+        type=int,
+        metavar="N",
+        help="fit the tiles on a local Dask cluster of N worker processes (each reads the photographs)",
     )
     fit.add_argument("-o", "--output", required=True, metavar="MAPS", help="folder to write the maps into")
     fit.set_defaults(action=_fit)

@@ -3,7 +3,9 @@
 The texels are fitted a tile at a time (:data:`TILE_TEXELS` texels, row by row) through the batch machinery
 (``fitting/many``: the texels' problems stacked in a few compiled programs, spread over the CPU cores), with the
 options of a single fit (model and its options, loss, ``fixed``/``bounds``, starts, caveats). Memory stays bounded
-by a tile's samples beside the photographs.
+by a tile's samples beside the photographs. On a Dask cluster the workers fit bands of tiles, each reading the
+photographs at its own texels (:func:`_tiles_on_cluster`): no process holds the whole capture (but for the
+smoothness prior's passes, which run here).
 
 The default loss is ``relative``, ``(f − y)/y``, not a single fit's ``log``: a photograph's noise grows with its
 signal, and relative residuals of such noise share one scatter, which Laplace's Gauss-Newton errors assume. On a
@@ -18,7 +20,8 @@ fitted again from a neighbour's parameters (``neighbours.py``).
 
 import os
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Generator
+from contextlib import closing
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -28,7 +31,7 @@ import numpy as np
 from .._progress import progress_bar
 from ..checks import choice, positive_number, whole_number
 from ..errors import BrdfInputError, FitWarning, UncertaintyWarning, warn
-from ..fitting.many.cluster import fit_here, fit_on_cluster
+from ..fitting.many.cluster import fit_here, on_workers, one_thread_each, worker_count
 from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
 from ..fitting.options import holding_of, solving_of
 from ..fitting.single.result import FitResult
@@ -40,7 +43,7 @@ from .maps import FIT_ARRAYS, Maps, flat_params, write_maps
 from .mitsuba_maps import TEXTURED, write_mitsuba_maps
 from .neighbours import neighbour_starts
 from .smoothing import shape_mask, smoothed
-from .texels import TexelSamples, read_photographs, texel_samples
+from .texels import Photographs, TexelSamples, read_normals, read_photographs, texel_samples
 from .tiles import TileStore
 
 #: Texels fitted at a time: a tile's samples (32 photographs: about 20 MB) and results are what grows with it.
@@ -77,9 +80,11 @@ def fit_capture(
     ``uncertainty="laplace"`` adds a standard-error map per parameter (each texel's own photographs'); ``smoothness``:
     τ of a smoothness prior on the texels' shape parameters (``smoothing.py``; None: each texel its own data's);
     ``textures``: write the ``textures/`` images too; ``progress``: a bar over the texels on stderr (default: when
-    stderr is a terminal); ``client``: a ``dask.distributed.Client`` whose workers fit each tile's texels (this
-    process reads the photographs and writes the maps; the results are this process's, ``fitting/many/cluster.py``;
-    the smoothness prior's passes run here)."""
+    stderr is a terminal); ``client``: a ``dask.distributed.Client`` whose workers fit the tiles, a band of them a
+    task, each worker reading its band's texels of the photographs itself (:func:`_tiles_on_cluster`; the capture's
+    files on a path every worker reads); this process checks every photograph, keeping a few texels, refits the
+    neighbour starts' texels on the workers too, and writes the maps; the results are this process's. The smoothness
+    prior's passes run here, on the photographs read here whole."""
     capture = capture if isinstance(capture, Capture) else read_capture(capture)
     if uncertainty is not None:
         choice("uncertainty", uncertainty, UNCERTAINTIES)
@@ -95,12 +100,14 @@ def fit_capture(
     positive = get_loss(loss).name == "relative"  # a value of 0 has no relative residual
     if output is not None:
         _check_output(Path(output), capture)
-    photographs = read_photographs(capture)  # every photograph checked before anything is written
+    # every photograph checked before anything is written; with a cluster, its workers read the texels they fit
+    photographs = read_photographs(capture) if client is None else None
+    probe = read_photographs(capture, scale_texels(capture.n_texels)) if photographs is None else photographs
     how = {"model": built.name, "options": built.model_options, "loss": loss, "solving": solving, "holding": holding}
     how |= {"uncertainty": uncertainty, "tile_texels": tile_texels}  # the smoothing runs after the tiles
     store = TileStore(None if output is None else Path(output), capture, how, resume)
     least = built.physical.size(1) + 1  # a texel with fewer samples than one channel's parameters is not fitted
-    notes = _scale_notes(photographs, loss)
+    notes = _scale_notes(probe, loss)
     then = None if uncertainty is None else partial(with_uncertainty, method=uncertainty)
     fit_tile = partial(
         _fit_tile,
@@ -109,26 +116,32 @@ def fit_capture(
         loss=loss,
         least=least,
         then=then,
-        client=client,
         threads=threads,
         solving=solving,
         holding=holding,
     )
+    on_worker = partial(fit_tile, **one_thread_each({"threads": threads}))
+    tiles = [
+        np.arange(start, min(start + tile_texels, capture.n_texels))
+        for start in range(0, capture.n_texels, tile_texels)
+    ]
+    finished = (
+        _tiles_on_cluster(client, capture, tiles, store, on_worker, positive)
+        if photographs is None
+        else _tiles_here(tiles, store, fit_tile, photographs, positive)
+    )
     bar = progress_bar(capture.n_texels, "texel", progress)
     columns: dict[str, np.ndarray] = {}
-    examples: list[str] = []
+    examples_of: dict[int, list[str]] = {}
     try:
-        for number, start in enumerate(range(0, capture.n_texels, tile_texels)):
-            texels = np.arange(start, min(start + tile_texels, capture.n_texels))
-            tile = store.kept(number)
-            if tile is None:
-                tile = fit_tile(texel_samples(photographs, texels, positive))
-                store.keep(number, tile)
-            examples += [str(text) for text in tile.pop(EXAMPLES)]
-            _gather(columns, tile, capture.n_texels, texels)
-            bar.update(len(texels))
+        with closing(finished) as done:
+            for number, tile in done:
+                examples_of[number] = [str(text) for text in tile.pop(EXAMPLES)]
+                _gather(columns, tile, capture.n_texels, tiles[number])
+                bar.update(len(tiles[number]))
     finally:
         bar.close()
+    examples = [text for number in sorted(examples_of) for text in examples_of[number]]
     if not np.any(columns["n_samples"] > 0):
         store.remove()
         raise BrdfInputError(
@@ -136,6 +149,8 @@ def fit_capture(
         )
 
     def refit(texels: np.ndarray, starts: list[dict[str, Any]]) -> dict[str, Any]:
+        if photographs is None:
+            return _refit_on_cluster(client, capture, texels, starts, on_worker, positive)
         tile = fit_tile(texel_samples(photographs, texels, positive), starts=starts)
         tile.pop(EXAMPLES)
         return tile
@@ -143,11 +158,12 @@ def fit_capture(
     retried = neighbour_starts(columns, capture, refit)
     smoothing: dict[str, Any] = {}
     if smoothness is not None:
+        photographs = read_photographs(capture) if photographs is None else photographs
 
         def refit_under(texels: np.ndarray, starts: list, priors: list, errors: bool) -> dict[str, Any]:
             samples = texel_samples(photographs, texels, positive)
             # fitted here (a pass is quick), and their Laplace errors only where asked for: at the descent's end
-            tile = fit_tile(samples, starts=starts, priors=priors, client=None, then=then if errors else None)
+            tile = fit_tile(samples, starts=starts, priors=priors, then=then if errors else None)
             tile.pop(EXAMPLES)
             return tile
 
@@ -158,7 +174,8 @@ def fit_capture(
                 f" coordinate by {smoothing['largest_change']:.2g}: the maps lie between the texels' own fits and the"
                 " prior's optimum"
             )
-    maps = _maps(columns, capture, built, loss, examples, retried, notes, photographs.normals)
+    normals = read_normals(capture) if photographs is None else photographs.normals
+    maps = _maps(columns, capture, built, loss, examples, retried, notes, normals)
     maps.smoothing = smoothing
     for note in notes:
         warn(FitWarning(note))
@@ -186,14 +203,13 @@ def _fit_tile(
     then: Callable | None,
     starts: list[dict[str, Any]] | None = None,
     priors: list[tuple[np.ndarray, np.ndarray]] | None = None,
-    client=None,
     **options,
 ) -> dict[str, Any]:  # arrays; Any: savez's stubs take allow_pickle among its keywords
     """The flat arrays (one row per texel of ``run``) of its texels' fits: every parameter, its standard error
     (``then`` adding Laplace's), ``cost``, ``rmse``, ``converged``, ``n_samples``, ``n_caveats``; NaN where a texel
     has fewer than ``least`` samples; and :data:`EXAMPLES`, the caveats of its first texel that has any. ``starts``:
     one start per texel of ``run`` (``neighbour_starts``), in place of the start search; ``priors``: one prior per
-    texel of ``run`` (``smoothing.py``), fitted in this process."""
+    texel of ``run`` (``smoothing.py``)."""
     counts = run.kept.sum(axis=1)
     fitted = np.flatnonzero(counts >= least)
     file, width = str(capture.file), capture.shape[1]  # once, not once a texel
@@ -207,12 +223,7 @@ def _fit_tile(
     with warnings.catch_warnings():  # a texel's caveats are counted (n_caveats) and summed up once (_caveats)
         warnings.simplefilter("ignore", FitWarning)
         warnings.simplefilter("ignore", UncertaintyWarning)
-        if not datasets:
-            results = []
-        elif client is not None:
-            results = fit_on_cluster(client, datasets, model, loss, then=then, progress=False, **options)
-        else:
-            results = fit_here(datasets, model, loss, then=then, progress=False, **options)
+        results = fit_here(datasets, model, loss, then=then, progress=False, **options) if datasets else []
     tile: dict[str, np.ndarray] = {
         "n_samples": np.where(counts >= least, counts, 0).astype(np.int32),  # 0: not fitted
         "n_caveats": np.zeros(len(counts), dtype=np.int32),
@@ -236,19 +247,83 @@ def _fit_tile(
     return tile
 
 
+def _tiles_here(
+    tiles: list[np.ndarray], store: TileStore, fit_tile: Callable, photographs: Photographs, positive: bool
+) -> Generator[tuple[int, dict[str, Any]]]:
+    """Each tile's number and arrays, fitted in this process (``fit_tile``: :func:`_fit_tile` with the fit's options)
+    or kept from an earlier run; each kept as it ends."""
+    for number, texels in enumerate(tiles):
+        tile = store.kept(number)
+        if tile is None:
+            tile = fit_tile(texel_samples(photographs, texels, positive))
+            store.keep(number, tile)
+        yield number, tile
+
+
+def _tiles_on_cluster(
+    client, capture: Capture, tiles: list[np.ndarray], store: TileStore, fit_tile: Callable, positive: bool
+) -> Generator[tuple[int, dict[str, Any]]]:
+    """Each tile's number and arrays, kept from an earlier run or fitted on ``client``'s workers: the tiles not kept
+    cut into bands of consecutive tiles, four bands a worker where there are enough, each band one task that reads
+    the photographs at its own texels (:func:`_fit_groups`); each tile kept as its band ends."""
+    pending = []
+    for number in range(len(tiles)):
+        tile = store.kept(number)
+        if tile is None:
+            pending.append(number)
+        else:
+            yield number, tile
+    size = max(1, -(-len(pending) // (4 * worker_count(client))))
+    bands = [pending[start : start + size] for start in range(0, len(pending), size)]
+    tasks = [(capture, fit_tile, [(tiles[number], None) for number in band], positive) for band in bands]
+    with closing(on_workers(client, _fit_groups, tasks)) as done:
+        for index, fitted in done:
+            for number, tile in zip(bands[index], fitted, strict=True):
+                store.keep(number, tile)
+                yield number, tile
+
+
+def _refit_on_cluster(
+    client, capture: Capture, texels: np.ndarray, starts: list[dict[str, Any]], fit_tile: Callable, positive: bool
+) -> dict[str, np.ndarray]:
+    """The arrays of ``texels`` fitted again from ``starts`` (one each: the neighbour starts) on ``client``'s workers,
+    in runs of consecutive ones, four a worker where there are enough, each run one task (:func:`_fit_groups`)."""
+    size = max(1, -(-len(texels) // (4 * worker_count(client))))
+    runs = [np.arange(start, min(start + size, len(texels))) for start in range(0, len(texels), size)]
+    tasks = [(capture, fit_tile, [(texels[run], [starts[i] for i in run])], positive) for run in runs]
+    columns: dict[str, np.ndarray] = {}
+    with closing(on_workers(client, _fit_groups, tasks)) as done:
+        for index, (tile,) in done:
+            tile.pop(EXAMPLES)
+            _gather(columns, tile, len(texels), runs[index])
+    return columns
+
+
+def _fit_groups(
+    capture: Capture, fit_tile: Callable, groups: list[tuple[np.ndarray, list | None]], positive: bool
+) -> list[dict[str, Any]]:
+    """One task's work, on a worker: the photographs read at the texels of ``groups`` alone, each group's texels
+    (flat indices) fitted as a tile, from its starts where it has them."""
+    photographs = read_photographs(capture, np.concatenate([texels for texels, _ in groups]))
+    return [fit_tile(texel_samples(photographs, texels, positive), starts=starts) for texels, starts in groups]
+
+
 #: Values (1/sr) the relative loss weighs as relative only well above its floor (``losses.RELATIVE_FLOOR``): a capture
 #: whose median BRDF is below this many times the floor is said to be in too small a unit.
 FLOOR_MARGIN = 100.0
 
 
-def _scale_notes(photographs, loss: str) -> list[str]:
+def scale_texels(n_texels: int) -> np.ndarray:
+    """The texels (flat indices) whose values :func:`_scale_notes` looks at: about 256, evenly spread."""
+    return np.arange(0, n_texels, max(1, n_texels // 256))
+
+
+def _scale_notes(photographs: Photographs, loss: str) -> list[str]:
     """What a user must know of the capture's values as BRDF: with the relative loss, a median far below its floor
     (lights' intensities in another unit than the photographs') makes its residuals absolute."""
     if get_loss(loss).name != "relative":
         return []
-    sample = texel_samples(
-        photographs, np.arange(0, photographs.capture.n_texels, max(1, photographs.capture.n_texels // 256))
-    )
+    sample = texel_samples(photographs, scale_texels(photographs.capture.n_texels))
     values = sample.values[sample.kept]
     median = float(np.median(values)) if values.size else float("nan")
     if not median < FLOOR_MARGIN * RELATIVE_FLOOR:

@@ -35,13 +35,23 @@ MIN_COSINE = np.cos(np.radians(89.9))
 
 @dataclass(frozen=True)
 class Photographs:
-    """The capture's photographs read, rectified onto its texel grid: ``radiance`` (K, H·W, C) float32 (NaN where a
-    sample is dropped), the ``mask`` (H·W,) and the normals (H·W, 3) or None."""
+    """The capture's photographs read, rectified onto its texel grid, at ``texels`` (T,) (flat indices, ascending;
+    None: every texel, T = H·W): ``radiance`` (K, T, C) float32 (NaN where a sample is dropped), the ``mask`` (T,) and
+    the normals (T, 3) or None."""
 
     capture: Capture
     radiance: np.ndarray
     mask: np.ndarray
     normals: np.ndarray | None
+    texels: np.ndarray | None = None
+
+    def positions(self, texels: np.ndarray) -> np.ndarray:
+        """Where the texels ``texels`` (flat indices) lie in these arrays; each must be one read."""
+        if self.texels is None:
+            return texels
+        positions = np.searchsorted(self.texels, texels)
+        assert np.all(self.texels[np.minimum(positions, len(self.texels) - 1)] == texels), "texels not read"
+        return positions
 
 
 @dataclass(frozen=True)
@@ -62,13 +72,17 @@ class TexelSamples:
         return Samples(self.wi[index, keep], self.wo[index, keep], self.values[index, keep], channels, source=source)
 
 
-def read_photographs(capture: Capture) -> Photographs:
-    """Every photograph of ``capture`` read and rectified, with its mask and normal map (module docstring); an image
-    of the wrong size or channel count is a one-line error naming it."""
+def read_photographs(capture: Capture, texels: np.ndarray | None = None) -> Photographs:
+    """Every photograph of ``capture`` read and rectified, with its mask and normal map (module docstring), at
+    ``texels`` (flat indices; None: every texel): one photograph in memory at a time besides them, so a Dask worker
+    reads its own texels of a capture no machine holds whole; an image of the wrong size or channel count is a
+    one-line error naming it, whichever texels are read (none: the photographs checked)."""
     height, width = capture.shape
     n_channels = len(capture.channels)
-    radiance = np.empty((len(capture.shots), height * width, n_channels), dtype=np.float32)
-    centres = capture.texel_centres()
+    held = None if texels is None else np.unique(np.asarray(texels, dtype=np.int64))
+    every = slice(None) if held is None else held
+    radiance = np.empty((len(capture.shots), height * width if held is None else len(held), n_channels), np.float32)
+    centres = capture.texel_centres()[every]
     for index, shot in enumerate(capture.shots):
         image = read_image(shot.file, capture.scale)
         image = image[..., None] if image.ndim == 2 else image
@@ -86,11 +100,12 @@ def read_photographs(capture: Capture) -> Photographs:
                     f"{shot.file}: {image.shape[0]} × {image.shape[1]} pixels; the capture's plane has"
                     f" {height} × {width} texels (give the camera's matrix for an unrectified photograph)"
                 )
-            flat = image.reshape(-1, n_channels)
+            flat = image.reshape(-1, n_channels)[every]
         else:
             flat = rectified(image, shot.matrix, centres)
         radiance[index] = np.maximum(flat, 0.0)  # NaN stays NaN: np.maximum propagates it
-    return Photographs(capture, radiance, _mask(capture), _normals(capture))
+    normals = read_normals(capture)
+    return Photographs(capture, radiance, _mask(capture)[every], None if normals is None else normals[every], held)
 
 
 def _channels(count: int) -> str:
@@ -134,7 +149,9 @@ def _mask(capture: Capture) -> np.ndarray:
     return mask.ravel()
 
 
-def _normals(capture: Capture) -> np.ndarray | None:
+def read_normals(capture: Capture) -> np.ndarray | None:
+    """The normal map of ``capture``, (H·W, 3) unit normals with z > 0, or None without one; a bad map is a one-line
+    error naming it."""
     if capture.normal_map is None:
         return None
     if is_sixteen_bit(capture.normal_map):
@@ -164,9 +181,10 @@ def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool =
     lights = np.stack([shot.light_mm for shot in capture.shots])  # (K, 3)
     cameras = np.stack([shot.camera_mm for shot in capture.shots])
     intensity = np.stack([shot.intensity for shot in capture.shots])  # (K, C)
-    normals = None if photographs.normals is None else photographs.normals[texels]
+    at = photographs.positions(texels)
+    normals = None if photographs.normals is None else photographs.normals[at]
     wi, wo, squared = point_light(capture.texel_centres()[texels], lights, cameras, normals)
-    radiance = np.asarray(photographs.radiance[:, texels, :], dtype=float).transpose(1, 0, 2)  # (T, K, C)
+    radiance = np.asarray(photographs.radiance[:, at, :], dtype=float).transpose(1, 0, 2)  # (T, K, C)
     cos_i = wi[..., 2]
     with np.errstate(invalid="ignore", divide="ignore"):
         values = radiance * (squared / np.maximum(cos_i, MIN_COSINE))[..., None] / intensity[None, :, :]
@@ -174,7 +192,7 @@ def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool =
         np.all(np.isfinite(values) & ((values > 0) if positive else True), axis=-1)
         & (cos_i >= MIN_COSINE)
         & (wo[..., 2] >= MIN_COSINE)
-        & photographs.mask[texels][:, None]
+        & photographs.mask[at][:, None]
     )
     return TexelSamples(texels, wi, wo, np.where(kept[..., None], values, 0.0), kept)
 

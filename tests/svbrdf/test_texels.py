@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+from brdffit import BrdfInputError
 from brdffit.svbrdf import read_capture
 from brdffit.svbrdf.texels import read_photographs, rectified, texel_samples
 
@@ -117,6 +118,46 @@ def test_an_unrectified_photograph_is_rectified_by_its_cameras_matrix(tmp_path):
     capture = read_capture(tmp_path)
     np.testing.assert_allclose(capture.shots[0].camera_mm, [0.0, 0.0, 400.0], atol=1e-9)
     np.testing.assert_allclose(read_photographs(capture).radiance[0].reshape(4, 6, 3), image, rtol=1e-6)  # float32
+
+
+def test_photographs_read_at_some_texels_give_those_texels_samples(tmp_path):
+    """A Dask worker reads the photographs at its own texels alone (``read_photographs(capture, texels)``): their
+    samples are those of the photographs read whole, for a rectified photograph and a raw one, under a mask and a
+    normal map, the texels in any order; read at no texel, every photograph is still checked."""
+    rng = np.random.default_rng(1)
+    shape = (4, 6)
+    np.save(tmp_path / "flat.npy", rng.uniform(0.1, 1.0, (*shape, 3)))
+    np.save(tmp_path / "raw.npy", rng.uniform(0.1, 1.0, (*shape, 3)))
+    normals = np.dstack([rng.normal(0.0, 0.2, (*shape, 2)), np.ones(shape)])
+    np.save(tmp_path / "normals.npy", normals)
+    mask = np.ones(shape)
+    mask[1, 2] = 0.0
+    np.save(tmp_path / "mask.npy", mask)
+    document = {
+        "brdffit_capture": 1,
+        "plane": {"width_mm": 12.0, "height_mm": 8.0, "texels": list(shape)},
+        "mask": "mask.npy",
+        "normal_map": "normals.npy",
+        "images": [
+            {"file": "flat.npy", "light": {"position_mm": [30, 10, 300], "intensity": 1},
+             "camera": {"position_mm": [0, 0, 400]}},
+            {"file": "raw.npy", "light": {"position_mm": [-50, 20, 250], "intensity": 1},
+             "camera": {"matrix": _looking_down(400.0, 2.0, shape).tolist()}},
+        ],
+    }  # fmt: skip
+    (tmp_path / "capture.json").write_text(json.dumps(document))
+    capture = read_capture(tmp_path)
+    texels = np.array([13, 0, 8, 23])  # texel (1, 2), 8, masked
+    whole, some = read_photographs(capture), read_photographs(capture, texels)
+    assert some.radiance.shape == (2, 4, 3)
+    ours, theirs = texel_samples(some, texels), texel_samples(whole, texels)
+    for name in ("wi", "wo", "values"):
+        np.testing.assert_allclose(getattr(ours, name), getattr(theirs, name), rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(ours.kept, theirs.kept)
+    assert not ours.kept[2].any() and ours.kept[[0, 1, 3]].all()
+    np.save(tmp_path / "flat.npy", np.ones((3, 6, 3)))
+    with pytest.raises(BrdfInputError, match=r"flat\.npy: 3 × 6 pixels; the capture's plane has 4 × 6 texels"):
+        read_photographs(capture, np.array([], dtype=int))
 
 
 @pytest.mark.parametrize("suffix", [".png", ".tif"])

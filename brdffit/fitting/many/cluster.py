@@ -20,7 +20,8 @@ stack at a time) and passes each result through a function on request (``brdffit
 
 import os
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Generator, Sequence
+from contextlib import closing
 from typing import Any, NamedTuple
 
 from ..._progress import progress_bar
@@ -73,42 +74,70 @@ def fit_on_cluster(
     ``model``: a built model. ``start``: one parameter dictionary for all, one per item, or None. ``options``:
     those of :func:`fit_here` but ``progress``, which is the client's bar here.
     """
-    from distributed import as_completed
-
     items = list(items)
     starts = starts_per_dataset(start, len(items))
-    if options.get("threads") is None:  # the workers are the parallelism
-        options = {**options, "threads": 1}
-    workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
-    chunks = _chunks(items, starts, model, loss, options, workers)
-    futures = {
-        client.submit(
-            _fit_chunk,
-            [items[i] for i in chunk],
-            [starts[i] for i in chunk],
-            model,
-            loss,
-            read_options or {},
-            options,
-            pure=False,
-            key=f"brdffit-fit-{index}-{os.urandom(4).hex()}",
-        ): chunk
-        for index, chunk in enumerate(chunks)
-    }
+    options = one_thread_each(options)
+    chunks = _chunks(items, starts, model, loss, options, worker_count(client))
+    tasks = [
+        ([items[i] for i in chunk], [starts[i] for i in chunk], model, loss, read_options or {}, options)
+        for chunk in chunks
+    ]
     results: list[FitResult | None] = [None] * len(items)
     bar = progress_bar(len(items), "fit", progress)
     try:
-        for future in as_completed(futures):
-            chunk, fitted = futures[future], future.result()
-            if isinstance(fitted, _BadInput):
-                raise BrdfInputError(fitted.message)
-            for index, result in zip(chunk, fitted, strict=True):
-                results[index] = result
-            bar.update(len(chunk))
+        with closing(on_workers(client, _fit_chunk, tasks)) as done:
+            for number, fitted in done:
+                for index, result in zip(chunks[number], fitted, strict=True):
+                    results[index] = result
+                bar.update(len(chunks[number]))
     finally:
         bar.close()
-        client.cancel(list(futures))
     return every_fitted(results)
+
+
+def worker_count(client) -> int:
+    """How many workers ``client``'s cluster has (at least 1)."""
+    return max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
+
+
+def one_thread_each(options: dict[str, Any]) -> dict[str, Any]:
+    """A fit's ``options`` for a worker: one thread, unless they say how many (the workers are the parallelism)."""
+    return options if options.get("threads") is not None else {**options, "threads": 1}
+
+
+def on_workers(client, function: Callable, tasks: Sequence[tuple]) -> Generator[tuple[int, Any]]:
+    """``function(*arguments)`` for each argument tuple of ``tasks``, each one task on a worker of ``client`` (its
+    compiled programs kept on its disk, :func:`_on_worker`), yielded as ``(index of the task, its result)`` as each
+    ends. Bad input met on a worker is raised here as its one-line error; the tasks not yet done are cancelled when
+    the generator is closed (use it in ``contextlib.closing``, so that an error or Ctrl-C in the caller's loop
+    cancels them at once)."""
+    from distributed import as_completed
+
+    futures = {
+        client.submit(_on_worker, function, *arguments, pure=False, key=f"brdffit-{index}-{os.urandom(4).hex()}"): index
+        for index, arguments in enumerate(tasks)
+    }
+    try:
+        for future in as_completed(futures):
+            result = future.result()
+            if isinstance(result, _BadInput):
+                raise BrdfInputError(result.message)
+            yield futures[future], result
+    finally:
+        client.cancel(list(futures))
+
+
+def _on_worker(function: Callable, *arguments):
+    """One task, on a worker: ``function(*arguments)`` with the worker's compiled programs kept on disk. Bad input comes
+    back as its one-line message (:class:`_BadInput`), for the client to raise: a task that raised would have the
+    worker log a traceback."""
+    from ..._programs.cache import enable_compilation_cache
+
+    enable_compilation_cache()
+    try:
+        return function(*arguments)
+    except BrdfInputError as error:
+        return _BadInput(str(error))
 
 
 def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, workers: int) -> list[list[int]]:
@@ -128,20 +157,13 @@ def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, w
     return [run[i : i + size] for run in [*units, paths] for i in range(0, len(run), size)]
 
 
-def _fit_chunk(items: list, starts: list, model, loss: str, read_options: dict, options: dict):
-    """One task, on a worker: read what is a path, fit everything (warnings are the results' own; the client
-    raises them), with the worker's compiled programs kept on disk. Bad input comes back as its one-line message
-    (:class:`_BadInput`), for the client to raise: a task that raised would have the worker log a traceback."""
-    from ..._programs.cache import enable_compilation_cache
-
-    enable_compilation_cache()
-    try:
-        samples = [item if isinstance(item, Samples) else load_samples(item, **read_options) for item in items]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return fit_here(samples, model, loss, start=starts, progress=False, **options)
-    except BrdfInputError as error:
-        return _BadInput(str(error))
+def _fit_chunk(items: list, starts: list, model, loss: str, read_options: dict, options: dict) -> list[FitResult]:
+    """One task's work, on a worker: read what is a path, fit everything (warnings are the results' own; the client
+    raises them)."""
+    samples = [item if isinstance(item, Samples) else load_samples(item, **read_options) for item in items]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fit_here(samples, model, loss, start=starts, progress=False, **options)
 
 
 class _BadInput(NamedTuple):
