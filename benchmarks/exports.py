@@ -14,8 +14,9 @@ Mitsuba). Then each command below runs in a fresh process, process start to exit
 ``warm``: with the cache that run filled (the project's default: the command line keeps compiled programs,
 ``docs/command-line.md``). Medians of ``--repeats`` runs. ``--baseline CHECKOUT`` times another checkout of brdffit
 (e.g. the code before this benchmark's change) in the same rounds, taking turns command by command, so that a shared
-machine's load falls on both alike. Prints the table and writes ``benchmarks/results/exports.json`` and
-``exports.md``.
+machine's load falls on both alike. ``--only TEXT`` times the commands whose label holds ``TEXT`` alone (with
+``--output`` elsewhere, so that the full table stays). Prints the table and writes
+``benchmarks/results/exports.json`` and ``exports.md``.
 """
 
 import argparse
@@ -102,12 +103,14 @@ def commands(folder: Path) -> dict[str, list[str]]:
     return timed
 
 
-def measured(checkouts: dict[str, Path], repeats: int, folder: Path) -> dict:
-    """Every command of :func:`commands` for each checkout, cold and warm, ``repeats`` times, taking turns."""
+def measured(checkouts: dict[str, Path], repeats: int, folder: Path, only: str | None = None) -> dict:
+    """Every command of :func:`commands` (those whose label holds ``only``, where given) for each checkout, cold and
+    warm, ``repeats`` times, taking turns."""
     runs: dict = {}
+    timed = {label: arguments for label, arguments in commands(folder).items() if only is None or only in label}
     for round_ in range(repeats):
         caches = {label: Path(tempfile.mkdtemp(prefix=f"cache-{label}-", dir=folder)) for label in checkouts}
-        for command, arguments in commands(folder).items():
+        for command, arguments in timed.items():
             for label, checkout in checkouts.items():
                 if arguments[0] == "render" and arguments[1].endswith(".xml") and label != "this":
                     continue  # an older brdffit cannot render a BSDF file
@@ -172,6 +175,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs per timing (default 3)")
     parser.add_argument("--baseline", type=Path, help="another checkout of brdffit, timed in the same rounds")
     parser.add_argument("--output", type=Path, default=RESULTS, help="folder for exports.json and exports.md")
+    parser.add_argument("--only", metavar="TEXT", help="time only the commands whose label holds TEXT (ward-aniso)")
     args = parser.parse_args()
     checkouts = {"this": ROOT} | ({"baseline": args.baseline.resolve()} if args.baseline else {})
     with tempfile.TemporaryDirectory(prefix="brdffit-bench-exports-") as folder:
@@ -187,7 +191,7 @@ def main() -> None:
             "date": datetime.date.today().isoformat(),
             "repeats": args.repeats,
             "machine": {"cpus": os.cpu_count(), "processor": platform.processor(), "platform": platform.platform()},
-            "timings": measured(checkouts, args.repeats, folder),
+            "timings": measured(checkouts, args.repeats, folder, args.only),
         }
     args.output.mkdir(parents=True, exist_ok=True)
     (args.output / "exports.json").write_text(json.dumps(results, indent=1) + "\n")

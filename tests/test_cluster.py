@@ -1,5 +1,7 @@
-"""fit_batch over a Dask cluster (``brdffit/fitting/many/cluster.py``): a LocalCluster of two worker processes gives
-the local results, reads paths on its workers, and loses no result when a worker dies mid-run."""
+"""fit_batch and a capture's maps over a Dask cluster (``brdffit/fitting/many/cluster.py``,
+``brdffit/svbrdf/texel_fits.py``): a LocalCluster of two worker processes gives the local results, reads paths and
+photographs on its workers, loses no result when a worker dies mid-run, and drops the tasks an interrupted run
+leaves."""
 
 import os
 import signal
@@ -165,7 +167,7 @@ def read_here(monkeypatch):
     return calls
 
 
-def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_path, read_here):
+def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_path, read_here, monkeypatch):
     """``brdffit.svbrdf.fit(…, client=)``: each tile's texels fitted by the workers, the maps the same as here; the
     workers read the photographs, this process checks them, keeping the texels its scale note looks at (every
     one of a capture of 36)."""
@@ -175,7 +177,8 @@ def test_a_captures_texels_fitted_on_the_cluster_are_the_local_ones(client, tmp_
     synth_capture(tmp_path / "capture", "ward", shape=(6, 6), n_images=16, noise=0.01, seed=1)
     here = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16)
     assert len(read_here) == 1 and read_here.pop() is None
-    there = svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=16, client=client)
+    monkeypatch.chdir(tmp_path)  # a relative path: the workers, started elsewhere, open the photographs all the same
+    there = svbrdf.fit("capture", "ward", progress=False, tile_texels=16, client=client)
     assert len(read_here) == 1 and len(read_here[0]) == 36
     assert_same_maps(there, here)
 
@@ -220,6 +223,10 @@ def test_a_cluster_fit_interrupted_resumes_from_its_kept_tiles(client, tmp_path,
     with pytest.raises(KeyboardInterrupt):
         svbrdf.fit(tmp_path / "capture", "ward", **options)
     assert not (tmp_path / "maps" / "params.npz").exists()
+    deadline = time.monotonic() + 30  # the bands not done are cancelled: the scheduler lets them go
+    while brdffit_tasks(client) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not brdffit_tasks(client)
     assert sorted(path.name for path in (tmp_path / "maps" / ".tiles").glob("0*.npz")) == [f"{kept[0]:06d}.npz"]
     fitted = []
 
@@ -231,6 +238,13 @@ def test_a_cluster_fit_interrupted_resumes_from_its_kept_tiles(client, tmp_path,
     resumed = svbrdf.fit(tmp_path / "capture", "ward", resume=True, **options)
     assert sorted(fitted) == sorted({0, 1, 2} - {kept[0]}) and (tmp_path / "maps" / "params.npz").exists()
     assert_same_maps(resumed, svbrdf.fit(tmp_path / "capture", "ward", progress=False, tile_texels=12))
+
+
+def brdffit_tasks(client) -> list[str]:
+    """The keys of brdffit's tasks the cluster's scheduler still holds."""
+    return client.run_on_scheduler(
+        lambda dask_scheduler: [str(key) for key in dask_scheduler.tasks if str(key).startswith("brdffit-")]
+    )
 
 
 def test_a_bad_photograph_stops_a_cluster_fit_before_any_tile(client, tmp_path):

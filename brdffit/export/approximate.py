@@ -4,9 +4,9 @@ The fitted model is tabulated on a dense hemisphere grid (:func:`fitting_grid`: 
 where the fitted BRDF is mirror-symmetric about the plane of incidence, as a light at azimuth 0 makes every isotropic
 BRDF: the other half repeats it, and the optimum is the same; an anisotropic BRDF, :func:`isotropic`, is tabulated
 with the light at :data:`ANISOTROPIC_TURNS` azimuths, which pin its tangent, on fewer viewer zeniths,
-:data:`ANISOTROPIC_FIT_GRID`); the renderer's model is fitted to those
-values with the fit's own loss, coarse to fine (:func:`refit`: the fit's own start search on a coarse subset of the
-grid, its optimum solved again on the whole); how far the two differ is reported (:class:`Approximation`): the rmse over
+:data:`ANISOTROPIC_FIT_GRID`); the renderer's model is fitted to those values with the fit's own loss, coarse to fine
+(:func:`refit`: the fit's own start search on a coarse subset of the grid, its optimum solved again on the whole, or
+on :data:`ANISOTROPIC_FIT_GRID`); how far the two differ is reported (:class:`Approximation`): the rmse over
 :func:`error_grid` (the dense grid and the plane of incidence with each light's mirror direction, where the highlight
 is: the dense grid's azimuths are bins' midpoints, which never sample the mirror direction), in 1/sr, and the worst
 relative difference of their directional albedos ``∫ f cos θo dωo`` (the light a surface reflects, at the incidences
@@ -36,8 +36,9 @@ POOR_SHAPE = 0.5
 #: equal bins over [0°, 90°)) and viewer azimuths (midpoints of equal bins over [0°, 360°)); 12 × 45 × 72 = 38,880
 #: pairs, every 2° in θo and 5° in φo.
 GRID = (12, 45, 72)
-#: The grid a renderer's model is fitted on (:func:`fitting_grid`): :data:`GRID`, halved where the BRDF is
-#: mirror-symmetric (19,440 pairs: the same optimum as the whole grid's, for half the work).
+#: The grid a renderer's model is fitted on where the BRDF is isotropic (:func:`fitting_grid`; an anisotropic one's:
+#: :data:`ANISOTROPIC_FIT_GRID`): :data:`GRID`, halved where the BRDF is mirror-symmetric (19,440 pairs: the same
+#: optimum as the whole grid's, for half the work).
 FIT_GRID = GRID
 #: The grid the start search runs on (:func:`coarse_refit`, and glTF's ``fit_material``): a subset of :data:`GRID`, its
 #: 12 light zeniths, every third viewer zenith (6°) and every third azimuth (15°); 12 × 15 × 12 = 2,160 pairs where

@@ -26,7 +26,7 @@ number of channels, a missing image; the images' sizes are checked as they are r
 """
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -85,19 +85,28 @@ class Capture:
     def n_texels(self) -> int:
         return self.shape[0] * self.shape[1]
 
-    def texel_centres(self) -> np.ndarray:
-        """The centres (H·W, 3) of the texels in mm, row by row (:func:`texel_centres`)."""
-        return texel_centres(self.width_mm, self.height_mm, self.shape)
+    def texel_centres(self, texels: np.ndarray | None = None) -> np.ndarray:
+        """The centres (T, 3) of ``texels`` (flat indices; None: all H·W, row by row) in mm (:func:`texel_centres`)."""
+        return texel_centres(self.width_mm, self.height_mm, self.shape, texels)
+
+    def resolved(self) -> "Capture":
+        """This capture with every file's path absolute: what a Dask worker, started in another folder, opens."""
+        shots = tuple(replace(shot, file=shot.file.resolve()) for shot in self.shots)
+        mask, normal_map = (None if path is None else path.resolve() for path in (self.mask, self.normal_map))
+        return replace(self, folder=self.folder.resolve(), shots=shots, mask=mask, normal_map=normal_map)
 
 
-def texel_centres(width_mm: float, height_mm: float, shape: tuple[int, int]) -> np.ndarray:
-    """The centres (H·W, 3) in mm of the texels of a ``width_mm`` × ``height_mm`` plane cut into ``shape`` (H, W),
-    row by row: texel (r, c) at ``x = (c + ½)·width/W − width/2``, ``y = height/2 − (r + ½)·height/H``, ``z = 0``."""
+def texel_centres(
+    width_mm: float, height_mm: float, shape: tuple[int, int], texels: np.ndarray | None = None
+) -> np.ndarray:
+    """The centres (T, 3) in mm of ``texels`` (flat indices, row by row; None: all H·W) of a ``width_mm`` ×
+    ``height_mm`` plane cut into ``shape`` (H, W): texel (r, c) at ``x = (c + ½)·width/W − width/2``,
+    ``y = height/2 − (r + ½)·height/H``, ``z = 0``."""
     rows, columns = shape
-    x = (np.arange(columns) + 0.5) * width_mm / columns - width_mm / 2
-    y = height_mm / 2 - (np.arange(rows) + 0.5) * height_mm / rows
-    xx, yy = np.meshgrid(x, y)
-    return np.stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)], axis=-1)
+    row, column = np.divmod(np.arange(rows * columns) if texels is None else np.asarray(texels), columns)
+    x = (column + 0.5) * width_mm / columns - width_mm / 2
+    y = height_mm / 2 - (row + 0.5) * height_mm / rows
+    return np.stack([x, y, np.zeros(np.shape(x))], axis=-1)
 
 
 def capture_file(path: str | os.PathLike) -> Path:

@@ -31,7 +31,7 @@ import numpy as np
 from .._progress import progress_bar
 from ..checks import choice, positive_number, whole_number
 from ..errors import BrdfInputError, FitWarning, UncertaintyWarning, warn
-from ..fitting.many.cluster import fit_here, on_workers, one_thread_each, worker_count
+from ..fitting.many.cluster import fit_here, on_workers, one_thread_each, task_size, worker_count
 from ..fitting.objective.losses import RELATIVE_FLOOR, get_loss
 from ..fitting.options import holding_of, solving_of
 from ..fitting.single.result import FitResult
@@ -48,6 +48,10 @@ from .tiles import TileStore
 
 #: Texels fitted at a time: a tile's samples (32 photographs: about 20 MB) and results are what grows with it.
 TILE_TEXELS = 4096
+#: The most texels one task of a cluster fits (:func:`_tiles_on_cluster`), in tiles of ``tile_texels``: each task
+#: decodes every photograph whole, ~1 s for 32 photographs of 1024² pixels, against ~16 s of fitting at 0.25 ms a
+#: texel; its tiles are kept (``resume``) as it ends, and a worker lost mid-task loses at most this many.
+BAND_TEXELS = 65536
 UNCERTAINTIES = ("laplace",)
 #: A tile's array of the caveats of its first texel that has any (not a map: left out of the maps).
 EXAMPLES = "caveat_examples"
@@ -82,9 +86,9 @@ def fit_capture(
     ``textures``: write the ``textures/`` images too; ``progress``: a bar over the texels on stderr (default: when
     stderr is a terminal); ``client``: a ``dask.distributed.Client`` whose workers fit the tiles, a band of them a
     task, each worker reading its band's texels of the photographs itself (:func:`_tiles_on_cluster`; the capture's
-    files on a path every worker reads); this process checks every photograph, keeping a few texels, refits the
-    neighbour starts' texels on the workers too, and writes the maps; the results are this process's. The smoothness
-    prior's passes run here, on the photographs read here whole."""
+    files at the same absolute paths on every worker); this process checks every photograph, keeping a few texels,
+    refits the neighbour starts' texels on the workers too, and writes the maps; the results are this process's. The
+    smoothness prior's passes run here, on the photographs read here whole."""
     capture = capture if isinstance(capture, Capture) else read_capture(capture)
     if uncertainty is not None:
         choice("uncertainty", uncertainty, UNCERTAINTIES)
@@ -101,8 +105,14 @@ def fit_capture(
     if output is not None:
         _check_output(Path(output), capture)
     # every photograph checked before anything is written; with a cluster, its workers read the texels they fit
-    photographs = read_photographs(capture) if client is None else None
-    probe = read_photographs(capture, scale_texels(capture.n_texels)) if photographs is None else photographs
+    on_cluster = client is not None
+    if on_cluster:
+        capture = capture.resolved()  # the workers open its files, in folders of their own
+    # read whole here where the tiles or the smoothness prior's passes are fitted here; else the texels the scale note
+    # looks at alone
+    whole = not on_cluster or smoothness is not None
+    photographs = read_photographs(capture) if whole else None
+    probe = read_photographs(capture, _scale_texels(capture.n_texels)) if photographs is None else photographs
     how = {"model": built.name, "options": built.model_options, "loss": loss, "solving": solving, "holding": holding}
     how |= {"uncertainty": uncertainty, "tile_texels": tile_texels}  # the smoothing runs after the tiles
     store = TileStore(None if output is None else Path(output), capture, how, resume)
@@ -125,11 +135,11 @@ def fit_capture(
         np.arange(start, min(start + tile_texels, capture.n_texels))
         for start in range(0, capture.n_texels, tile_texels)
     ]
-    finished = (
-        _tiles_on_cluster(client, capture, tiles, store, on_worker, positive)
-        if photographs is None
-        else _tiles_here(tiles, store, fit_tile, photographs, positive)
-    )
+    if on_cluster:
+        finished = _tiles_on_cluster(client, capture, tiles, store, on_worker, positive)
+    else:
+        assert photographs is not None  # read whole above
+        finished = _tiles_here(tiles, store, fit_tile, photographs, positive)
     bar = progress_bar(capture.n_texels, "texel", progress)
     columns: dict[str, np.ndarray] = {}
     examples_of: dict[int, list[str]] = {}
@@ -149,8 +159,9 @@ def fit_capture(
         )
 
     def refit(texels: np.ndarray, starts: list[dict[str, Any]]) -> dict[str, Any]:
-        if photographs is None:
-            return _refit_on_cluster(client, capture, texels, starts, on_worker, positive)
+        if on_cluster:
+            return _refit_on_cluster(client, capture, texels, starts, on_worker, positive, tile_texels)
+        assert photographs is not None  # read whole above
         tile = fit_tile(texel_samples(photographs, texels, positive), starts=starts)
         tile.pop(EXAMPLES)
         return tile
@@ -158,7 +169,7 @@ def fit_capture(
     retried = neighbour_starts(columns, capture, refit)
     smoothing: dict[str, Any] = {}
     if smoothness is not None:
-        photographs = read_photographs(capture) if photographs is None else photographs
+        assert photographs is not None  # read whole above
 
         def refit_under(texels: np.ndarray, starts: list, priors: list, errors: bool) -> dict[str, Any]:
             samples = texel_samples(photographs, texels, positive)
@@ -264,8 +275,9 @@ def _tiles_on_cluster(
     client, capture: Capture, tiles: list[np.ndarray], store: TileStore, fit_tile: Callable, positive: bool
 ) -> Generator[tuple[int, dict[str, Any]]]:
     """Each tile's number and arrays, kept from an earlier run or fitted on ``client``'s workers: the tiles not kept
-    cut into bands of consecutive tiles, four bands a worker where there are enough, each band one task that reads
-    the photographs at its own texels (:func:`_fit_groups`); each tile kept as its band ends."""
+    cut into bands of consecutive tiles (``cluster.TASKS_PER_WORKER`` bands a worker where there are enough, at most
+    :data:`BAND_TEXELS` texels each), each band one task that reads the photographs at its own texels
+    (:func:`_fit_groups`); each tile kept as its band ends."""
     pending = []
     for number in range(len(tiles)):
         tile = store.kept(number)
@@ -273,7 +285,7 @@ def _tiles_on_cluster(
             pending.append(number)
         else:
             yield number, tile
-    size = max(1, -(-len(pending) // (4 * worker_count(client))))
+    size = task_size(len(pending), worker_count(client), max(1, BAND_TEXELS // len(tiles[0])))
     bands = [pending[start : start + size] for start in range(0, len(pending), size)]
     tasks = [(capture, fit_tile, [(tiles[number], None) for number in band], positive) for band in bands]
     with closing(on_workers(client, _fit_groups, tasks)) as done:
@@ -284,18 +296,27 @@ def _tiles_on_cluster(
 
 
 def _refit_on_cluster(
-    client, capture: Capture, texels: np.ndarray, starts: list[dict[str, Any]], fit_tile: Callable, positive: bool
+    client,
+    capture: Capture,
+    texels: np.ndarray,
+    starts: list[dict[str, Any]],
+    fit_tile: Callable,
+    positive: bool,
+    tile_texels: int,
 ) -> dict[str, np.ndarray]:
-    """The arrays of ``texels`` fitted again from ``starts`` (one each: the neighbour starts) on ``client``'s workers,
-    in runs of consecutive ones, four a worker where there are enough, each run one task (:func:`_fit_groups`)."""
-    size = max(1, -(-len(texels) // (4 * worker_count(client))))
+    """The arrays of ``texels`` fitted again from ``starts`` (one each: the neighbour starts) on ``client``'s workers:
+    runs of consecutive ones, cut as :func:`_tiles_on_cluster` cuts its bands, each run one task
+    (:func:`_fit_groups`) of groups of at most ``tile_texels``."""
+    size = task_size(len(texels), worker_count(client), BAND_TEXELS)
     runs = [np.arange(start, min(start + size, len(texels))) for start in range(0, len(texels), size)]
-    tasks = [(capture, fit_tile, [(texels[run], [starts[i] for i in run])], positive) for run in runs]
+    groups = [[run[i : i + tile_texels] for i in range(0, len(run), tile_texels)] for run in runs]
+    tasks = [(capture, fit_tile, [(texels[at], [starts[i] for i in at]) for at in run], positive) for run in groups]
     columns: dict[str, np.ndarray] = {}
     with closing(on_workers(client, _fit_groups, tasks)) as done:
-        for index, (tile,) in done:
-            tile.pop(EXAMPLES)
-            _gather(columns, tile, len(texels), runs[index])
+        for index, tiles in done:
+            for at, tile in zip(groups[index], tiles, strict=True):
+                tile.pop(EXAMPLES)
+                _gather(columns, tile, len(texels), at)
     return columns
 
 
@@ -313,7 +334,7 @@ def _fit_groups(
 FLOOR_MARGIN = 100.0
 
 
-def scale_texels(n_texels: int) -> np.ndarray:
+def _scale_texels(n_texels: int) -> np.ndarray:
     """The texels (flat indices) whose values :func:`_scale_notes` looks at: about 256, evenly spread."""
     return np.arange(0, n_texels, max(1, n_texels // 256))
 
@@ -323,7 +344,7 @@ def _scale_notes(photographs: Photographs, loss: str) -> list[str]:
     (lights' intensities in another unit than the photographs') makes its residuals absolute."""
     if get_loss(loss).name != "relative":
         return []
-    sample = texel_samples(photographs, scale_texels(photographs.capture.n_texels))
+    sample = texel_samples(photographs, _scale_texels(photographs.capture.n_texels))
     values = sample.values[sample.kept]
     median = float(np.median(values)) if values.size else float("nan")
     if not median < FLOOR_MARGIN * RELATIVE_FLOOR:

@@ -46,11 +46,14 @@ class Photographs:
     texels: np.ndarray | None = None
 
     def positions(self, texels: np.ndarray) -> np.ndarray:
-        """Where the texels ``texels`` (flat indices) lie in these arrays; each must be one read."""
+        """Where the texels ``texels`` (flat indices) lie in these arrays; a texel not read is a ValueError."""
         if self.texels is None:
             return texels
         positions = np.searchsorted(self.texels, texels)
-        assert np.all(self.texels[np.minimum(positions, len(self.texels) - 1)] == texels), "texels not read"
+        found = positions < len(self.texels)
+        found[found] = self.texels[positions[found]] == np.asarray(texels)[found]
+        if not np.all(found):
+            raise ValueError(f"texels {np.asarray(texels)[~found][:5].tolist()} were not read")
         return positions
 
 
@@ -80,9 +83,11 @@ def read_photographs(capture: Capture, texels: np.ndarray | None = None) -> Phot
     height, width = capture.shape
     n_channels = len(capture.channels)
     held = None if texels is None else np.unique(np.asarray(texels, dtype=np.int64))
+    if held is not None and len(held) and not (0 <= held[0] and held[-1] < height * width):
+        raise ValueError(f"texels {held[0]}…{held[-1]} of a capture of {height * width}")
     every = slice(None) if held is None else held
     radiance = np.empty((len(capture.shots), height * width if held is None else len(held), n_channels), np.float32)
-    centres = capture.texel_centres()[every]
+    centres = capture.texel_centres(held)
     for index, shot in enumerate(capture.shots):
         image = read_image(shot.file, capture.scale)
         image = image[..., None] if image.ndim == 2 else image
@@ -183,7 +188,7 @@ def texel_samples(photographs: Photographs, texels: np.ndarray, positive: bool =
     intensity = np.stack([shot.intensity for shot in capture.shots])  # (K, C)
     at = photographs.positions(texels)
     normals = None if photographs.normals is None else photographs.normals[at]
-    wi, wo, squared = point_light(capture.texel_centres()[texels], lights, cameras, normals)
+    wi, wo, squared = point_light(capture.texel_centres(texels), lights, cameras, normals)
     radiance = np.asarray(photographs.radiance[:, at, :], dtype=float).transpose(1, 0, 2)  # (T, K, C)
     cos_i = wi[..., 2]
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -76,9 +76,10 @@ class TileStore:
 
 
 def _stamps(capture: Capture) -> list[list]:
-    """Each photograph's, the mask's and the normal map's path, size and modification time (ns)."""
+    """Each photograph's, the mask's and the normal map's absolute path, size and modification time (ns): the same
+    whether the capture was given by a relative path or not (a cluster's fit resolves it)."""
     files = [shot.file for shot in capture.shots] + [path for path in (capture.mask, capture.normal_map) if path]
-    return [[str(path), path.stat().st_size, path.stat().st_mtime_ns] for path in files]
+    return [[str(path.resolve()), path.stat().st_size, path.stat().st_mtime_ns] for path in files]
 
 
 def _plain(value: Any):

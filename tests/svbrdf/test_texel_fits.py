@@ -146,3 +146,22 @@ def test_lobes_are_flattened_and_nested_again():
     flat = flat_params(params)
     assert sorted(flat) == ["lobe0_cxy", "lobe0_n", "lobe0_rho_s", "lobe1_cxy", "lobe1_rho_s", "rho_d"]
     assert nested_params(flat) == params
+
+
+def test_a_cluster_task_reads_the_photographs_at_its_own_texels_alone(ward_capture, monkeypatch):
+    """A worker's task (``_fit_groups``, ``tests/test_cluster.py`` runs it on workers) reads the photographs at the
+    texels of its groups alone, once, and fits each group as a tile from its own starts."""
+    folder, _ = ward_capture
+    read, read_photographs = [], texel_fits.read_photographs
+
+    def recorded(capture, texels=None):
+        read.append(texels)
+        return read_photographs(capture, texels)
+
+    monkeypatch.setattr(texel_fits, "read_photographs", recorded)
+    groups = [(np.arange(10, 14), None), (np.array([41, 40]), [{"a": 1}, {"a": 2}])]
+    fitted = texel_fits._fit_groups(
+        svbrdf.read_capture(folder), lambda run, starts: (run.texels.tolist(), starts), groups, True
+    )
+    assert [sorted(np.asarray(texels).tolist()) for texels in read] == [[10, 11, 12, 13, 40, 41]]
+    assert fitted == [([10, 11, 12, 13], None), ([41, 40], [{"a": 1}, {"a": 2}])]

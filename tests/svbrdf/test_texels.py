@@ -147,14 +147,16 @@ def test_photographs_read_at_some_texels_give_those_texels_samples(tmp_path):
     }  # fmt: skip
     (tmp_path / "capture.json").write_text(json.dumps(document))
     capture = read_capture(tmp_path)
-    texels = np.array([13, 0, 8, 23])  # texel (1, 2), 8, masked
+    texels = np.array([13, 0, 8, 23, 13])  # texel (1, 2), 8, masked; 13 twice
     whole, some = read_photographs(capture), read_photographs(capture, texels)
     assert some.radiance.shape == (2, 4, 3)
+    with pytest.raises(ValueError, match=r"texels \[1, 24\] were not read"):
+        some.positions(np.array([0, 1, 24]))
     ours, theirs = texel_samples(some, texels), texel_samples(whole, texels)
     for name in ("wi", "wo", "values"):
         np.testing.assert_allclose(getattr(ours, name), getattr(theirs, name), rtol=1e-12, atol=0)
     np.testing.assert_array_equal(ours.kept, theirs.kept)
-    assert not ours.kept[2].any() and ours.kept[[0, 1, 3]].all()
+    assert not ours.kept[2].any() and ours.kept[[0, 1, 3, 4]].all()
     np.save(tmp_path / "flat.npy", np.ones((3, 6, 3)))
     with pytest.raises(BrdfInputError, match=r"flat\.npy: 3 × 6 pixels; the capture's plane has 4 × 6 texels"):
         read_photographs(capture, np.array([], dtype=int))

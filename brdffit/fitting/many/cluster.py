@@ -15,6 +15,9 @@ stack at a time) and passes each result through a function on request (``brdffit
 * a worker lost mid-run has its tasks re-run on another (Dask's scheduler does this), and the results come back
   in the order of the inputs.
 
+:func:`on_workers` runs any such tasks (``fit_batch``'s chunks, the bands of a capture's tiles, ``svbrdf``), raising
+a worker's bad input here in one line.
+
 ``dask[distributed]`` is the ``cluster`` extra (``pip install 'brdffit[cluster]'``).
 """
 
@@ -95,6 +98,17 @@ def fit_on_cluster(
     return every_fitted(results)
 
 
+#: How many tasks each worker gets where there is work enough: one that ends early takes another, so that the last
+#: task to end holds the others up less.
+TASKS_PER_WORKER = 4
+
+
+def task_size(n_items: int, workers: int, most: int) -> int:
+    """How many of ``n_items`` one task takes: at most ``most``, and few enough that each of ``workers`` gets
+    :data:`TASKS_PER_WORKER` tasks where there are enough items (at least 1)."""
+    return max(1, min(most, -(-n_items // (TASKS_PER_WORKER * workers))))
+
+
 def worker_count(client) -> int:
     """How many workers ``client``'s cluster has (at least 1)."""
     return max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
@@ -118,11 +132,11 @@ def on_workers(client, function: Callable, tasks: Sequence[tuple]) -> Generator[
         for index, arguments in enumerate(tasks)
     }
     try:
-        for future in as_completed(futures):
-            result = future.result()
+        for future in as_completed(list(futures)):
+            result, index = future.result(), futures.pop(future)  # a result fetched is let go on its worker
             if isinstance(result, _BadInput):
                 raise BrdfInputError(result.message)
-            yield futures[future], result
+            yield index, result
     finally:
         client.cancel(list(futures))
 
@@ -153,7 +167,7 @@ def _chunks(items: list, starts: list, model: Model, loss: str, options: dict, w
         for unit in work_units(model, kept, [starts[index] is not None for index in in_memory])
     ]
     paths = [index for index, item in enumerate(items) if not isinstance(item, Samples)]
-    size = max(1, min(PER_TASK, -(-len(items) // (4 * workers))))
+    size = task_size(len(items), workers, PER_TASK)
     return [run[i : i + size] for run in [*units, paths] for i in range(0, len(run), size)]
 
 

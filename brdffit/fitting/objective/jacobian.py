@@ -22,7 +22,8 @@ parameters alone, so one forward-mode tangent per parameter, set in every channe
 derivatives: S + P tangents, as many as a lobe of shared parameters would take. A separable lobe
 (``Lobe.separable``: a conductor's ``F(cos β; eta, k)`` (N, C) times ``D·G/(4 ci co)`` (N,)) takes its S tangents
 through the second factor alone and its P through the first alone, not S + P through both: an anisotropic GGX
-conductor's 19 steps on 155,520 pairs (an export's refit) took 2.25 s whole, 1.16 s so (2-core x86-64).
+conductor's 19 steps on 155,520 pairs (an anisotropic export's refit, on its fine grid before 2026-11-28) took 2.25 s
+whole, 1.16 s so (2-core x86-64).
 
 A whole-lobe model (a renderer's own, ``LobeModel.whole``) has the same basis with no albedos in θ: its diffuse albedo
 is 0 and its lobe's 1, so its diffuse and lobe rows carry nothing and its derivative rows carry 1. A lobe whose channels
