@@ -55,6 +55,15 @@ def read_mask(path: str | os.PathLike) -> np.ndarray:
 def read_image(path: str | os.PathLike, scale: float = 1.0) -> np.ndarray:
     """The image at ``path`` as float64, (H, W) or (H, W, C) (module docstring); ``scale``: the value of a 16-bit
     image's 65,535."""
+    return read_rows(path, scale)[0]
+
+
+def read_rows(
+    path: str | os.PathLike, scale: float = 1.0, rows: slice = slice(None)
+) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The ``rows`` of the image at ``path`` as float64 (:func:`read_image`), and the whole image's shape: a
+    ``.npy``'s rows read alone (memory-mapped: a Dask worker reads its band of a capture), any other format's
+    decoded whole first."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in IMAGE_SUFFIXES:
@@ -66,19 +75,20 @@ def read_image(path: str | os.PathLike, scale: float = 1.0) -> np.ndarray:
             image = _exr(path)
         else:
             image = _sixteen_bit(path) * (scale / SIXTEEN_BITS)
-    if image.ndim not in (2, 3) or image.size == 0:
-        raise BrdfInputError(f"{path}: an image of shape {image.shape}; expected (rows, columns[, channels])")
-    return image
+        if image.ndim not in (2, 3) or image.size == 0:
+            raise BrdfInputError(f"{path}: an image of shape {image.shape}; expected (rows, columns[, channels])")
+        return np.asarray(image[rows], dtype=float), image.shape
 
 
 def _npy(path: Path) -> np.ndarray:
+    """A ``.npy`` file's array, memory-mapped (its values read when indexed)."""
     try:
-        array = np.load(path, allow_pickle=False)
+        array = np.load(path, mmap_mode="r", allow_pickle=False)
     except ValueError as error:
         raise BrdfInputError(f"{path}: not a NumPy array file ({error})") from None
     if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
         raise BrdfInputError(f"{path}: values of type {array.dtype}; expected numbers")
-    return np.asarray(array, dtype=float)
+    return array
 
 
 def _exr(path: Path) -> np.ndarray:

@@ -26,7 +26,7 @@ from scipy.ndimage import map_coordinates
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from .capture import Capture
-from .images import SIXTEEN_BITS, is_sixteen_bit, read_image, read_mask
+from .images import SIXTEEN_BITS, is_sixteen_bit, read_image, read_mask, read_rows
 
 #: The smallest cosine of a light's or camera's angle to a texel's normal that is a sample (an 89.9° grazing angle):
 #: below it the cosine's rounding, not the light, decides the value.
@@ -89,7 +89,9 @@ def read_photographs(capture: Capture, texels: np.ndarray | None = None) -> Phot
     radiance = np.empty((len(capture.shots), height * width if held is None else len(held), n_channels), np.float32)
     centres = capture.texel_centres(held)
     for index, shot in enumerate(capture.shots):
-        image = read_image(shot.file, capture.scale)
+        # a rectified photograph's rows that hold the texels (a .npy's read alone); a raw one whole
+        rows = slice(None) if held is None or not len(held) or shot.matrix is not None else _rows(held, width)
+        image, shape = read_rows(shot.file, capture.scale, rows)
         image = image[..., None] if image.ndim == 2 else image
         if image.shape[-1] != n_channels:
             hint = ' (a light\'s "intensity": [1.0] makes a capture of one channel)' if image.shape[-1] == 1 else ""
@@ -100,17 +102,22 @@ def read_photographs(capture: Capture, texels: np.ndarray | None = None) -> Phot
         if saturated is not None:  # before rectifying: a clipped pixel then spoils every texel it is mixed into
             image = np.where(np.any(image >= saturated, axis=-1, keepdims=True), np.nan, image)
         if shot.matrix is None:
-            if image.shape[:2] != capture.shape:
+            if shape[:2] != capture.shape:
                 raise BrdfInputError(
-                    f"{shot.file}: {image.shape[0]} × {image.shape[1]} pixels; the capture's plane has"
+                    f"{shot.file}: {shape[0]} × {shape[1]} pixels; the capture's plane has"
                     f" {height} × {width} texels (give the camera's matrix for an unrectified photograph)"
                 )
-            flat = image.reshape(-1, n_channels)[every]
+            flat = image.reshape(-1, n_channels)[every if rows.start is None else held - rows.start * width]
         else:
             flat = rectified(image, shot.matrix, centres)
         radiance[index] = np.maximum(flat, 0.0)  # NaN stays NaN: np.maximum propagates it
     normals = read_normals(capture)
     return Photographs(capture, radiance, _mask(capture)[every], None if normals is None else normals[every], held)
+
+
+def _rows(texels: np.ndarray, width: int) -> slice:
+    """The rows of a grid ``width`` texels wide that hold ``texels`` (flat indices, ascending), first to last."""
+    return slice(int(texels[0]) // width, int(texels[-1]) // width + 1)
 
 
 def _channels(count: int) -> str:

@@ -8,6 +8,7 @@ import pytest
 
 from brdffit import BrdfInputError
 from brdffit.svbrdf import read_capture
+from brdffit.svbrdf.images import read_rows
 from brdffit.svbrdf.texels import read_photographs, rectified, texel_samples
 
 #: The photographs are held as float32: a value read back lies within 2⁻²⁴ (relative) of the file's, ~6e-8.
@@ -121,9 +122,10 @@ def test_an_unrectified_photograph_is_rectified_by_its_cameras_matrix(tmp_path):
 
 
 def test_photographs_read_at_some_texels_give_those_texels_samples(tmp_path):
-    """A Dask worker reads the photographs at its own texels alone (``read_photographs(capture, texels)``): their
-    samples are those of the photographs read whole, for a rectified photograph and a raw one, under a mask and a
-    normal map, the texels in any order; read at no texel, every photograph is still checked."""
+    """A Dask worker reads the photographs at its own texels alone (``read_photographs(capture, texels)``; a .npy's
+    rows that hold them alone): their samples are those of the photographs read whole, for a rectified photograph and
+    a raw one, under a mask and a normal map, the texels in any order; read at no texel, every photograph is still
+    checked."""
     rng = np.random.default_rng(1)
     shape = (4, 6)
     np.save(tmp_path / "flat.npy", rng.uniform(0.1, 1.0, (*shape, 3)))
@@ -157,6 +159,11 @@ def test_photographs_read_at_some_texels_give_those_texels_samples(tmp_path):
         np.testing.assert_allclose(getattr(ours, name), getattr(theirs, name), rtol=1e-12, atol=0)
     np.testing.assert_array_equal(ours.kept, theirs.kept)
     assert not ours.kept[2].any() and ours.kept[[0, 1, 3, 4]].all()
+    later = np.array([23, 14, 13])  # rows 2 and 3 alone: the .npy's rows read from row 2
+    ours, theirs = texel_samples(read_photographs(capture, later), later), texel_samples(whole, later)
+    np.testing.assert_allclose(ours.values, theirs.values, rtol=1e-12, atol=0)
+    rows, shape = read_rows(tmp_path / "flat.npy", rows=slice(2, 4))
+    assert shape == (4, 6, 3) and np.array_equal(rows, np.load(tmp_path / "flat.npy")[2:4])
     np.save(tmp_path / "flat.npy", np.ones((3, 6, 3)))
     with pytest.raises(BrdfInputError, match=r"flat\.npy: 3 × 6 pixels; the capture's plane has 4 × 6 texels"):
         read_photographs(capture, np.array([], dtype=int))
