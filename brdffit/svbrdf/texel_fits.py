@@ -20,7 +20,7 @@ fitted again from a neighbour's parameters (``neighbours.py``).
 
 import os
 import warnings
-from collections.abc import Callable, Generator
+from collections.abc import Callable, Generator, Sequence
 from contextlib import closing
 from functools import partial
 from pathlib import Path
@@ -48,9 +48,10 @@ from .tiles import TileStore
 
 #: Texels fitted at a time: a tile's samples (32 photographs: about 20 MB) and results are what grows with it.
 TILE_TEXELS = 4096
-#: The most texels one task of a cluster fits (:func:`_tiles_on_cluster`), in tiles of ``tile_texels``: each task
-#: decodes every photograph whole, ~1 s for 32 photographs of 1024² pixels, against ~16 s of fitting at 0.25 ms a
-#: texel; its tiles are kept (``resume``) as it ends, and a worker lost mid-task loses at most this many.
+#: The most texels one task of a cluster fits (:func:`_groups_on_cluster`), in tiles of ``tile_texels``: each task
+#: decodes every EXR, PNG or TIFF photograph whole (a .npy's rows alone), ~1 s for 32 photographs of 1024² pixels,
+#: against ~16 s of fitting at 0.25 ms a texel; its tiles are kept (``resume``) as it ends, and a worker lost
+#: mid-task loses at most this many.
 BAND_TEXELS = 65536
 UNCERTAINTIES = ("laplace",)
 #: A tile's array of the caveats of its first texel that has any (not a map: left out of the maps).
@@ -274,10 +275,8 @@ def _tiles_here(
 def _tiles_on_cluster(
     client, capture: Capture, tiles: list[np.ndarray], store: TileStore, fit_tile: Callable, positive: bool
 ) -> Generator[tuple[int, dict[str, Any]]]:
-    """Each tile's number and arrays, kept from an earlier run or fitted on ``client``'s workers: the tiles not kept
-    cut into bands of consecutive tiles (``cluster.TASKS_PER_WORKER`` bands a worker where there are enough, at most
-    :data:`BAND_TEXELS` texels each), each band one task that reads the photographs at its own texels
-    (:func:`_fit_groups`); each tile kept as its band ends."""
+    """Each tile's number and arrays, kept from an earlier run or fitted on ``client``'s workers
+    (:func:`_groups_on_cluster`); each tile kept as its band ends."""
     pending = []
     for number in range(len(tiles)):
         tile = store.kept(number)
@@ -285,14 +284,11 @@ def _tiles_on_cluster(
             pending.append(number)
         else:
             yield number, tile
-    size = task_size(len(pending), worker_count(client), max(1, BAND_TEXELS // len(tiles[0])))
-    bands = [pending[start : start + size] for start in range(0, len(pending), size)]
-    tasks = [(capture, fit_tile, [(tiles[number], None) for number in band], positive) for band in bands]
-    with closing(on_workers(client, _fit_groups, tasks)) as done:
-        for index, fitted in done:
-            for number, tile in zip(bands[index], fitted, strict=True):
-                store.keep(number, tile)
-                yield number, tile
+    groups = [(tiles[number], None) for number in pending]
+    with closing(_groups_on_cluster(client, capture, groups, fit_tile, positive)) as done:
+        for index, tile in done:
+            store.keep(pending[index], tile)
+            yield pending[index], tile
 
 
 def _refit_on_cluster(
@@ -304,24 +300,38 @@ def _refit_on_cluster(
     positive: bool,
     tile_texels: int,
 ) -> dict[str, np.ndarray]:
-    """The arrays of ``texels`` fitted again from ``starts`` (one each: the neighbour starts) on ``client``'s workers:
-    runs of consecutive ones, cut as :func:`_tiles_on_cluster` cuts its bands, each run one task
-    (:func:`_fit_groups`) of groups of at most ``tile_texels``."""
-    size = task_size(len(texels), worker_count(client), BAND_TEXELS)
+    """The arrays of ``texels`` fitted again from ``starts`` (one each: the neighbour starts) on ``client``'s workers
+    (:func:`_groups_on_cluster`), in runs of consecutive ones: at most ``tile_texels``, and
+    ``cluster.TASKS_PER_WORKER`` runs a worker where there are enough."""
+    size = task_size(len(texels), worker_count(client), tile_texels)
     runs = [np.arange(start, min(start + size, len(texels))) for start in range(0, len(texels), size)]
-    groups = [[run[i : i + tile_texels] for i in range(0, len(run), tile_texels)] for run in runs]
-    tasks = [(capture, fit_tile, [(texels[at], [starts[i] for i in at]) for at in run], positive) for run in groups]
+    groups = [(texels[run], [starts[i] for i in run]) for run in runs]
     columns: dict[str, np.ndarray] = {}
-    with closing(on_workers(client, _fit_groups, tasks)) as done:
-        for index, tiles in done:
-            for at, tile in zip(groups[index], tiles, strict=True):
-                tile.pop(EXAMPLES)
-                _gather(columns, tile, len(texels), at)
+    with closing(_groups_on_cluster(client, capture, groups, fit_tile, positive)) as done:
+        for index, tile in done:
+            tile.pop(EXAMPLES)
+            _gather(columns, tile, len(texels), runs[index])
     return columns
 
 
+def _groups_on_cluster(
+    client, capture: Capture, groups: Sequence[tuple[np.ndarray, list | None]], fit_tile: Callable, positive: bool
+) -> Generator[tuple[int, dict[str, Any]]]:
+    """Each of ``groups`` (texels and their starts, or None: the start search) fitted as a tile on ``client``'s
+    workers, yielded as ``(index of the group, its arrays)``: the groups cut into bands of consecutive ones
+    (``cluster.TASKS_PER_WORKER`` bands a worker where there are enough, at most :data:`BAND_TEXELS` texels each),
+    each band one task that reads the photographs at its own texels (:func:`_fit_groups`)."""
+    largest = max((len(texels) for texels, _ in groups), default=1)
+    size = task_size(len(groups), worker_count(client), max(1, BAND_TEXELS // largest))
+    bands = [range(start, min(start + size, len(groups))) for start in range(0, len(groups), size)]
+    tasks = [(capture, fit_tile, [groups[i] for i in band], positive) for band in bands]
+    with closing(on_workers(client, _fit_groups, tasks)) as done:
+        for index, fitted in done:
+            yield from zip(bands[index], fitted, strict=True)
+
+
 def _fit_groups(
-    capture: Capture, fit_tile: Callable, groups: list[tuple[np.ndarray, list | None]], positive: bool
+    capture: Capture, fit_tile: Callable, groups: Sequence[tuple[np.ndarray, list | None]], positive: bool
 ) -> list[dict[str, Any]]:
     """One task's work, on a worker: the photographs read at the texels of ``groups`` alone, each group's texels
     (flat indices) fitted as a tile, from its starts where it has them."""
