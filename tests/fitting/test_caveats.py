@@ -9,6 +9,8 @@ from catalogue import CASES
 from paths import TAPE
 
 from brdffit import FitWarning, data_synth, fit, get_model, load_samples
+from brdffit._jax import jax
+from brdffit.data.samples import Samples
 from brdffit.fitting.single.caveats import caveats
 
 WARD = CASES[1][2]
@@ -241,6 +243,38 @@ def test_the_bucket_screen_of_padded_stacks_equals_each_fit_screened_alone(oak):
         (alone,) = screen_bucket(model, params[k : k + 1], samples[k : k + 1], 1)
         assert together[k].albedo_open == alone.albedo_open
         np.testing.assert_allclose(together[k].lobe_shares, alone.lobe_shares, rtol=1e-12, atol=1e-15)
+
+
+def test_the_finer_screen_runs_on_the_fits_the_first_leaves_open_and_decides_for_them(oak, monkeypatch):
+    """A bucket of three Ward fits stacked to four: one the first (16 × 32) grid clears, one it leaves open and the
+    64 × 128 grid clears, one both leave open at 30°, 60° and 80°. Each fit's open incidences are those where the
+    smaller of the two grids' bounds reaches the screen's threshold (the first's alone where it cleared every one),
+    and the finer grid runs once, on the two open fits alone (padded to a stack of its own)."""
+    from brdffit.fitting.single import caveats as module
+
+    model = get_model("ward")
+    materials = [(0.2, 0.05, 0.3), (0.5, 0.1, 0.05), (0.7, 0.1, 0.02)]  # rho_d, rho_s, alpha in the first channel
+    params = [model.dictionary.to_params({"rho_d": [d, 0.2], "rho_s": [s, 0.05], "alpha": a}) for d, s, a in materials]
+    samples = [oak.select(np.arange(k, oak.n_samples, 3)) for k in range(3)]
+    samples = [Samples.from_arrays(one.wi, one.wo, one.values[:, :2], source="oak") for one in samples]
+    calls = []
+    real = module._grid_bounds
+
+    def counted(model, stacked, n):
+        calls.append((n, len(stacked.diffuse)))
+        return real(model, stacked, n)
+
+    monkeypatch.setattr(module, "_grid_bounds", counted)
+    screened = module.screen_bucket(model, params, samples, 4)
+    assert calls == [(module.SCREEN_GRID, 2)]  # the two open fits, a stack of two
+    grid = jax.jit(module._grid_bound, static_argnums=(0, 2))
+    expected = []
+    for one in params:
+        first = np.asarray(grid(model, one, module.FIRST_SCREEN_GRID))
+        if np.any(first >= module.SCREEN_BELOW):
+            first = np.minimum(first, np.asarray(grid(model, one, module.SCREEN_GRID)))
+        expected.append(module._incidences_of(tuple(np.any(first >= module.SCREEN_BELOW, axis=1))))
+    assert [one.albedo_open for one in screened] == expected == [(), (), (30.0, 60.0, 80.0)]
 
 
 def test_an_anisotropy_that_in_plane_data_cannot_determine_is_named():
