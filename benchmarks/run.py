@@ -525,6 +525,12 @@ def table(results: dict) -> str:
                     f" {1000 * step['pass_flops'] / step['flops_per_second']:.0f} ms):"
                     f" a step is {per_step / step['bound_seconds']:.1f}× that bound"
                 )
+            if "transform_seconds" in step:  # worker.transform_alone: the loss's transform of every value, alone
+                line += (
+                    "; the loss's transform of every value alone (log1p) takes"
+                    f" {1000 * step['transform_seconds']:.0f} ms:"
+                    f" a step is {per_step / step['transform_seconds']:.1f}× that"
+                )
             lines.append(line)
     posterior = results.get("mcmc")
     if posterior:
