@@ -20,7 +20,6 @@ Where the file's header names a quantity, the check also says whether the data a
 import collections
 import hashlib
 import threading
-from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -135,22 +134,6 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
         ratios[reading] = float(np.median(a[usable] / b[usable])) if np.any(usable) else float("nan")
     header = provenance.header_quantity if provenance is not None else None
     return Reciprocity(len(first), kind, ratios, in_force, float(np.degrees(within)), header)
-
-
-def reciprocity_ahead(samples: Samples) -> Future[Reciprocity | None]:
-    """:func:`reciprocity` of ``samples``, computed from now in a thread while the caller does other work (a fit traces,
-    compiles and solves meanwhile: pairing a MERL-size file's directions is ~0.7 s, most of it in NumPy and the k-d
-    tree, which release the GIL); ``.result()`` waits for it and raises what it raised."""
-    future: Future[Reciprocity | None] = Future()
-
-    def find():
-        try:
-            future.set_result(reciprocity(samples))
-        except BaseException as error:  # handed to the caller of .result(), whose thread reports it
-            future.set_exception(error)
-
-    threading.Thread(target=find, name="brdffit-reciprocity", daemon=True).start()
-    return future
 
 
 def header_contradiction(found: Reciprocity) -> str:

@@ -10,7 +10,7 @@ from paths import SHARED_DATA, TAPE
 from brdffit import data_synth, load_samples, save_samples
 from brdffit.cli import main
 from brdffit.data.quantities import stored_factor
-from brdffit.data.reciprocity import MIN_PAIRS, RECIPROCAL, reciprocity, reciprocity_ahead
+from brdffit.data.reciprocity import MIN_PAIRS, RECIPROCAL, reciprocity
 from brdffit.data.samples import Samples
 from brdffit.errors import FitWarning, InputWarning
 from brdffit.physics.geometry import spherical_to_direction
@@ -47,18 +47,6 @@ def test_brdf_values_are_reciprocal_and_cosine_readings_are_not(brdf_values):
     # Every model here is exactly reciprocal: the median ratio is 1 to rounding.
     assert found.ratios["brdf"] == pytest.approx(1.0, rel=1e-12)
     assert found.ratios["cosine-weighted-in"] < RECIPROCAL[0] < RECIPROCAL[1] < found.ratios["cosine-weighted-out"]
-
-
-def test_the_check_started_ahead_finds_what_the_check_finds_and_raises_what_it_raises(brdf_values):
-    """A fit starts the check in a thread while it solves (``reciprocity_ahead``): its answer is the check's, and an
-    error inside the thread reaches the caller of ``result()``."""
-    cosine = Samples.from_arrays(
-        brdf_values.wi, brdf_values.wo, brdf_values.values * brdf_values.wi[:, 2:3], source="cosine"
-    )
-    for samples in (brdf_values, cosine):
-        assert reciprocity_ahead(samples).result(timeout=60) == reciprocity(samples)
-    with pytest.raises(AttributeError):
-        reciprocity_ahead(None).result(timeout=60)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("quantity", ["cosine-weighted-in", "cosine-weighted-out", "reflectance-factor"])

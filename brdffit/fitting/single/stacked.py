@@ -22,7 +22,6 @@ import numpy as np
 
 from ..._jax import float64, jax
 from ..._programs import built_once, jit
-from ...data.reciprocity import reciprocity_ahead
 from ...data.samples import Samples
 from ...physics.models.model import LobeModel, Model
 from ..objective.losses import Loss
@@ -93,9 +92,6 @@ class StackedFit:
         self.budget = step_budget(max_steps)
         self.caveats = caveats
         self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count)) if caveats else None
-        # One dataset's reciprocity is checked while it is fitted (a MERL-size file's directions take ~0.7 s to pair);
-        # a batch's datasets mostly share their directions, whose pairs the first check keeps for the others.
-        self._reciprocal = [reciprocity_ahead(self.samples[0])] if caveats and len(self.samples) == 1 else None
 
     @float64
     def starts(self, given: np.ndarray | None = None) -> np.ndarray:
@@ -191,11 +187,8 @@ class StackedFit:
                 constraints=constraints,
                 params=fitted,
                 with_caveats=self.caveats,
-                reciprocal=reciprocal,
             )
-            for samples, one, fitted, screened, reciprocal in zip(
-                self.samples, each, params, screens, self._reciprocal or [None] * len(params), strict=True
-            )
+            for samples, one, fitted, screened in zip(self.samples, each, params, screens, strict=True)
         ]
 
 
