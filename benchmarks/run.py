@@ -527,7 +527,7 @@ def table(results: dict) -> str:
                 )
             if "transform_seconds" in step:  # worker.transform_alone: the loss's transform of every value, alone
                 line += (
-                    "; the loss's transform of every value alone (log1p) takes"
+                    "; the loss's transform of every value alone (log1p; the fastest of 7 runs) takes"
                     f" {1000 * step['transform_seconds']:.0f} ms:"
                     f" a step is {per_step / step['transform_seconds']:.1f}× that"
                 )

@@ -163,7 +163,7 @@ def where_the_time_goes(capture: Path) -> dict:
         (texel_fits, "texel_samples", "the texels' samples"),
         (stacked.StackedFit, "starts", "start search (grid, race of the starts)"),
         (stacked.StackedFit, "solve", "solve (Levenberg-Marquardt)"),
-        (stacked, "screen_bucket", "caveats' screens (albedo, lobes; one program)"),
+        (stacked, "screen_bucket", "caveats' screens (albedo, lobes)"),
         (stacked, "result_of", "results (caveats, FitResult; Python)"),
     ]
     originals = []

@@ -142,26 +142,27 @@ def steps(args) -> dict:
     sums = jit(lambda t, p: normal_equations(model, loss, t, p))  # compiled as the solver is (brdffit's options)
     solve = compiled_solver(model, loss, 256)
 
-    def median_seconds(call, repeats):
+    def seconds_of(call, repeats, summary=np.median):
+        """``summary`` (the median; the minimum for a floor) of ``repeats`` timed calls after one to warm up."""
         jax.block_until_ready(call())
         times = []
         for _ in range(repeats):
             clock = time.perf_counter()
             output = jax.block_until_ready(call())
             times.append(time.perf_counter() - clock)
-        return float(np.median(times)), output
+        return float(summary(times)), output
 
-    pass_seconds, _ = median_seconds(lambda: sums(theta, problem), 7)
-    solve_seconds, output = median_seconds(lambda: solve(theta, problem), 3)
+    pass_seconds, _ = seconds_of(lambda: sums(theta, problem), 7)
+    solve_seconds, output = seconds_of(lambda: solve(theta, problem), 3)
     transform = jit(functools.partial(transform_alone, loss))
-    transform_seconds, _ = median_seconds(lambda: transform(problem), 7)
-    n_steps = int(output[2])
-    timed = {"pass_seconds": pass_seconds, "solve_seconds": solve_seconds, "steps": n_steps}
-    return (
-        timed
-        | {"transform_seconds": transform_seconds}
-        | pass_bound(lambda t, p: normal_equations(model, loss, t, p), theta, problem, median_seconds)
-    )
+    transform_seconds, _ = seconds_of(lambda: transform(problem), 7, np.min)  # a floor: its fastest run
+    timed = {
+        "pass_seconds": pass_seconds,
+        "solve_seconds": solve_seconds,
+        "steps": int(output[2]),
+        "transform_seconds": transform_seconds,
+    }
+    return timed | pass_bound(lambda t, p: normal_equations(model, loss, t, p), theta, problem, seconds_of)
 
 
 def transform_alone(loss, problem):
@@ -175,9 +176,8 @@ def transform_alone(loss, problem):
     from brdffit.fitting.objective.problem import chunks
 
     def accumulate(total, chunk):
-        values = (
-            1.01 * chunk.measured
-        )  # model values near the measurements: the transform's cost does not depend on them
+        # model values near the measurements: the transform's cost does not depend on them
+        values = 1.01 * chunk.measured
         return total + jnp.sum(loss.transform(values, chunk.measured, chunk.wi[:, 2:3])), None
 
     return jax.lax.scan(accumulate, jnp.zeros((), problem.measured.dtype), chunks(problem))[0]
@@ -197,7 +197,7 @@ def float64_product_rate(size: int = 1024, repeats: int = 5) -> float:
     return 2 * size**3 / float(np.median(seconds))
 
 
-def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
+def pass_bound(normal_pass, theta, problem, seconds_of) -> dict:
     """(e)'s lower bound of one normal-equation pass on this machine, the larger of two:
 
     * the bytes it must read (every array of the problem, once) at the memory's streaming rate, measured here by a
@@ -214,7 +214,7 @@ def pass_bound(normal_pass, theta, problem, median_seconds) -> dict:
 
     bytes_read = float(sum(np.asarray(leaf).nbytes for leaf in jax.tree.leaves(problem)))
     stream = np.ones(32 * 2**20)  # 256 MB
-    stream_seconds, _ = median_seconds(lambda: stream.sum(), 5)
+    stream_seconds, _ = seconds_of(lambda: stream.sum(), 5)
     bandwidth = stream.nbytes / stream_seconds
     n = problem.wi.shape[0]
     size = chunk_size(n)

@@ -3,14 +3,15 @@
 import re
 import warnings
 
+import jax
 import numpy as np
 import pytest
 from catalogue import CASES
 from paths import TAPE
 
 from brdffit import FitWarning, data_synth, fit, get_model, load_samples
-from brdffit._jax import jax
 from brdffit.data.samples import Samples
+from brdffit.fitting.single import caveats as caveats_module
 from brdffit.fitting.single.caveats import caveats
 
 WARD = CASES[1][2]
@@ -128,8 +129,6 @@ def test_the_screen_changes_no_verdict(name):
     0.002–1.5 or the equivalent exponents), the verdicts equal those of the fine grid alone; both verdicts
     occur, and the screen does skip some. Each of its grids' bounds is checked alone as well: the first grid's
     decides alone where it clears every incidence."""
-    from brdffit.fitting.single import caveats as module
-
     model = get_model(name)
     rng = np.random.default_rng(5)
     skipped = above = 0
@@ -144,17 +143,21 @@ def test_the_screen_changes_no_verdict(name):
             "blinn-phong": {"rho_d": [diffuse], "rho_s": [specular], "n": 2.0 / roughness**2},
         }[name]
         params = model.dictionary.to_params(params)
-        fine, coarse = (np.asarray(a) for a in module._albedo_estimates(model, params, 256))
-        expected = bool(np.any((fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)))
-        assert bool(module._albedo_above_one(model, params, ("y",))) is expected, params
+        fine, coarse = (np.asarray(a) for a in caveats_module._albedo_estimates(model, params, 256))
+        expected = bool(np.any((fine > caveats_module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)))
+        stacked = jax.tree.map(lambda leaf: np.asarray(leaf)[None], params)
+        first_bound = np.asarray(caveats_module._grid_bounds(model, stacked, caveats_module.FIRST_SCREEN_GRID))
+        screen_bound = caveats_module._refined(model, stacked, first_bound)[0]
+        open_incidences = caveats_module._incidences_of(caveats_module._open_patterns(screen_bound[None])[0])
+        assert bool(caveats_module._albedo_above_one(model, params, ("y",), open_incidences)) is expected, params
         above += expected
-        per_incidence = (fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)
+        per_incidence = (fine > caveats_module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)
         screen, first, second = (
-            np.all(np.asarray(bound) < module.SCREEN_BELOW, axis=1)
+            np.all(np.asarray(bound) < caveats_module.SCREEN_BELOW, axis=1)
             for bound in (
-                module._screen_bound(model, params),
-                module._grid_bound(model, params, module.FIRST_SCREEN_GRID),
-                module._grid_bound(model, params, module.SCREEN_GRID),
+                screen_bound,
+                first_bound[0],
+                caveats_module._grid_bound(model, params, caveats_module.SCREEN_GRID),
             )
         )
         for cleared in (screen, first, second):
@@ -182,24 +185,21 @@ def test_neither_screen_grid_clears_an_albedo_above_one_over_the_whole_domain(na
     (:data:`FIRST_SCREEN_GRID`, :data:`SCREEN_GRID`) is never one where the fine grid finds the albedo above the
     limit. Written on 2026-11-27, when one seeded draw of this kind over the 9 models (3,600 materials) found none
     wrongly cleared, the first grid clearing every incidence of 1,116 of them, the second of 1,410."""
-    import jax
-
-    from brdffit.fitting.single import caveats as module
-
     model = get_model(name)
     rng = np.random.default_rng(11)
     bounds = [
-        jax.jit(lambda p, n=n: module._grid_bound(model, p, n)) for n in (module.FIRST_SCREEN_GRID, module.SCREEN_GRID)
+        jax.jit(lambda p, n=n: caveats_module._grid_bound(model, p, n))
+        for n in (caveats_module.FIRST_SCREEN_GRID, caveats_module.SCREEN_GRID)
     ]
     checked = found_above = 0
     for _ in range(400):
         params = model.unconstrained.to_params(rng.normal(0.0, 2.0, model.unconstrained.size(1)), 1)
-        fine, coarse = (np.asarray(a) for a in module._albedo_estimates(model, params, 256))
+        fine, coarse = (np.asarray(a) for a in caveats_module._albedo_estimates(model, params, 256))
         if not np.all(np.isfinite(fine)):
             continue
-        above = ((fine > module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)).any(axis=1)
+        above = ((fine > caveats_module.ALBEDO_LIMIT) & (np.abs(fine - coarse) <= 0.01 * fine)).any(axis=1)
         for bound in bounds:
-            cleared = np.all(np.asarray(bound(params)) < module.SCREEN_BELOW, axis=1)
+            cleared = np.all(np.asarray(bound(params)) < caveats_module.SCREEN_BELOW, axis=1)
             assert not np.any(above & cleared), model.physical.from_params(params)
         checked += 1
         found_above += bool(above.any())
@@ -217,13 +217,11 @@ def test_the_albedo_at_normal_incidence_is_exact_for_normalised_phong(n):
     ``rho_s h² (n+2)/24`` (9.8e-4 of rho_s at n = 10⁴); for the diffuse term, ``g = 2 rho_d cos θ sin θ``,
     ``rho_d h²/6``. The tolerance is 1.5× their sum, plus 1e-12. The (cos θo, φo) grid of the same size put its
     first row over the whole lobe: 0.700 instead of 0.9 for Blinn-Phong at n = 3,000."""
-    from brdffit.fitting.single import caveats as module
-
     model = get_model("phong")
     rho_d, rho_s = np.array([0.3, 0.05]), np.array([0.6, 0.9])
     params = model.dictionary.to_params({"rho_d": rho_d.tolist(), "rho_s": rho_s.tolist(), "n": n})
-    fine, _ = (np.asarray(a) for a in module._axial_quadrature(model, params, module.SCREEN_GRID))
-    h = module._axial_row_width(module.SCREEN_GRID)
+    fine, _ = (np.asarray(a) for a in caveats_module._axial_quadrature(model, params, caveats_module.SCREEN_GRID))
+    h = caveats_module._axial_row_width(caveats_module.SCREEN_GRID)
     allowed = 1.5 * h**2 / 24 * (rho_s * (n + 2) + 4 * rho_d) + 1e-12
     assert np.all(np.abs(fine - (rho_d + rho_s)) <= allowed), (fine, allowed)
 
@@ -231,50 +229,72 @@ def test_the_albedo_at_normal_incidence_is_exact_for_normalised_phong(n):
 def test_the_bucket_screen_of_padded_stacks_equals_each_fit_screened_alone(oak):
     """Screening three fits stacked to four (the fourth a copy, its padding rows masked) gives each fit what it gets
     stacked alone: the same open incidences and lobe shares (1e-12: the same arithmetic, one row of a stack)."""
-    from brdffit.fitting.single.caveats import screen_bucket
-
     samples = [oak.select(np.arange(k, oak.n_samples, 3)) for k in range(3)]
     model = get_model("ward")
     params = [
         model.dictionary.to_params(WARD | {"rho_s": [0.3 * k, 0.2, 0.1], "alpha": 0.02 + 0.1 * k}) for k in range(3)
     ]
-    together = screen_bucket(model, params, samples, 4)
+    together = caveats_module.screen_bucket(model, params, samples, 4)
     for k in range(3):
-        (alone,) = screen_bucket(model, params[k : k + 1], samples[k : k + 1], 1)
+        (alone,) = caveats_module.screen_bucket(model, params[k : k + 1], samples[k : k + 1], 1)
         assert together[k].albedo_open == alone.albedo_open
         np.testing.assert_allclose(together[k].lobe_shares, alone.lobe_shares, rtol=1e-12, atol=1e-15)
 
 
 def test_the_finer_screen_runs_on_the_fits_the_first_leaves_open_and_decides_for_them(oak, monkeypatch):
-    """A bucket of three Ward fits stacked to four: one the first (16 × 32) grid clears, one it leaves open and the
-    64 × 128 grid clears, one both leave open at 30°, 60° and 80°. Each fit's open incidences are those where the
+    """A bucket of four Ward fits stacked to five: one the first (16 × 32) grid clears, one it leaves open and the
+    64 × 128 grid clears, two both leave open at 30°, 60° and 80°. Each fit's open incidences are those where the
     smaller of the two grids' bounds reaches the screen's threshold (the first's alone where it cleared every one),
-    and the finer grid runs once, on the two open fits alone (padded to a stack of its own)."""
-    from brdffit.fitting.single import caveats as module
-
+    and the finer grid runs once, on the three open fits alone, padded with the first of them to a stack of four."""
     model = get_model("ward")
-    materials = [(0.2, 0.05, 0.3), (0.5, 0.1, 0.05), (0.7, 0.1, 0.02)]  # rho_d, rho_s, alpha in the first channel
+    materials = [(0.2, 0.05, 0.3), (0.5, 0.1, 0.05), (0.7, 0.1, 0.02), (0.8, 0.1, 0.021)]  # rho_d, rho_s, alpha
     params = [model.dictionary.to_params({"rho_d": [d, 0.2], "rho_s": [s, 0.05], "alpha": a}) for d, s, a in materials]
-    samples = [oak.select(np.arange(k, oak.n_samples, 3)) for k in range(3)]
+    samples = [oak.select(np.arange(k, oak.n_samples, 4)) for k in range(4)]
     samples = [Samples.from_arrays(one.wi, one.wo, one.values[:, :2], source="oak") for one in samples]
-    calls = []
-    real = module._grid_bounds
+    sent = []
+    real = caveats_module._grid_bounds
 
     def counted(model, stacked, n):
-        calls.append((n, len(stacked.diffuse)))
+        sent.append((n, [float(alpha) for alpha in np.ravel(stacked.shape["alpha"])]))
         return real(model, stacked, n)
 
-    monkeypatch.setattr(module, "_grid_bounds", counted)
-    screened = module.screen_bucket(model, params, samples, 4)
-    assert calls == [(module.SCREEN_GRID, 2)]  # the two open fits, a stack of two
-    grid = jax.jit(module._grid_bound, static_argnums=(0, 2))
+    monkeypatch.setattr(caveats_module, "_grid_bounds", counted)
+    screened = caveats_module.screen_bucket(model, params, samples, 5)
+    assert sent == [(caveats_module.SCREEN_GRID, [0.05, 0.02, 0.021, 0.05])]
+    grid = jax.jit(caveats_module._grid_bound, static_argnums=(0, 2))
     expected = []
     for one in params:
-        first = np.asarray(grid(model, one, module.FIRST_SCREEN_GRID))
-        if np.any(first >= module.SCREEN_BELOW):
-            first = np.minimum(first, np.asarray(grid(model, one, module.SCREEN_GRID)))
-        expected.append(module._incidences_of(tuple(np.any(first >= module.SCREEN_BELOW, axis=1))))
-    assert [one.albedo_open for one in screened] == expected == [(), (), (30.0, 60.0, 80.0)]
+        first = np.asarray(grid(model, one, caveats_module.FIRST_SCREEN_GRID))
+        if np.any(first >= caveats_module.SCREEN_BELOW):
+            first = np.minimum(first, np.asarray(grid(model, one, caveats_module.SCREEN_GRID)))
+        expected.append(caveats_module._incidences_of(tuple(np.any(first >= caveats_module.SCREEN_BELOW, axis=1))))
+    assert [one.albedo_open for one in screened] == expected == [(), (), (30.0, 60.0, 80.0), (30.0, 60.0, 80.0)]
+
+
+@pytest.mark.parametrize("open_rows", [[], [1], [0, 2, 3], [0, 1, 2, 3, 4]])
+def test_the_second_grid_takes_the_smaller_bound_on_the_open_fits_alone(monkeypatch, open_rows):
+    """``_refined`` on made-up bounds (5 fits, 4 incidences, 2 channels) and a made-up second grid that gives each fit
+    its row number plus 0.5 at some entries: the open fits (a bound at the threshold) are sent alone, padded with
+    the first to a power of two no larger than the stack; each gets the smaller of its two bounds, entry by entry
+    (an entry the second grid puts above the first keeps the first's); the others keep theirs, untouched."""
+    rng = np.random.default_rng(3)
+    bounds = rng.uniform(0.1, 0.9, (5, 4, 2))
+    for row in open_rows:
+        bounds[row, row % 4, 1] = caveats_module.SCREEN_BELOW
+    second_of = rng.uniform(0.0, 1.2, (5, 4, 2))
+    sent = []
+
+    def second_grid(model, stacked, n):
+        sent.append(list(stacked["row"]))
+        return second_of[stacked["row"]]
+
+    monkeypatch.setattr(caveats_module, "_grid_bounds", second_grid)
+    refined = caveats_module._refined(None, {"row": np.arange(5)}, bounds.copy())
+    size = min(1 << max(len(open_rows) - 1, 0).bit_length(), 5)
+    assert sent == ([] if not open_rows else [[*open_rows, *[open_rows[0]] * (size - len(open_rows))]])
+    for row in range(5):
+        wanted = np.minimum(bounds[row], second_of[row]) if row in open_rows else bounds[row]
+        np.testing.assert_array_equal(refined[row], wanted)
 
 
 def test_an_anisotropy_that_in_plane_data_cannot_determine_is_named():

@@ -44,7 +44,7 @@ EDGE = 1e-6
 ALBEDO_INCIDENCE = (0.0, 30.0, 60.0, 80.0)
 #: A directional albedo counts as above 1 beyond this (quadrature rounds), and only where two grids agree.
 ALBEDO_LIMIT = 1.005
-#: The screening grid's n (n × 2n viewing directions per incidence), and the bound (``_screen_bound``) below which
+#: The screening grid's n (n × 2n viewing directions per incidence), and the bound (``_refined``) below which
 #: the fine grid is not evaluated: 5% under the limit, for the bound's own guesswork.
 SCREEN_GRID = 64
 SCREEN_BELOW = 0.95
@@ -310,19 +310,15 @@ def _domain_table(model: Model, channels: tuple[str, ...]) -> DomainTable:
 
 
 def _albedo_above_one(
-    model: Model, params: Params, channels: tuple[str, ...], open_incidences: tuple[float, ...] | None = None
+    model: Model, params: Params, channels: tuple[str, ...], open_incidences: tuple[float, ...]
 ) -> list[str]:
     """The directional albedo ``∫ f cos θo dωo`` by midpoint quadrature in ``(cos θo, φo)``; a value above
     :data:`ALBEDO_LIMIT` counts only where the grid's even points alone (a grid half as fine) agree within 1%,
     i.e. where the grid resolves the lobe.
 
     The fine grid (256 × 512 viewing directions per incidence; half that for an isotropic model) is evaluated only
-    at the incidences where a screen (:func:`_screen_bound`: 16 × 32 directions, then 64 × 128) cannot rule an albedo
-    above the limit out; ``open_incidences``: those incidences, when :func:`screen_bucket` screened many fits at
-    once."""
-    if open_incidences is None:
-        screened = _screen_bound(model, params) if _screenable(model) else None
-        open_incidences = ALBEDO_INCIDENCE if screened is None else _open_incidences(np.asarray(screened))
+    at ``open_incidences``, those where the screen (:func:`screen_bucket`: 16 × 32 directions, then 64 × 128) cannot
+    rule an albedo above the limit out."""
     if not open_incidences:
         return []
     fine, coarse = (np.asarray(estimate) for estimate in _albedo_estimates(model, params, 256, open_incidences))
@@ -339,7 +335,7 @@ def _albedo_above_one(
 
 
 class Screened(NamedTuple):
-    """What :func:`screen_bucket` found for one fit: the incidences its albedo screen left open (:func:`_screen_bound`;
+    """What :func:`screen_bucket` found for one fit: the incidences its albedo screen left open (:func:`_refined`;
     none: cleared; all of them for a model the screen does not apply to), each lobe's largest share (K,)."""
 
     albedo_open: tuple[float, ...]
@@ -387,11 +383,6 @@ def _bucket_screens(model: LobeModel, stacked: Params, wi, wo, real):
     return jax.lax.map(one, (stacked, wi, wo, real))
 
 
-def _open_incidences(bounds: np.ndarray) -> tuple[float, ...]:
-    """The incidences whose screen bound (incidences, C) reaches :data:`SCREEN_BELOW` in some channel."""
-    return _incidences_of(_open_patterns(bounds[None])[0])
-
-
 def _open_patterns(bounds: np.ndarray) -> list[tuple[bool, ...]]:
     """For each of a stack of screen bounds (D, incidences, C), which incidences reach :data:`SCREEN_BELOW` in some
     channel."""
@@ -410,24 +401,19 @@ def _screenable(model: Model) -> TypeGuard[LobeModel]:
     return isinstance(model, LobeModel) and model.lobe is not None and model.lobe.peaks_at_mirror
 
 
-def _screen_bound(model: LobeModel, params: Params) -> np.ndarray:
-    """A generous bound (incidences, C) on the directional albedo of ``model`` with ``params`` (numpy):
-    :func:`_grid_bound` on the :data:`FIRST_SCREEN_GRID` grid, and where that leaves an incidence open, the smaller of
-    it and the bound on the :data:`SCREEN_GRID` grid (:func:`_refined`)."""
-    stacked = jax.tree.map(lambda leaf: np.asarray(leaf)[None], params)
-    return _refined(model, stacked, np.asarray(_grid_bounds(model, stacked, FIRST_SCREEN_GRID)))[0]
-
-
 def _refined(model: LobeModel, stacked: Params, bounds: np.ndarray) -> np.ndarray:
     """``bounds`` (D, incidences, C), the first screen's of the first D fits of ``stacked`` (numpy, leading axis ≥ D),
     where it cleared every incidence; for a fit where it left one open, the smaller of it and the bound on the
-    :data:`SCREEN_GRID` grid (both are bounds). The second grid is a program of its own, run on those fits alone:
-    as a branch of the first screen's program it doubled that program's compilation (a MERL-size Ward fit's screens
-    0.77 s of tracing and compiling, 0.40 s without it), and most fits never take it."""
+    :data:`SCREEN_GRID` grid (both are bounds). The second grid is a program of its own, run on those fits alone,
+    their count padded (with the first of them) to a power of two, at most the stack's: a program for each of a few
+    shapes, compiled the first time one is needed. As a branch of the first screen's program it doubled that
+    program's compilation (a MERL-size Ward fit's screens: 0.77 s of tracing and compiling, 0.40 s without it), and
+    most fits never take it."""
     rows = np.flatnonzero(np.any(bounds >= SCREEN_BELOW, axis=(1, 2)))
     if not len(rows):
         return bounds
-    chosen = np.concatenate([rows, np.repeat(rows[:1], padded_size(len(rows)) - len(rows))])  # few program shapes
+    size = min(1 << (len(rows) - 1).bit_length(), len(jax.tree.leaves(stacked)[0]))
+    chosen = np.concatenate([rows, np.repeat(rows[:1], size - len(rows))])
     second = np.asarray(_grid_bounds(model, jax.tree.map(lambda leaf: leaf[chosen], stacked), SCREEN_GRID))
     refined = bounds.copy()
     refined[rows] = np.minimum(bounds[rows], second[: len(rows)])

@@ -8,7 +8,8 @@ texels of a capture pay no Python per dataset and per solver step; a single fit 
    step budget;
 2. solve (:meth:`StackedFit.solve`): Levenberg-Marquardt from the winner on every sample (float32 fits: refined in
    float64 after; a parameter pulled beyond its bound: solved again on it);
-3. caveats and results (:meth:`StackedFit.results`): the caveats' screens of every dataset in one program.
+3. caveats and results (:meth:`StackedFit.results`): the caveats' screens of every dataset in one program (and, for
+   the fits its albedo screen leaves open, a finer grid in another, ``caveats._refined``).
 
 Inside a program the datasets are solved one after another (``lax.map``) on a CPU, where a vectorised
 while-loop would run every fit until the slowest ends; on a GPU all at once (``vmap``), which fills the device.
@@ -165,7 +166,8 @@ class StackedFit:
         self, solved, *, max_theta: float | None = None, constraints: Constraints | None = None
     ) -> list[FitResult]:
         """The :class:`FitResult` of each dataset's ``solved`` (:meth:`solve`), with its caveats: the screens of all
-        of them in one program, compiled while they were solved."""
+        of them in one program, compiled while they were solved (and the albedo screen's finer grid for the fits its
+        first grid leaves open, ``caveats.screen_bucket``)."""
         leaves, structure = jax.tree.flatten(solved)  # flattened once, not once a dataset: a tile has thousands
         each = [structure.unflatten([leaf[p] for leaf in leaves]) for p in range(len(self.samples))]
         n_channels = self.samples[0].n_channels
