@@ -77,7 +77,10 @@ def read_rows(
             image = _sixteen_bit(path) * (scale / SIXTEEN_BITS)
         if image.ndim not in (2, 3) or image.size == 0:
             raise BrdfInputError(f"{path}: an image of shape {image.shape}; expected (rows, columns[, channels])")
-        return np.asarray(image[rows], dtype=float), image.shape
+        taken = image[rows]
+        # a memory-mapped file's rows are read into an array of their own now: none stays tied to the open file
+        taken = np.array(taken, dtype=float) if isinstance(image, np.memmap) else np.asarray(taken, dtype=float)
+        return taken, image.shape
 
 
 def _npy(path: Path) -> np.ndarray:

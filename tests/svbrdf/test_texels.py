@@ -8,7 +8,7 @@ import pytest
 
 from brdffit import BrdfInputError
 from brdffit.svbrdf import read_capture
-from brdffit.svbrdf.images import read_rows
+from brdffit.svbrdf.images import read_image, read_rows
 from brdffit.svbrdf.texels import read_photographs, rectified, texel_samples
 
 #: The photographs are held as float32: a value read back lies within 2⁻²⁴ (relative) of the file's, ~6e-8.
@@ -164,6 +164,9 @@ def test_photographs_read_at_some_texels_give_those_texels_samples(tmp_path):
     np.testing.assert_allclose(ours.values, theirs.values, rtol=1e-12, atol=0)
     rows, shape = read_rows(tmp_path / "flat.npy", rows=slice(2, 4))
     assert shape == (4, 6, 3) and np.array_equal(rows, np.load(tmp_path / "flat.npy")[2:4])
+    whole_image = read_image(tmp_path / "flat.npy")
+    for read in (rows, whole_image):  # arrays of their own, as a decoded image is: not views of the mapped file
+        assert read.flags.owndata and read.flags.writeable and not isinstance(read, np.memmap)
     np.save(tmp_path / "flat.npy", np.ones((3, 6, 3)))
     with pytest.raises(BrdfInputError, match=r"flat\.npy: 3 × 6 pixels; the capture's plane has 4 × 6 texels"):
         read_photographs(capture, np.array([], dtype=int))
