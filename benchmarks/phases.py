@@ -48,7 +48,7 @@ PHASES = {
     "starts": "start search (grid, race)",
     "solve": "Levenberg-Marquardt solve",
     "screens": "caveats: screens (lobe shares, directional albedo)",
-    "reciprocity": "caveats: reciprocity",
+    "reciprocity": "caveats: reciprocity (what the main thread waits for)",
     "result": "the result and its other caveats",
     "write": "writing the result",
     "other": "the rest of the command (parsing, checks, printing)",
@@ -121,6 +121,7 @@ def instrument(spans: Spans) -> None:
     spans.wrap(stacked.StackedFit, "solve", "solve")
     spans.wrap(stacked, "screen_bucket", "screens")
     spans.wrap(caveats, "_not_reciprocal", "reciprocity")
+    spans.wrap(stacked.StackedFit, "_reciprocity_checked", "reciprocity")  # a single fit's check runs in a thread
     spans.wrap(stacked, "result_of", "result")
     spans.wrap(result.FitResult, "save", "write")
     spans.wrap_programs(stored, "stored_program")

@@ -10,7 +10,7 @@ from paths import SHARED_DATA, TAPE
 from brdffit import data_synth, load_samples, save_samples
 from brdffit.cli import main
 from brdffit.data.quantities import stored_factor
-from brdffit.data.reciprocity import MIN_PAIRS, RECIPROCAL, reciprocity
+from brdffit.data.reciprocity import MIN_PAIRS, RECIPROCAL, reciprocity, reciprocity_ahead
 from brdffit.data.samples import Samples
 from brdffit.errors import FitWarning, InputWarning
 from brdffit.physics.geometry import spherical_to_direction
@@ -47,6 +47,18 @@ def test_brdf_values_are_reciprocal_and_cosine_readings_are_not(brdf_values):
     # Every model here is exactly reciprocal: the median ratio is 1 to rounding.
     assert found.ratios["brdf"] == pytest.approx(1.0, rel=1e-12)
     assert found.ratios["cosine-weighted-in"] < RECIPROCAL[0] < RECIPROCAL[1] < found.ratios["cosine-weighted-out"]
+
+
+def test_the_check_started_ahead_finds_what_the_check_finds_and_raises_what_it_raises(brdf_values):
+    """A fit starts the check in a thread while it compiles (``reciprocity_ahead``): its answer is the check's, and an
+    error inside the thread reaches the caller of ``result()``."""
+    cosine = Samples.from_arrays(
+        brdf_values.wi, brdf_values.wo, brdf_values.values * brdf_values.wi[:, 2:3], source="cosine"
+    )
+    for samples in (brdf_values, cosine):
+        assert reciprocity_ahead(samples).result(timeout=60) == reciprocity(samples)
+    with pytest.raises(AttributeError):
+        reciprocity_ahead(None).result(timeout=60)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("quantity", ["cosine-weighted-in", "cosine-weighted-out", "reflectance-factor"])
@@ -218,6 +230,69 @@ def test_a_few_samples_pair_as_a_k_d_tree_pairs_them(monkeypatch, general):
     np.testing.assert_array_equal(few[0], tree[0])
     np.testing.assert_array_equal(few[1], tree[1])
     assert few[2] == pytest.approx(tree[2], rel=1e-12)
+
+
+def jittered_swaps(count: int, seed: int):
+    """``count`` random direction pairs with ``θi < θo`` and each again with its directions swapped, jittered by ~0.05°:
+    ~``count`` reciprocal pairs, spread over every ``cos θi − cos θo``."""
+    rng = np.random.default_rng(seed)
+    wi, wo = data_synth.uniform_random(count, seed=seed)
+    wi, wo = np.where(wi[:, 2:] > wo[:, 2:], wi, wo), np.where(wi[:, 2:] > wo[:, 2:], wo, wi)
+    wi, wo = np.concatenate([wi, wo]), np.concatenate([wo, wi])
+    jitter = [w + rng.normal(0.0, np.radians(0.05), w.shape) for w in (wi, wo)]
+    wi, wo = (w / np.linalg.norm(w, axis=1, keepdims=True) for w in jitter)
+    above = (wi[:, 2] > 0.01) & (wo[:, 2] > 0.01)  # jitter took a few grazing ones below the horizon
+    return Samples.from_arrays(wi[above], wo[above], np.ones((np.count_nonzero(above), 1)))
+
+
+@pytest.mark.parametrize("general", [True, False])
+def test_pairing_band_by_band_finds_what_one_tree_finds(monkeypatch, general):
+    """A large file is paired band by band of cos θi − cos θo (BAND_SAMPLES a tree): the same pairs and tolerance as
+    one tree of every sample, on ~6,000 samples in 24 bands, their pairs straddling the bands' edges."""
+    from brdffit.data import reciprocity as module
+
+    samples = jittered_swaps(3000, seed=5)
+    whole = module._paired(samples, general)
+    monkeypatch.setattr(module, "BAND_SAMPLES", 250)
+    assert len(module._bands(module._cosine_difference(samples))) == 24
+    banded = module._paired(samples, general)
+    assert len(whole[0]) >= 2000
+    np.testing.assert_array_equal(banded[0], whole[0])
+    np.testing.assert_array_equal(banded[1], whole[1])
+    assert banded[2] == whole[2]  # the same distances, from trees over other points
+
+
+def test_bands_hold_every_sample_once_where_differences_repeat(monkeypatch):
+    """A grid's cos θi − cos θo repeats, so quantiles can coincide: no band is empty, every sample is in one."""
+    from brdffit.data import reciprocity as module
+
+    monkeypatch.setattr(module, "BAND_SAMPLES", 10)
+    difference = np.repeat([-0.5, 0.0, 0.0, 0.0, 0.25], 20)
+    bands = module._bands(difference)
+    assert all(len(band) for band in bands)
+    np.testing.assert_array_equal(np.sort(np.concatenate(bands)), np.arange(len(difference)))
+
+
+def test_the_spacing_needs_no_neighbour_beyond_its_reach():
+    """The spacing's neighbours are looked up within SPACING_REACH alone: any distance beyond it, written as inf, gives
+    the same tolerance, also where the median straddles the reach (4,096 rows of 9 distances around it, some the
+    sample itself again, some rows all itself)."""
+    from brdffit.data import reciprocity as module
+
+    rng = np.random.default_rng(6)
+    for scale in (0.25, 0.5, 1.0, 1.5, 3.0):
+        nearest = np.sort(rng.uniform(0.0, 2 * scale * module.SPACING_REACH, (4096, 9)), axis=1)
+        nearest[:300, :2] = 0.0  # measured twice
+        nearest[300:310] = 0.0  # nothing but itself
+        unseen = np.where(nearest > module.SPACING_REACH, np.inf, nearest)
+        assert module.tolerance(unseen) == module.tolerance(nearest)
+    # The median's two middle values straddle the reach, the lower far below it: their mean is just over half the
+    # reach, which is still beyond the cap's spacing (2 · MAX_TOLERANCE / SPACING_FRACTION) by 11 %.
+    rows = np.full((4096, 9), 1.01 * module.SPACING_REACH)
+    rows[:2048, 0] = 0.1 * module.SPACING_REACH
+    rows = np.sort(rows, axis=1)
+    assert module.tolerance(rows) == module.MAX_TOLERANCE
+    assert module.tolerance(np.where(rows > module.SPACING_REACH, np.inf, rows)) == module.MAX_TOLERANCE
 
 
 def test_fewer_firsts_than_pairs_say_nothing_at_once(monkeypatch):

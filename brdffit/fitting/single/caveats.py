@@ -19,6 +19,7 @@
 import functools
 import re
 from collections.abc import Sequence
+from concurrent.futures import Future
 from dataclasses import replace
 from typing import NamedTuple, TypeGuard
 
@@ -28,7 +29,7 @@ import numpy as np
 
 from ..._jax import float64
 from ..._programs import jit
-from ...data.reciprocity import header_contradiction, reciprocity
+from ...data.reciprocity import Reciprocity, header_contradiction, reciprocity
 from ...data.samples import Samples
 from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
@@ -70,11 +71,14 @@ def caveats(
     *,
     screened: "Screened | None" = None,
     held: frozenset[str] = frozenset(),
+    reciprocal: Future[Reciprocity | None] | None = None,
 ) -> list[str]:
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
-    ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once."""
-    found = _not_reciprocal(samples) + _anisotropy_undetermined(model, samples, held)
+    ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once;
+    ``reciprocal``: the reciprocity of ``samples`` when the caller started it earlier (``reciprocity_ahead``)."""
+    found = _not_reciprocal(reciprocity(samples) if reciprocal is None else reciprocal.result())
+    found += _anisotropy_undetermined(model, samples, held)
     found += _coat_undetermined(model, samples, held) + _sheen_undetermined(model, samples, held)
     checked = as_fitted(model, params)
     if checked is not model:  # screened by the caller as the isotropic model its fit is not: again, as it is
@@ -104,8 +108,8 @@ def lobe_name(model: LobeModel, params: Params, k: int) -> str:
     return f"lobe {k + 1} ({shape})"
 
 
-def _not_reciprocal(samples: Samples) -> list[str]:
-    found = reciprocity(samples)
+def _not_reciprocal(found: Reciprocity | None) -> list[str]:
+    """The caveat of samples whose values as read are not reciprocal, from what their check found."""
     if found is None or found.reciprocal:
         return []
     advice = f"read them with --quantity {found.best} (quantity='{found.best}' in Python)"

@@ -17,12 +17,14 @@ while-loop would run every fit until the slowest ends; on a GPU all at once (``v
 
 import threading
 from collections.abc import Callable, Sequence
+from concurrent import futures
 from functools import partial
 
 import numpy as np
 
 from ..._jax import float64, jax
 from ..._programs import built_once, jit
+from ...data.reciprocity import reciprocity_ahead
 from ...data.samples import Samples
 from ...physics.models.model import LobeModel, Model
 from ..objective.losses import Loss
@@ -93,6 +95,11 @@ class StackedFit:
         self.budget = step_budget(max_steps)
         self.caveats = caveats
         self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count)) if caveats else None
+        # One dataset's reciprocity is checked while its programs trace and compile (a MERL-size file's directions take
+        # ~0.6 s to pair); a batch's datasets mostly share their directions, whose pairs the first check keeps for the
+        # others. The solve runs once it is done (:meth:`solve`): its k-d trees (~60 MB at MERL size) and the solve's
+        # arrays never meet, and a MERL-size fit's peak memory stays that of its solve.
+        self._reciprocal = [reciprocity_ahead(self.samples[0])] if caveats and len(self.samples) == 1 else None
 
     @float64
     def starts(self, given: np.ndarray | None = None) -> np.ndarray:
@@ -149,6 +156,10 @@ class StackedFit:
         start (:meth:`starts`): Levenberg-Marquardt on every sample, then a float32 fit refined in float64, and a
         bounded parameter that ended near its bound solved again on it (:func:`onto_bounds`)."""
         samples, count, holds = self.samples, self.count, self.holds
+        if self._reciprocal is not None:  # compiled beside the check, run after it
+            if not self.solver.is_compiled(thetas, self.problems, holds, self.budget):
+                self.solver.precompile(thetas, self.problems, holds, self.budget)
+            self._reciprocity_checked()
         solved = _best(self.solver(thetas, self.problems, holds, self.budget))
         solver64, problems64 = self.solver, self.problems
         if self.dtype == "float32":
@@ -162,6 +173,10 @@ class StackedFit:
         self.problems = None  # the results need none of it: its memory (~110 MB at MERL size) back before the caveats
         return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
 
+    def _reciprocity_checked(self) -> None:
+        """Wait for the reciprocity check started with the fit (``reciprocity_ahead``), if it is still under way."""
+        futures.wait(self._reciprocal or [])
+
     def results(
         self, solved, *, max_theta: float | None = None, constraints: Constraints | None = None
     ) -> list[FitResult]:
@@ -173,6 +188,9 @@ class StackedFit:
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
         screens: Sequence[Screened | None] = [None] * len(params)
+        reciprocals: Sequence[futures.Future | None] = [None] * len(params)
+        if self._reciprocal is not None:  # started with the fit (``reciprocity_ahead``)
+            reciprocals = self._reciprocal
         if self._screen_compiling is not None:  # with caveats
             self._screen_compiling.join()
             screens = screen_bucket(self.model, params, self.samples, self.count)
@@ -189,8 +207,11 @@ class StackedFit:
                 constraints=constraints,
                 params=fitted,
                 with_caveats=self.caveats,
+                reciprocal=reciprocal,
             )
-            for samples, one, fitted, screened in zip(self.samples, each, params, screens, strict=True)
+            for samples, one, fitted, screened, reciprocal in zip(
+                self.samples, each, params, screens, reciprocals, strict=True
+            )
         ]
 
 
