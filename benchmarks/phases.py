@@ -120,7 +120,7 @@ def instrument(spans: Spans) -> None:
     spans.wrap(stacked.StackedFit, "starts", "starts")
     spans.wrap(stacked.StackedFit, "solve", "solve")
     spans.wrap(stacked, "screen_bucket", "screens")
-    spans.wrap(caveats, "_not_reciprocal", "reciprocity")
+    spans.wrap(caveats, "reciprocity", "reciprocity")  # where a fit checks after its solve (many datasets at once)
     spans.wrap(stacked.StackedFit, "_reciprocity_checked", "reciprocity")  # a single fit's check runs in a thread
     spans.wrap(stacked, "result_of", "result")
     spans.wrap(result.FitResult, "save", "write")

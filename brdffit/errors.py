@@ -14,10 +14,12 @@ result's ``fit.warnings``) and :class:`UncertaintyWarning` (an estimate that nee
 an undetermined parameter, a short chain; also the result's ``uncertainty.warnings``).
 """
 
+import contextlib
 import os
 import sys
+import threading
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from types import FrameType
 
@@ -94,12 +96,34 @@ _PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
 def warn(warning: Warning) -> None:
     """Issue ``warning`` at the line of the code that called brdffit (the first frame outside this package), so that the
     message, and a filter by module, name the user's line rather than brdffit's own (Python 3.12's
-    ``skip_file_prefixes``, for 3.11 as well)."""
+    ``skip_file_prefixes``, for 3.11 as well). Inside :func:`warnings_deferred` on this thread: kept, not issued."""
+    kept = getattr(_deferred, "warnings", None)
+    if kept is not None:
+        kept.append(warning)
+        return
     frame: FrameType | None
     frame, level = sys._getframe(1), 2
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
         frame, level = frame.f_back, level + 1
     warnings.warn(warning, stacklevel=level)
+
+
+_deferred = threading.local()
+
+
+@contextlib.contextmanager
+def warnings_deferred() -> Iterator[list[Warning]]:
+    """Within, :func:`warn` on this thread keeps its warnings in the list given instead of issuing them. A thread that
+    works for a caller (a fit's reciprocity check, ``data.reciprocity.ReciprocityAhead``) hands them over, and the
+    caller issues each (:func:`warn`) where the user's code called it: issued in the thread, a warning would name
+    ``threading.py``'s line and escape the caller's filters."""
+    kept: list[Warning] = []
+    outer = getattr(_deferred, "warnings", None)
+    _deferred.warnings = kept
+    try:
+        yield kept
+    finally:
+        _deferred.warnings = outer
 
 
 def needs(module: str, extra: str, what: str):

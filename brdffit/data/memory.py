@@ -1,13 +1,12 @@
 """Freed memory handed back to the system, where the C library keeps it.
 
 glibc's ``malloc`` serves each thread from an arena of its own and keeps what is freed there for later
-allocations: a thread that built and dropped large temporary structures (the reciprocity check's k-d trees, ~90 MB
+allocations: a thread that built and dropped large temporary structures (the reciprocity check's k-d trees, ~60 MB
 at MERL size) leaves the process that much larger while the main thread goes on to its own peak. ``malloc_trim(0)``
 returns the free pages (Dask's workers do the same: distributed's "memory trimming"). Elsewhere than glibc, nothing.
 """
 
 import ctypes
-import ctypes.util
 import functools
 
 
@@ -20,9 +19,9 @@ def return_freed_memory() -> None:
 
 @functools.cache
 def _malloc_trim():
-    """glibc's ``malloc_trim``, or None where the C library has none (musl, macOS, Windows)."""
-    name = ctypes.util.find_library("c")
+    """glibc's ``malloc_trim``, or None where the C library has none (musl, macOS, Windows): looked up among the
+    symbols the process has loaded already, which hold the C library's."""
     try:
-        return getattr(ctypes.CDLL(name), "malloc_trim", None) if name else None
-    except OSError:
+        return getattr(ctypes.CDLL(None), "malloc_trim", None)
+    except (OSError, TypeError):  # no handle to the process's own symbols (Windows)
         return None

@@ -10,7 +10,7 @@ A pair is two samples whose directions are swapped: ``wi`` and ``wo`` exchanged 
 :data:`ENOUGH_PAIRS` of those, else whichever finds more of these and the isotropic pairs (for isotropic
 measurements, the light at one azimuth): the zeniths exchanged at the same ``|φo − φi|``. Directions match
 within a tolerance the file's own angular spacing sets (:func:`tolerance`: half the median distance between
-neighbouring measurements, at most 0.5°), looked up in a k-d tree: a real gonioreflectometer's positions carry
+neighbouring measurements, at most 0.5°), looked up in k-d trees: a real gonioreflectometer's positions carry
 jitter, so exact matches are rare. Pairs a cosine factor hardly changes (:data:`INFORMATIVE`) are left out.
 
 Where the file's header names a quantity, the check also says whether the data agree with it
@@ -21,12 +21,12 @@ import collections
 import hashlib
 import itertools
 import threading
-from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..errors import warn, warnings_deferred
 from .memory import return_freed_memory
 from .quantities import stored_factor
 from .samples import Samples
@@ -139,22 +139,44 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
     return Reciprocity(len(first), kind, ratios, in_force, float(np.degrees(within)), header)
 
 
-def reciprocity_ahead(samples: Samples) -> Future[Reciprocity | None]:
-    """:func:`reciprocity` of ``samples``, computed from now in a thread while the caller does other work (a fit traces
-    and compiles meanwhile: pairing a MERL-size file's directions is ~0.55 s, most of it in NumPy and the k-d trees,
-    which release the GIL); ``.result()`` waits for it and raises what it raised."""
-    future: Future[Reciprocity | None] = Future()
+class ReciprocityAhead:
+    """:func:`reciprocity` of some samples, computed in a thread from when it is made, while the caller does other work
+    (a fit traces and compiles meanwhile: pairing a MERL-size file's directions is ~0.6 s, most of it in NumPy and the
+    k-d trees, which release the GIL). :meth:`result` waits for it, issues the warnings it met (in the caller's
+    thread, :func:`~brdffit.errors.warnings_deferred`) and returns what it found or raises what it raised."""
 
-    def find():
-        try:
-            future.set_result(reciprocity(samples))
-        except BaseException as error:  # handed to the caller of .result(), whose thread reports it
-            future.set_exception(error)
-        finally:
-            return_freed_memory()  # the trees' pages, kept by this thread's arena, back before the solve's peak
+    def __init__(self, samples: Samples):
+        self._done = threading.Event()
+        self._found: Reciprocity | None = None
+        self._error: BaseException | None = None
+        self._warnings: list[Warning] = []
+        threading.Thread(target=self._find, args=(samples,), name="brdffit-reciprocity", daemon=True).start()
 
-    threading.Thread(target=find, name="brdffit-reciprocity", daemon=True).start()
-    return future
+    def _find(self, samples: Samples) -> None:
+        with warnings_deferred() as said:
+            try:
+                self._found = reciprocity(samples)
+            except BaseException as error:  # raised by result(), in the caller's thread
+                self._error = error
+        self._warnings = said
+        return_freed_memory()  # the trees' pages, kept by this thread's arena, back before the caller goes on
+        self._done.set()
+
+    def wait(self) -> None:
+        """Wait until the check is done."""
+        self._done.wait()
+
+    def result(self, timeout: float | None = None) -> Reciprocity | None:
+        """What :func:`reciprocity` found, once done (``TimeoutError`` after ``timeout`` seconds), its warnings issued
+        once."""
+        if not self._done.wait(timeout):
+            raise TimeoutError(f"the reciprocity check took over {timeout} s")
+        said, self._warnings = self._warnings, []
+        for warning in said:
+            warn(warning)
+        if self._error is not None:
+            raise self._error
+        return self._found
 
 
 def header_contradiction(found: Reciprocity) -> str:
@@ -269,8 +291,8 @@ EVERY_PAIR_UP_TO = 256
 
 
 class _EveryPair:
-    """The nearest points of a few (N ≤ :data:`EVERY_PAIR_UP_TO`) by their whole distance matrix, with the
-    ``query`` of ``scipy.spatial.cKDTree`` (k nearest in order; beyond ``distance_upper_bound``, inf and index N)."""
+    """The nearest points of a few by their whole distance matrix, with the ``query`` of ``scipy.spatial.cKDTree``
+    (k nearest in order; at ``distance_upper_bound`` or beyond, inf and index N)."""
 
     def __init__(self, points: np.ndarray):
         self.points, self.n = points, len(points)
@@ -279,14 +301,16 @@ class _EveryPair:
         distances = np.linalg.norm(asked[:, None, :] - self.points[None, :, :], axis=-1)
         order = np.argsort(distances, axis=1, kind="stable")[:, :k]
         nearest = np.take_along_axis(distances, order, axis=1)
-        beyond = nearest > distance_upper_bound
+        beyond = nearest >= distance_upper_bound  # as cKDTree: a neighbour lies strictly within the bound
         nearest, order = np.where(beyond, np.inf, nearest), np.where(beyond, len(self.points), order)
         return (nearest[:, 0], order[:, 0]) if k == 1 else (nearest, order)
 
 
-def _tree(points: np.ndarray, **options) -> "cKDTree | _EveryPair":
-    """What finds the nearest of ``points``: every pair compared for a few, else a k-d tree (``options``: its)."""
-    if len(points) <= EVERY_PAIR_UP_TO:
+def _tree(points: np.ndarray, few: bool, **options) -> "cKDTree | _EveryPair":
+    """What finds the nearest of ``points``: every pair compared where the file has ``few`` samples (at most
+    :data:`EVERY_PAIR_UP_TO`), else a k-d tree (``options``: its). A band of a large file is never few: its whole
+    distance matrix to 4,096 spacing queries would outweigh its tree."""
+    if few:
         return _EveryPair(points)
     from scipy.spatial import cKDTree
 
@@ -295,7 +319,7 @@ def _tree(points: np.ndarray, **options) -> "cKDTree | _EveryPair":
 
 #: The most samples in one k-d tree: larger files are paired band by band of ``cos θi − cos θo`` (:func:`_bands`), each
 #: band's tree built, asked and dropped in turn, in the same time as one tree. A MERL-size file's pairing held ~130 MB
-#: with one tree of every sample, and holds ~60 MB with bands (a fit compiles beside it: ``reciprocity_ahead``).
+#: with one tree of every sample, and holds ~60 MB with bands (a fit compiles beside it: :class:`ReciprocityAhead`).
 BAND_SAMPLES = 2**17
 #: How far (in ``cos θi − cos θo``) a partner can lie from a first's swapped point: two points within ``r`` of each
 #: other (at most :data:`MAX_TOLERANCE`) differ by at most ``√2·r`` in it, their two ``z`` differing by ``a`` and ``b``
@@ -309,8 +333,9 @@ def _cosine_difference(samples: Samples) -> np.ndarray:
 
 
 def _bands(difference: np.ndarray) -> list[np.ndarray]:
-    """Indices of the samples in bands of ``difference`` (:func:`_cosine_difference`), each of about
-    :data:`BAND_SAMPLES` at most (bounded by quantiles): one band for most files."""
+    """Indices of the samples in bands of ``difference`` (:func:`_cosine_difference`), bounded by its quantiles: each
+    of about :data:`BAND_SAMPLES` (more where many samples share a difference, as a grid's do); one band for most
+    files."""
     count = -(-len(difference) // BAND_SAMPLES)
     if count <= 1:
         return [np.arange(len(difference))]
@@ -385,10 +410,11 @@ def _paired(samples: Samples, general: bool) -> Pairs:
 
     Band by band (:func:`_bands`): a band's k-d tree gives the spacing's nearest neighbours among its samples, and the
     nearest partner, within :data:`MAX_TOLERANCE`, of each swapped point that lies within :data:`PARTNER_SLACK` of it;
-    the nearest of all bands are those of every sample at once, and the tolerance, known at the end, keeps those
-    within it."""
+    the nearest of all bands are those of every sample at once (where two samples are equally near, a direction
+    measured twice, either may be taken, as in one tree), and the tolerance, known at the end, keeps those within it."""
     wi, wo = samples.wi, samples.wo
     asked, k = _spacing_asked(samples, general), min(len(wi), SPACING_NEIGHBOURS)
+    few = len(wi) <= EVERY_PAIR_UP_TO
     queries = _firsts(samples)
     if len(queries) > MAX_QUERIES:
         queries = np.sort(np.random.default_rng(0).choice(queries, MAX_QUERIES, replace=False))
@@ -400,7 +426,7 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     nearest = np.full((len(asked), k), np.inf)
     distance, found = np.full(len(queries), np.inf), np.zeros(len(queries), np.int64)
     for band in _bands(difference):
-        tree = _tree(_points_at(samples, band, general), balanced_tree=False, compact_nodes=False)  # ~2× faster
+        tree = _tree(_points_at(samples, band, general), few, balanced_tree=False, compact_nodes=False)  # ~2× faster
         nearest = np.sort(np.hstack([nearest, _nearest(asked, tree, k)]), axis=1)[:, :k]
         lowest, highest = difference[band].min() - PARTNER_SLACK, difference[band].max() + PARTNER_SLACK
         near = np.flatnonzero((swapped_difference >= lowest) & (swapped_difference <= highest))

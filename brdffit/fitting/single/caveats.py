@@ -19,7 +19,6 @@
 import functools
 import re
 from collections.abc import Sequence
-from concurrent.futures import Future
 from dataclasses import replace
 from typing import NamedTuple, TypeGuard
 
@@ -29,7 +28,7 @@ import numpy as np
 
 from ..._jax import float64
 from ..._programs import jit
-from ...data.reciprocity import Reciprocity, header_contradiction, reciprocity
+from ...data.reciprocity import Reciprocity, ReciprocityAhead, header_contradiction, reciprocity
 from ...data.samples import Samples
 from ...physics.domains import Positive, UnitInterval
 from ...physics.geometry import NORMAL, above_horizon, mirror_direction, spherical_to_direction
@@ -71,12 +70,12 @@ def caveats(
     *,
     screened: "Screened | None" = None,
     held: frozenset[str] = frozenset(),
-    reciprocal: Future[Reciprocity | None] | None = None,
+    reciprocal: ReciprocityAhead | None = None,
 ) -> list[str]:
     """Every caveat of ``model`` fitted to ``samples`` with ``params`` (numpy), ``cost`` its Σr²;
     ``fewer_lobes_cost``: the cost the same model with one lobe less reached on the same samples;
     ``screened``: what :func:`screen_bucket` found for this fit, when the caller screened many fits at once;
-    ``reciprocal``: the reciprocity of ``samples`` when the caller started it earlier (``reciprocity_ahead``)."""
+    ``reciprocal``: the reciprocity of ``samples`` when the caller started its check earlier (``ReciprocityAhead``)."""
     found = _not_reciprocal(reciprocity(samples) if reciprocal is None else reciprocal.result())
     found += _anisotropy_undetermined(model, samples, held)
     found += _coat_undetermined(model, samples, held) + _sheen_undetermined(model, samples, held)

@@ -7,12 +7,11 @@ lobes (``fit.py``), the data-driven model's own solve (``datadriven/fit.py``).
 
 import functools
 from collections.abc import Sequence
-from concurrent.futures import Future
 
 import numpy as np
 
 from ..._jax import jax
-from ...data.reciprocity import Reciprocity
+from ...data.reciprocity import ReciprocityAhead
 from ...data.samples import Samples
 from ...physics.models.model import LobeModel, Model
 from ...physics.models.params import Params
@@ -85,7 +84,7 @@ def result_of(
     constraints: Constraints | None = None,
     params: Params | None = None,
     with_caveats: bool = True,
-    reciprocal: Future[Reciprocity | None] | None = None,
+    reciprocal: ReciprocityAhead | None = None,
 ) -> FitResult:
     """The :class:`FitResult` of a solve, with its caveats (``caveats.py``) and ``more_caveats`` (the model's own);
     ``samples`` are those fitted, selected by ``max_theta``. ``screened``: what the caveats' screens found for this fit,
@@ -93,7 +92,7 @@ def result_of(
     held; its fixed values are written exactly, and a parameter that ended on a bound is said. ``params``: the
     solve's :func:`final_params`, when the caller has them. ``with_caveats=False``: only what the constraints say
     (``fit.fit_checked``). ``reciprocal``: the samples' reciprocity, when the caller started its check earlier
-    (``reciprocity.reciprocity_ahead``)."""
+    (``reciprocity.ReciprocityAhead``)."""
     converged = bool(solved.converged)
     params = final_params(model, solved, samples.n_channels) if params is None else params
     params = canonical_params(model, params, constraints)

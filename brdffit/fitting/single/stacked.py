@@ -17,14 +17,13 @@ while-loop would run every fit until the slowest ends; on a GPU all at once (``v
 
 import threading
 from collections.abc import Callable, Sequence
-from concurrent import futures
 from functools import partial
 
 import numpy as np
 
 from ..._jax import float64, jax
 from ..._programs import built_once, jit
-from ...data.reciprocity import reciprocity_ahead
+from ...data.reciprocity import ReciprocityAhead
 from ...data.samples import Samples
 from ...physics.models.model import LobeModel, Model
 from ..objective.losses import Loss
@@ -99,7 +98,7 @@ class StackedFit:
         # ~0.6 s to pair); a batch's datasets mostly share their directions, whose pairs the first check keeps for the
         # others. The solve runs once it is done (:meth:`solve`): its k-d trees (~60 MB at MERL size) and the solve's
         # arrays never meet, and a MERL-size fit's peak memory stays that of its solve.
-        self._reciprocal = [reciprocity_ahead(self.samples[0])] if caveats and len(self.samples) == 1 else None
+        self._reciprocal = ReciprocityAhead(self.samples[0]) if caveats and len(self.samples) == 1 else None
 
     @float64
     def starts(self, given: np.ndarray | None = None) -> np.ndarray:
@@ -174,8 +173,9 @@ class StackedFit:
         return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
 
     def _reciprocity_checked(self) -> None:
-        """Wait for the reciprocity check started with the fit (``reciprocity_ahead``), if it is still under way."""
-        futures.wait(self._reciprocal or [])
+        """Wait for the reciprocity check started with the fit, if it is still under way."""
+        if self._reciprocal is not None:
+            self._reciprocal.wait()
 
     def results(
         self, solved, *, max_theta: float | None = None, constraints: Constraints | None = None
@@ -188,9 +188,9 @@ class StackedFit:
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
         screens: Sequence[Screened | None] = [None] * len(params)
-        reciprocals: Sequence[futures.Future | None] = [None] * len(params)
-        if self._reciprocal is not None:  # started with the fit (``reciprocity_ahead``)
-            reciprocals = self._reciprocal
+        reciprocals: Sequence[ReciprocityAhead | None] = [None] * len(params)
+        if self._reciprocal is not None:  # started with the fit
+            reciprocals = [self._reciprocal]
         if self._screen_compiling is not None:  # with caveats
             self._screen_compiling.join()
             screens = screen_bucket(self.model, params, self.samples, self.count)
