@@ -116,7 +116,7 @@ def warnings_deferred() -> Iterator[list[Warning]]:
     """Within, :func:`warn` on this thread keeps its warnings in the list given instead of issuing them. A thread that
     works for a caller (a fit's reciprocity check, ``data.reciprocity.ReciprocityAhead``) hands them over, and the
     caller issues each (:func:`warn`) where the user's code called it: issued in the thread, a warning would name
-    ``threading.py``'s line and escape the caller's filters."""
+    ``threading.py``'s line and escape the caller's filters by module."""
     kept: list[Warning] = []
     outer = getattr(_deferred, "warnings", None)
     _deferred.warnings = kept

@@ -22,6 +22,7 @@ import hashlib
 import itertools
 import threading
 from dataclasses import dataclass
+from types import TracebackType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -149,18 +150,21 @@ class ReciprocityAhead:
         self._done = threading.Event()
         self._found: Reciprocity | None = None
         self._error: BaseException | None = None
+        self._traceback: TracebackType | None = None  # the error's own: raised again as it was
         self._warnings: list[Warning] = []
         threading.Thread(target=self._find, args=(samples,), name="brdffit-reciprocity", daemon=True).start()
 
     def _find(self, samples: Samples) -> None:
-        with warnings_deferred() as said:
-            try:
-                self._found = reciprocity(samples)
-            except BaseException as error:  # raised by result(), in the caller's thread
-                self._error = error
-        self._warnings = said
-        return_freed_memory()  # the trees' pages, kept by this thread's arena, back before the caller goes on
-        self._done.set()
+        try:
+            with warnings_deferred() as said:
+                try:
+                    self._found = reciprocity(samples)
+                except BaseException as error:  # raised by result(), in the caller's thread
+                    self._error, self._traceback = error, error.__traceback__
+            self._warnings = said
+            return_freed_memory()  # the trees' pages, kept by this thread's arena, back before the caller goes on
+        finally:
+            self._done.set()  # whatever happened: a solve waits for it
 
     def wait(self) -> None:
         """Wait until the check is done."""
@@ -175,7 +179,7 @@ class ReciprocityAhead:
         for warning in said:
             warn(warning)
         if self._error is not None:
-            raise self._error
+            raise self._error.with_traceback(self._traceback)
         return self._found
 
 

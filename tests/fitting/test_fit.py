@@ -124,6 +124,17 @@ def test_start_is_used_and_checked():
         fit(samples, model, start={"rho_d": [0.1], "rho_s": [0.1], "alpha": 0.1})
 
 
+def test_a_bad_start_is_said_before_any_work_starts(monkeypatch):
+    """A start that does not fit the model is checked before the fit sets to work (its reciprocity check, its
+    programs' compilation): nothing is left running behind the error."""
+    from brdffit.fitting.single import stacked
+
+    model, options, params = CASES[1]
+    monkeypatch.setattr(stacked, "ReciprocityAhead", lambda samples: pytest.fail("the check started"))
+    with pytest.raises(BrdfInputError, match="start parameters have 1 channel"):
+        fit(noiseless(model, options, params), model, start={"rho_d": [0.1], "rho_s": [0.1], "alpha": 0.1})
+
+
 def test_not_converged_is_reported():
     model, options, params = CASES[4]
     result = fit(noiseless(model, options, params), model, max_steps=2, **options)

@@ -100,8 +100,10 @@ def fit_checked(
             with_caveats=caveats,
         )
     strategy = default_strategy()
+    given = (
+        None if start is None else start_vector(model, start, samples.n_channels)[None]
+    )  # checked before work starts
     fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=strategy, caveats=caveats)  # one dataset
-    given = None if start is None else start_vector(model, start, samples.n_channels)[None]
     thetas = fit.starts(given)  # start: the given one, or the grid's best shapes, raced
     solved = fit.solve(thetas)  # solve: Levenberg-Marquardt
     (result,) = fit.results(solved, max_theta=max_theta, constraints=constraints)  # caveats, result
