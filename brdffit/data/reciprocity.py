@@ -379,8 +379,6 @@ SPACING_REACH = 2 * MAX_TOLERANCE / SPACING_FRACTION
 def _nearest(asked: np.ndarray, tree: "cKDTree | _EveryPair", k: int) -> np.ndarray:
     """The distances from each of ``asked`` (M, 6) to its ``k`` nearest points of ``tree`` in order, inf beyond
     :data:`SPACING_REACH` and past the tree's size: (M, k)."""
-    if not tree.n:
-        return np.full((len(asked), k), np.inf)
     distances, _ = tree.query(asked, k=min(k, tree.n), distance_upper_bound=SPACING_REACH, workers=-1)
     distances = distances.reshape(len(asked), -1)  # one neighbour: one distance a point
     return np.pad(distances, ((0, 0), (0, k - distances.shape[1])), constant_values=np.inf)

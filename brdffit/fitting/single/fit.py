@@ -100,9 +100,8 @@ def fit_checked(
             with_caveats=caveats,
         )
     strategy = default_strategy()
-    given = (
-        None if start is None else start_vector(model, start, samples.n_channels)[None]
-    )  # checked before work starts
+    # the start is checked before the fit sets to work (its reciprocity check, its programs' compilation)
+    given = None if start is None else start_vector(model, start, samples.n_channels)[None]
     fit = StackedFit(model, loss, [samples], hold, solving=solving, strategy=strategy, caveats=caveats)  # one dataset
     thetas = fit.starts(given)  # start: the given one, or the grid's best shapes, raced
     solved = fit.solve(thetas)  # solve: Levenberg-Marquardt

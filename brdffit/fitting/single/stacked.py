@@ -188,9 +188,7 @@ class StackedFit:
         n_channels = self.samples[0].n_channels
         params = [final_params(self.model, one, n_channels) for one in each]
         screens: Sequence[Screened | None] = [None] * len(params)
-        reciprocals: Sequence[ReciprocityAhead | None] = [None] * len(params)
-        if self._reciprocal is not None:  # started with the fit
-            reciprocals = [self._reciprocal]
+        reciprocals = [self._reciprocal] * len(params)  # a check started with the fit: of its one dataset
         if self._screen_compiling is not None:  # with caveats
             self._screen_compiling.join()
             screens = screen_bucket(self.model, params, self.samples, self.count)
