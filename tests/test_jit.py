@@ -7,8 +7,10 @@ import time
 from pathlib import Path
 
 import jax
+import jax.numpy as jnp
 import jaxlib
 import numpy as np
+import pytest
 
 from brdffit import data_synth
 from brdffit._programs import cache, jit
@@ -107,11 +109,8 @@ def test_a_model_that_asks_for_xla_fusion_emitters_has_its_programs_compiled_wit
 
     jit_module = importlib.import_module("brdffit._programs.jit")  # the package's ``jit`` is the function
 
-    asked = []
     options = jit_module.compiler_options
-    monkeypatch.setattr(
-        jit_module, "compiler_options", lambda emitters=False: asked.append(emitters) or options(emitters)
-    )
+    asked = _asked_options(monkeypatch, "emitters")
 
     def scaled(model, x):
         return (2.0 if model.fusion_emitters else 3.0) * x
@@ -131,6 +130,22 @@ def test_a_model_that_asks_for_xla_fusion_emitters_has_its_programs_compiled_wit
         assert options(True) == options(False) | {"xla_cpu_use_fusion_emitters": True}
 
 
+def _asked_options(monkeypatch, argument: str) -> list:
+    """``jit.compiler_options`` patched to record its ``argument`` (``emitters`` or ``optimised``) at each call: the
+    list it records in."""
+    import importlib
+
+    jit_module = importlib.import_module("brdffit._programs.jit")  # the package's ``jit`` is the function
+    options, asked = jit_module.compiler_options, []
+
+    def recorded(emitters=False, optimised=True):
+        asked.append({"emitters": emitters, "optimised": optimised}[argument])
+        return options(emitters, optimised)
+
+    monkeypatch.setattr(jit_module, "compiler_options", recorded)
+    return asked
+
+
 def _pinned(package: str) -> str | None:
     """The version ``constraints.txt`` pins ``package`` at (``make test``'s venv), or None."""
     path = Path(__file__).resolve().parents[1] / "constraints.txt"
@@ -139,3 +154,88 @@ def _pinned(package: str) -> str | None:
         if name.strip().lower() == package:
             return version.strip()
     return None
+
+
+def _hooked_sum(x):
+    return jnp.sum(jnp.sin(x))
+
+
+@pytest.mark.parametrize("stored", [False, True])
+def test_precompile_with_calls_its_hook_once_the_program_is_lowered_before_it_is_compiled(
+    stored, tmp_path, monkeypatch
+):
+    """``precompile_with(lowered, …)``: ``lowered()`` runs on the caller's thread once the program is traced and
+    lowered (with the cache on: exported), before XLA compiles it, so that what it starts overlaps the compilation and
+    not the tracing (``single/stacked.py``); not at all for a signature compiled already."""
+    import importlib
+
+    stored_programs = importlib.import_module("brdffit._programs.stored")
+    executables = importlib.import_module("brdffit._programs.executables")
+    monkeypatch.setattr(cache, "_enabled", tmp_path if stored else None)
+    monkeypatch.setattr(stored_programs, "_loaded", {})
+    events = []
+    ours = lambda name: "_hooked_sum" in str(name)
+    lower, compile_, export, compiled_program = (
+        jax.stages.Traced.lower,
+        jax.stages.Lowered.compile,
+        jax.export.export,
+        executables.compiled_program,
+    )
+
+    def lowered_and_said(self, *args, **kwargs):
+        result = lower(self, *args, **kwargs)
+        events.extend(["lowered"] if ours(self.fun_name) else [])
+        return result
+
+    def exported_and_said(fun, *args, **kwargs):
+        def made(*shapes):
+            result = export(fun, *args, **kwargs)(*shapes)
+            events.extend(["lowered"] if ours(result.fun_name) else [])
+            return result
+
+        return made
+
+    def compiled_and_said(self, *args, **kwargs):
+        events.extend(["compiled"] if ours(self._lowering._name) else [])
+        return compile_(self, *args, **kwargs)
+
+    def program_and_said(folder, name, key, exported, *args):
+        events.extend(["compiled"] if ours(exported.fun_name) else [])
+        return compiled_program(folder, name, key, exported, *args)
+
+    monkeypatch.setattr(jax.stages.Traced, "lower", lowered_and_said)
+    monkeypatch.setattr(jax.export, "export", exported_and_said)
+    monkeypatch.setattr(jax.stages.Lowered, "compile", compiled_and_said)
+    monkeypatch.setattr(executables, "compiled_program", program_and_said)
+    hooked = jit(_hooked_sum)
+    shape = jax.ShapeDtypeStruct((5,), np.float64)
+    hooked.precompile_with(lambda: events.append("hook"), shape)
+    said = [event for index, event in enumerate(events) if events.index(event) == index]  # export lowers within
+    assert said == ["lowered", "hook", "compiled"] and events.count("hook") == 1
+    assert max(i for i, event in enumerate(events) if event == "lowered") < events.index("hook")
+    assert hooked.is_compiled(shape) and float(hooked(np.zeros(5))) == 0.0
+    events.clear()
+    hooked.precompile_with(lambda: events.append("hook"), shape)  # compiled already: nothing to overlap
+    assert "hook" not in events
+
+
+def test_a_function_jitted_unoptimised_compiles_with_llvm_passes_skipped_as_a_program_of_its_own(tmp_path, monkeypatch):
+    """``jit(optimised=False)`` (a single fit's caveat screens): its programs compile with ``UNOPTIMISED`` added to the
+    options (where the running XLA knows it), and are stored apart from those of the same function optimised."""
+    import importlib
+
+    from brdffit._programs.jit import UNOPTIMISED, known_options
+
+    jit_module = importlib.import_module("brdffit._programs.jit")
+    stored_programs = importlib.import_module("brdffit._programs.stored")
+    monkeypatch.setattr(cache, "_enabled", tmp_path)
+    monkeypatch.setattr(stored_programs, "_loaded", {})
+    if jax.default_backend() == "cpu" and known_options(UNOPTIMISED):
+        assert jit_module.compiler_options(False, False) == jit_module.compiler_options(False) | UNOPTIMISED
+    asked = _asked_options(monkeypatch, "optimised")
+    x = np.linspace(0.0, 1.0, 6)
+    for optimised in (True, False):
+        asked.clear()
+        assert float(jit(_hooked_sum, optimised=optimised)(x)) == pytest.approx(np.sum(np.sin(x)), rel=1e-14)
+        assert asked and set(asked) == {optimised}
+    assert len(list((tmp_path / "programs").glob(f"*{stored_programs.SUFFIX}"))) == 2

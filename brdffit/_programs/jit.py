@@ -33,12 +33,17 @@ CPU_COMPILER_OPTIONS = {
 #: The others keep the classic ones: Ward 4.6 and 4.8 ms, Cook-Torrance 4.7 and 5.3, an anisotropic conductor 60 and
 #: 64, principled's whole Jacobian 138 and 373. Compiling takes 0.5–1.2 s longer a program.
 EMITTER_COMPILER_OPTIONS = CPU_COMPILER_OPTIONS | {"xla_cpu_use_fusion_emitters": True}
+#: Added for a program compiled unoptimised (``jit(..., optimised=False)``): LLVM's passes skipped. A small program
+#: whose run is short, as the caveats' screens (~300 operations on a grid of a few thousand directions), compiles
+#: in a third of the time (the albedo screen's: 0.05 s against 0.15–0.19 s) and runs a few ms longer.
+UNOPTIMISED = {"xla_backend_optimization_level": 0}
 
 
 class Compiled(Protocol):
-    """What :func:`jit` returns: the function, and its ``precompile`` and ``is_compiled``."""
+    """What :func:`jit` returns: the function, and its ``precompile``, ``precompile_with`` and ``is_compiled``."""
 
     precompile: Callable[..., None]
+    precompile_with: Callable[..., None]
     is_compiled: Callable[..., bool]
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any: ...
@@ -60,12 +65,14 @@ def built_once(builder: Callable) -> Callable:
 
 
 @functools.cache
-def compiler_options(fusion_emitters: bool = False) -> dict | None:
-    """:data:`CPU_COMPILER_OPTIONS` (:data:`EMITTER_COMPILER_OPTIONS` with ``fusion_emitters``) that the running XLA
-    knows (:func:`known_options`) when JAX's default backend is the CPU, else None (XLA's defaults)."""
+def compiler_options(fusion_emitters: bool = False, optimised: bool = True) -> dict | None:
+    """:data:`CPU_COMPILER_OPTIONS` (:data:`EMITTER_COMPILER_OPTIONS` with ``fusion_emitters``, and
+    :data:`UNOPTIMISED` unless ``optimised``) that the running XLA knows (:func:`known_options`) when JAX's default
+    backend is the CPU, else None (XLA's defaults)."""
     if jax.default_backend() != "cpu":
         return None
-    return known_options(EMITTER_COMPILER_OPTIONS if fusion_emitters else CPU_COMPILER_OPTIONS)
+    options = EMITTER_COMPILER_OPTIONS if fusion_emitters else CPU_COMPILER_OPTIONS
+    return known_options(options if optimised else options | UNOPTIMISED)
 
 
 def known_options(options: dict) -> dict:
@@ -88,10 +95,11 @@ def known_options(options: dict) -> dict:
     return {name: value for name, value in options.items() if accepted({name: value})}
 
 
-def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arguments):
+def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), optimised: bool = True, **jit_arguments):
     """``jax.jit`` in :func:`float64` with :func:`compiler_options`, chosen at the first call (importing does no work):
     with XLA's fusion emitters where a model among the static arguments and the values it closes over says so (its
-    ``fusion_emitters``: :data:`EMITTER_COMPILER_OPTIONS`).
+    ``fusion_emitters``: :data:`EMITTER_COMPILER_OPTIONS`); ``optimised=False``: with :data:`UNOPTIMISED` too, for a
+    small program that runs briefly.
 
     Usable as ``@jit``, ``@jit(static_argnums=0)`` or ``jit(f, static_argnums=0)``. JAX takes compiler
     options only for a program compiled on its own, so inside a traced function (``jit`` or ``vmap`` of a
@@ -104,7 +112,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
     closes over (``closes_over``, each named by its cache key).
     """
     if fun is None:
-        return functools.partial(jit, name=name, closes_over=closes_over, **jit_arguments)
+        return functools.partial(jit, name=name, closes_over=closes_over, optimised=optimised, **jit_arguments)
     if name is None and isinstance(fun, functools.partial) and _module_level(fun.func):
         name = f"{fun.func.__module__}.{fun.func.__qualname__}"
         closes_over = (*fun.args, *sorted(fun.keywords.items()))
@@ -122,7 +130,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
 
     @functools.cache
     def top_level(emitters: bool):
-        return jax.jit(fun, compiler_options=compiler_options(emitters), **jit_arguments)
+        return jax.jit(fun, compiler_options=compiler_options(emitters, optimised), **jit_arguments)
 
     def emitters_for(args) -> bool:
         """Whether the call's program compiles with XLA's fusion emitters (the docstring); a value bound by keyword
@@ -131,25 +139,27 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         values = [item for value in statics for item in (value if isinstance(value, tuple) else (value,))]
         return any(getattr(value, "fusion_emitters", False) is True for value in values)
 
-    def stored_for(args, kwargs):
-        """The stored program for a top-level call, or None (``stored.stored_program``)."""
+    def stored_for(args, kwargs, lowered=None):
+        """The stored program for a top-level call, or None (``stored.stored_program``, which calls ``lowered()``
+        between exporting the program and compiling it)."""
         if identity is None or kwargs:
             return None
         emitters = emitters_for(args)
-        jitted, options = (lambda: top_level(emitters)), (lambda: compiler_options(emitters))
-        return stored.stored_program(stored_identity(emitters), jitted, args, static_argnums, options)
+        jitted, options = (lambda: top_level(emitters)), (lambda: compiler_options(emitters, optimised))
+        return stored.stored_program(stored_identity(emitters), jitted, args, static_argnums, options, lowered)
 
     def stored_identity(emitters: bool) -> list:
         """What names a call's stored program: the function's identity and the options it compiles with."""
         assert identity is not None  # a stored program is only ever found for a function with an identity
-        return [*identity, {"fusion_emitters": emitters}]
+        return [*identity, {"fusion_emitters": emitters} | ({} if optimised else {"optimised": False})]
 
-    def with_stored(args, kwargs, key, use, otherwise, runs: bool = True):
+    def with_stored(args, kwargs, key, use, otherwise, runs: bool = True, lowered=None):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
         program that fails the first time it is compiled or run in this process (a file this cache signed, but that
         this JAX cannot read) is discarded with one warning (``stored.discard``) and exported again. ``runs``: whether
-        ``use`` runs the program (else it only compiles it, which proves nothing of an executable loaded ready)."""
-        program = stored_for(args, kwargs)
+        ``use`` runs the program (else it only compiles it, which proves nothing of an executable loaded ready).
+        ``lowered``: called once a program exported now is lowered, before it is compiled (``stored_for``)."""
+        program = stored_for(args, kwargs, lowered)
         if program is None:
             return otherwise()
         if program in proven:
@@ -194,15 +204,28 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
         A later call with arrays of those shapes reuses JAX's caches; so this
         can run in another thread while the caller does other work.
         """
+        precompile_with(None, *args, **kwargs)
+
+    def precompile_with(lowered: Callable[[], None] | None, *args, **kwargs) -> None:
+        """:func:`precompile`, calling ``lowered()`` on this thread once the program is traced and lowered (or its
+        stored export read), just before XLA compiles it; not at all where it is compiled in this process already.
+        Work that holds the GIL (another program's tracing) started there runs beside the compilation, which
+        releases it, instead of beside the tracing, which it would slow as much as it takes (``single/stacked.py``).
+        """
         with float64():
             key = _call_key(args, kwargs, static_argnums)
+            if key in compiled:
+                return
             with_stored(
                 args,
                 kwargs,
                 key,
                 lambda program: _compile(program, stored.dynamic_arguments(args, static_argnums)),
-                lambda: first_calls.run(key, lambda: top_level(emitters_for(args)).lower(*args, **kwargs).compile()),
+                lambda: first_calls.run(
+                    key, lambda: _compile_lowered(top_level(emitters_for(args)).lower(*args, **kwargs), lowered)
+                ),
                 runs=False,
+                lowered=lowered,
             )
             compiled.add(key)
 
@@ -213,6 +236,7 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), **jit_arg
 
     compiled_call = cast(Compiled, call)
     compiled_call.precompile = precompile
+    compiled_call.precompile_with = precompile_with
     compiled_call.is_compiled = is_compiled
     return compiled_call
 
@@ -228,6 +252,13 @@ def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tup
     leaves, tree = jax.tree.flatten((stored.dynamic_arguments(args, static_argnums), kwargs))
     statics = stored.static_arguments(args, static_argnums)
     return statics, tree, tuple(stored.array_description(leaf) for leaf in leaves)
+
+
+def _compile_lowered(program, lowered: Callable[[], None] | None) -> None:
+    """Compile a lowered ``program`` (``jax.stages.Lowered``), calling ``lowered()`` first (``precompile_with``)."""
+    if lowered is not None:
+        lowered()
+    program.compile()
 
 
 def _compile(program, dynamic_args) -> None:

@@ -20,10 +20,11 @@ Where the file's header names a quantity, the check also says whether the data a
 import collections
 import hashlib
 import itertools
+import math
 import threading
 from dataclasses import dataclass
 from types import TracebackType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -104,8 +105,9 @@ INFORMATIVE = 1.1
 #: How many geometries' pairs :func:`_pairs` keeps.
 KEPT_GEOMETRIES = 8
 #: The most samples whose partners are looked for, per pairing: a check of the median ratio needs no more. Above
-#: it, a seeded random choice of them (the same each run). A MERL-size file (1.4 million random directions) is then
-#: paired in ~0.6 s on 2 cores, ~0.25 s of it building the k-d trees; 500 samples in ~3 ms.
+#: it, a seeded random choice of them (the same each run); in a file above :data:`REGION_ABOVE` samples, of those in a
+#: region (:func:`_region`). A MERL-size file (1.4 million pairs of directions) is then paired in ~0.3 s on 2 cores
+#: (~0.6 s asking samples from every cell: ~0.25 s of it building k-d trees of every sample); 500 samples in ~3 ms.
 MAX_QUERIES = 2**17
 _kept: collections.OrderedDict = collections.OrderedDict()
 _kept_lock = threading.Lock()
@@ -349,12 +351,12 @@ def _bands(difference: np.ndarray) -> list[np.ndarray]:
     return [band for band in bands if len(band)]  # a grid's repeated differences can make two edges one
 
 
-def _spacing_asked(samples: Samples, general: bool) -> np.ndarray:
-    """The points whose neighbours estimate the spacing (:func:`_points`): every sample's, or :data:`SPACING_SAMPLE`
-    of them (a seeded choice)."""
-    asked = np.arange(len(samples.wi))
+def _spacing_asked(samples: Samples, general: bool, among: np.ndarray) -> np.ndarray:
+    """The points whose neighbours estimate the spacing (:func:`_points`): those of the samples at indices ``among``,
+    or of :data:`SPACING_SAMPLE` of them (a seeded choice)."""
+    asked = among
     if len(asked) > SPACING_SAMPLE:
-        asked = np.random.default_rng(0).choice(len(asked), SPACING_SAMPLE, replace=False)
+        asked = np.random.default_rng(0).choice(among, SPACING_SAMPLE, replace=False)
     return _points_at(samples, asked, general)
 
 
@@ -404,6 +406,72 @@ def tolerance(nearest: np.ndarray) -> float:
     return float(np.clip(SPACING_FRACTION * np.median(spacing), MIN_TOLERANCE, MAX_TOLERANCE))
 
 
+#: Files of more samples than this are paired within a region of their pairs of directions (:func:`_region`).
+REGION_ABOVE = 2**19
+#: The region's grid: this many cells along each of ``s = cos θi + cos θo`` (in [0, 2]) and ``u = wi · wo`` (in
+#: [−1, 1]), 0.25 wide,
+REGION_CELLS = 8
+#: each cut into this many along each for the lookups: 2 / (8 × 14) = 0.0179 wide, at least :data:`PARTNER_SLACK`.
+REGION_FINE = 14
+
+
+class Region(NamedTuple):
+    """Where a large file's pairs are looked for (:func:`_region`), by sample: ``queried`` (N,) whether a sample
+    lies in it (a first there is asked for its partner); ``kept``, the indices of the samples in it or within
+    :data:`PARTNER_SLACK` of it (the trees hold these alone); ``inner``, the indices of those that lie at least
+    twice :data:`SPACING_REACH` inside it (the spacing's samples are chosen among these)."""
+
+    queried: np.ndarray
+    kept: np.ndarray
+    inner: np.ndarray
+
+
+def _swap_invariants(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
+    """``s = cos θi + cos θo`` and ``u = wi · wo`` of each sample: alike for a sample and its swapped point, the
+    general one's and the isotropic one's alike (turning about the normal and mirroring keep both). Two points
+    (:func:`_points`) ``r`` apart differ in each by at most ``√2·r``: ``|Δs| ≤ |Δwi| + |Δwo|``, and
+    ``|a·b − a'·b'| = |a·(b − b') + (a − a')·b'| ≤ |Δwi| + |Δwo|`` for unit vectors."""
+    wi, wo = samples.wi, samples.wo
+    return wi[:, 2] + wo[:, 2], np.einsum("ij,ij->i", wi, wo)
+
+
+def _region(samples: Samples) -> Region | None:
+    """The region of a large file whose pairs are looked for: cells of the :data:`REGION_CELLS` grid of
+    :func:`_swap_invariants`, taken in a seeded order until they hold :data:`MAX_QUERIES` firsts (as many as are
+    asked of any file). A first's partner lies within :data:`MAX_TOLERANCE` of its swapped point, whose ``s`` and
+    ``u`` are its own: within ``√2`` × 0.5° (≤ :data:`PARTNER_SLACK`) of its cell. So the trees hold the region's
+    samples and those beside it alone (a MERL-size file: 23% of its samples), and find every partner one tree of
+    every sample finds for the same firsts; the spacing is estimated among samples whose neighbours within
+    :data:`SPACING_REACH` all lie in the region (twice that inside it, ``√2`` × it in ``s`` and ``u``, with a margin
+    for rounding). None where the file has too few firsts or inner samples for that (then every sample is asked)."""
+    s, u = _swap_invariants(samples)
+    lines = REGION_CELLS * REGION_FINE  # the fine grid's cells along each
+    width = 2.0 / lines
+    fine = np.clip((s / width).astype(np.intp), 0, lines - 1) * lines
+    fine += np.clip(((u + 1.0) / width).astype(np.intp), 0, lines - 1)
+    firsts = np.bincount(fine[samples.wi[:, 2] > samples.wo[:, 2]], minlength=lines * lines)
+    in_cells = firsts.reshape(REGION_CELLS, REGION_FINE, REGION_CELLS, REGION_FINE).sum(axis=(1, 3)).ravel()
+    order = np.random.default_rng(0).permutation(len(in_cells))
+    enough = np.flatnonzero(np.cumsum(in_cells[order]) >= MAX_QUERIES)
+    if not len(enough):
+        return None
+    cells = np.zeros(len(in_cells), bool)
+    cells[order[: enough[0] + 1]] = True
+    chosen = np.kron(cells.reshape(REGION_CELLS, REGION_CELLS), np.ones((REGION_FINE, REGION_FINE), bool))
+    beside = _spread(chosen, math.ceil(PARTNER_SLACK / width), np.any)
+    inner = _spread(chosen, math.ceil(2 * SPACING_REACH / width), np.all)
+    region = Region(chosen.ravel()[fine], np.flatnonzero(beside.ravel()[fine]), np.flatnonzero(inner.ravel()[fine]))
+    return region if len(region.inner) >= SPACING_SAMPLE else None
+
+
+def _spread(grid: np.ndarray, reach: int, test) -> np.ndarray:
+    """Each cell of a boolean ``grid``: ``test`` (``np.any``, ``np.all``) of the cells within ``reach`` of it along
+    each axis; beyond the grid, none (``np.any``) or every one (``np.all``: no sample lies there)."""
+    padded = np.pad(grid, reach, constant_values=test is np.all)
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (2 * reach + 1, 2 * reach + 1))
+    return test(windows, axis=(2, 3))
+
+
 def _paired(samples: Samples, general: bool) -> Pairs:
     """:func:`_pairs`, computed: each queried sample's swapped point (:func:`_points`) looked up among the samples, its
     nearest taken within :func:`tolerance`. Not asked: a sample whose cosines differ by less than :data:`INFORMATIVE`,
@@ -413,11 +481,18 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     Band by band (:func:`_bands`): a band's k-d tree gives the spacing's nearest neighbours among its samples, and the
     nearest partner, within :data:`MAX_TOLERANCE`, of each swapped point that lies within :data:`PARTNER_SLACK` of it;
     the nearest of all bands are those of every sample at once (where two samples are equally near, a direction
-    measured twice, either may be taken, as in one tree), and the tolerance, known at the end, keeps those within it."""
+    measured twice, either may be taken, as in one tree), and the tolerance, known at the end, keeps those within it.
+    A file above :data:`REGION_ABOVE` samples asks those of a region alone, and its trees hold the samples in the
+    region and beside it (:func:`_region`)."""
     wi, wo = samples.wi, samples.wo
-    asked, k = _spacing_asked(samples, general), min(len(wi), SPACING_NEIGHBOURS)
+    region = _region(samples) if len(wi) > REGION_ABOVE else None
+    every = np.arange(len(wi))
+    kept, among = (every, every) if region is None else (region.kept, region.inner)
+    asked, k = _spacing_asked(samples, general, among), min(len(wi), SPACING_NEIGHBOURS)
     few = len(wi) <= EVERY_PAIR_UP_TO
     queries = _firsts(samples)
+    if region is not None:
+        queries = queries[region.queried[queries]]
     if len(queries) > MAX_QUERIES:
         queries = np.sort(np.random.default_rng(0).choice(queries, MAX_QUERIES, replace=False))
     queries = queries[wi[queries, 2] >= INFORMATIVE * wo[queries, 2]]
@@ -427,7 +502,8 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     swapped_difference = -difference[queries]
     nearest = np.full((len(asked), k), np.inf)
     distance, found = np.full(len(queries), np.inf), np.zeros(len(queries), np.int64)
-    for band in _bands(difference):
+    for band in _bands(difference[kept]):
+        band = kept[band]
         tree = _tree(_points_at(samples, band, general), few, balanced_tree=False, compact_nodes=False)  # ~2× faster
         nearest = np.sort(np.hstack([nearest, _nearest(asked, tree, k)]), axis=1)[:, :k]
         lowest, highest = difference[band].min() - PARTNER_SLACK, difference[band].max() + PARTNER_SLACK

@@ -269,6 +269,42 @@ def test_pairing_band_by_band_finds_what_one_tree_finds(monkeypatch, general):
     assert banded[2] == pytest.approx(whole[2], rel=1e-12)  # the same distances, from trees over other points
 
 
+@pytest.mark.parametrize("general", [True, False])
+def test_a_large_file_is_paired_in_a_region_where_its_trees_find_what_trees_of_every_sample_find(monkeypatch, general):
+    """Above REGION_ABOVE samples, the firsts asked lie in cells of (cos θi + cos θo, wi · wo), which a sample and its
+    partner share to √2 × the tolerance, and the trees hold the samples in those cells or beside them alone: for the
+    same firsts and the same spacing samples, trees of every sample find the same partners and the same tolerance,
+    pairs straddling a cell's edge included; the spacing samples, 2 × SPACING_REACH inside the region, have the
+    same neighbours. Made: ~6,000 jittered swapped pairs and 1,500 samples within ~1° of others (neighbours within
+    the reach), the region of 600 firsts a fraction of the cells."""
+    from brdffit.data import reciprocity as module
+
+    pairs = jittered_swaps(3000, seed=5)
+    rng = np.random.default_rng(7)
+    near = [w[:1500] + rng.normal(0.0, 0.008, (1500, 3)) for w in (pairs.wi, pairs.wo)]
+    near = [w / np.linalg.norm(w, axis=1, keepdims=True) for w in near]
+    wi, wo = np.vstack([pairs.wi, near[0]]), np.vstack([pairs.wo, near[1]])
+    samples = Samples.from_arrays(wi, wo, np.ones((len(wi), 1)))
+    monkeypatch.setattr(module, "REGION_ABOVE", 0)
+    monkeypatch.setattr(module, "MAX_QUERIES", 600)
+    monkeypatch.setattr(module, "SPACING_SAMPLE", 64)
+    region = module._region(samples)
+    assert region is not None and len(region.kept) < 0.6 * samples.n_samples
+    in_region = module._paired(samples, general)
+    everywhere = module.Region(region.queried, np.arange(samples.n_samples), region.inner)
+    monkeypatch.setattr(module, "_region", lambda samples: everywhere)
+    whole = module._paired(samples, general)
+    assert len(whole[0]) >= 300 and np.any(~region.queried[whole[1]])  # some partners lie beside the region
+    np.testing.assert_array_equal(in_region[0], whole[0])
+    np.testing.assert_array_equal(in_region[1], whole[1])
+    assert in_region[2] == pytest.approx(whole[2], rel=1e-12)
+    inner = module._points_at(samples, region.inner, general)
+    trees = [module._tree(module._points_at(samples, kept, general), False) for kept in (region.kept, everywhere.kept)]
+    found = [module._nearest(inner, tree, module.SPACING_NEIGHBOURS) for tree in trees]
+    assert np.isfinite(found[1][:, 1]).mean() > 0.3  # many have a neighbour within the reach besides themselves
+    np.testing.assert_array_equal(found[0], found[1])
+
+
 def test_bands_hold_every_sample_once_where_differences_repeat(monkeypatch):
     """A grid's cos θi − cos θo repeats, so quantiles can coincide: no band is empty, every sample is in one."""
     from brdffit.data import reciprocity as module

@@ -271,6 +271,29 @@ def test_the_finer_screen_runs_on_the_fits_the_first_leaves_open_and_decides_for
     assert [one.albedo_open for one in screened] == expected == [(), (), (30.0, 60.0, 80.0), (30.0, 60.0, 80.0)]
 
 
+def test_lobe_shares_screened_at_a_few_samples_are_confirmed_at_every_sample_where_a_lobe_looks_dead(monkeypatch):
+    """A large dataset's lobe shares are screened at SHARE_SAMPLES of its samples (16 of 2,001 here): a lobe whose
+    share reaches DEAD_SHARE there contributes; one that stays under it is looked at on every sample. A narrow Ward
+    lobe that only the mirror direction sees (one sample, not among the 16) contributes; a lobe dead everywhere has its
+    largest share over every sample, as the whole dataset's own program gives it (1e-12: the same arithmetic)."""
+    monkeypatch.setattr(caveats_module, "SHARE_SAMPLES", 16)
+    model = get_model("ward")
+    wi, wo = data_synth.uniform_random(2000, seed=3)
+    light = np.array([[np.sin(0.5), 0.0, np.cos(0.5)]])
+    wi, wo = np.vstack([wi, light]), np.vstack([wo, light * [-1.0, -1.0, 1.0]])  # the last one at the mirror
+    samples = Samples.from_arrays(wi, wo, np.full((len(wi), 1), 0.1), source="narrow")
+    real = np.ones(samples.n_samples, bool)
+    for rho_s, alive in ((0.05, True), (1e-12, False)):
+        params = model.dictionary.to_params({"rho_d": [0.5], "rho_s": [rho_s], "alpha": 0.01})
+        whole = np.asarray(caveats_module._lobe_shares(model, params, samples.wi, samples.wo, real))
+        few = caveats_module._screened_at(samples)
+        at_few = np.asarray(caveats_module._lobe_shares(model, params, few.wi, few.wo, np.ones(few.n_samples, bool)))
+        assert few.n_samples == 16 and at_few[0] < caveats_module.DEAD_SHARE  # the screen alone calls it dead
+        (screened,) = caveats_module.screen_bucket(model, [params], [samples], 1)
+        np.testing.assert_allclose(screened.lobe_shares, whole, rtol=1e-12, atol=0.0)
+        assert (whole[0] >= caveats_module.DEAD_SHARE) == alive
+
+
 @pytest.mark.parametrize("open_rows", [[], [1], [0, 2, 3], [0, 1, 2, 3, 4]])
 def test_the_second_grid_takes_the_smaller_bound_on_the_open_fits_alone(monkeypatch, open_rows):
     """``_refined`` on made-up bounds (5 fits, 4 incidences, 2 channels) and a made-up second grid that gives each fit

@@ -135,6 +135,39 @@ def test_a_bad_start_is_said_before_any_work_starts(monkeypatch):
         fit(noiseless(model, options, params), model, start={"rho_d": [0.1], "rho_s": [0.1], "alpha": 0.1})
 
 
+@pytest.mark.parametrize("given", [True, False])
+def test_the_screens_compile_once_the_solve_is_lowered_from_a_given_start_else_before_the_search(given, monkeypatch):
+    """The caveats' screen program compiles in the background (``stacked.compile_in_background``): a single fit from a
+    given start starts it once its solve is lowered, so that its tracing runs beside the solve's compilation and not
+    beside the solve's own tracing (``StackedFit._compile_screens``); a fit from grid starts, before its search. The
+    result is the same. A step budget of its own gives the fit a solve not compiled before in this process."""
+    import jax
+
+    from brdffit._programs import cache
+    from brdffit.fitting.single import stacked
+
+    monkeypatch.setattr(cache, "_enabled", None)
+    events = []
+    lower, start = jax.stages.Traced.lower, stacked.compile_in_background
+
+    def lowered(self, *args, **kwargs):
+        events.append(("lowered", self.fun_name))
+        return lower(self, *args, **kwargs)
+
+    def started(program, *arguments):
+        events.append(("started", program.__name__))
+        return start(program, *arguments)
+
+    monkeypatch.setattr(jax.stages.Traced, "lower", lowered)
+    monkeypatch.setattr(stacked, "compile_in_background", started)
+    model, options, params = CASES[1]
+    samples = noiseless(model, options, params)
+    result = fit(samples, model, start=params if given else None, n_starts=1, max_steps=91 + given)
+    screens, solve = events.index(("started", "_bucket_screens")), events.index(("lowered", "solve"))
+    assert (screens > solve) == given
+    assert result.converged and result.warnings == []
+
+
 def test_not_converged_is_reported():
     model, options, params = CASES[4]
     result = fit(noiseless(model, options, params), model, max_steps=2, **options)

@@ -65,7 +65,8 @@ class StackedFit:
     ``on_stage``: called with ``"searched"`` once the grid starts are searched and ``"compiled"`` once the programs
     of the search and of the solve are compiled (with given starts, before anything has run; a float32 fit's
     refinement and a bounded fit's second solve compile later): ``many/threads.py`` starts its other threads then.
-    The caveats' screen program compiles in the background meanwhile (``caveats.screen_program``).
+    The caveats' screen program compiles in the background meanwhile (``caveats.screen_program``; a single fit's from
+    a given start once its solve is lowered, :meth:`_compile_screens`).
     """
 
     @float64
@@ -93,7 +94,8 @@ class StackedFit:
         self.solver = bucket_solver(model, loss, max_steps, dtype, strategy == "vmap")
         self.budget = step_budget(max_steps)
         self.caveats = caveats
-        self._screen_compiling = compile_in_background(*screen_program(model, samples, self.count)) if caveats else None
+        self._screen_program = screen_program(model, samples, self.count) if caveats else None
+        self._screen_compiling: threading.Thread | None = None  # started by _compile_screens
         # One dataset's reciprocity is checked while its programs trace and compile (a MERL-size file's directions take
         # ~0.6 s to pair); a batch's datasets mostly share their directions, whose pairs the first check keeps for the
         # others. The solve runs once it is done (:meth:`solve`): its k-d trees (~60 MB at MERL size) and the solve's
@@ -106,6 +108,8 @@ class StackedFit:
         its ``n_starts`` best shapes raced: to convergence on the search subset of large datasets, a few steps
         (:data:`RACE_STEPS`) on every sample of small ones."""
         model, count, holds = self.model, self.count, self.holds
+        if given is None or self._reciprocal is None:  # a single fit from a given start: once its solve is lowered
+            self._compile_screens()
         if given is not None:
             self.on_stage("compiled")
             return padded_rows(given, count)[:, None]
@@ -157,7 +161,8 @@ class StackedFit:
         samples, count, holds = self.samples, self.count, self.holds
         if self._reciprocal is not None:  # compiled beside the check, run after it
             if not self.solver.is_compiled(thetas, self.problems, holds, self.budget):
-                self.solver.precompile(thetas, self.problems, holds, self.budget)
+                self.solver.precompile_with(self._compile_screens, thetas, self.problems, holds, self.budget)
+            self._compile_screens()
             self._reciprocity_checked()
         solved = _best(self.solver(thetas, self.problems, holds, self.budget))
         solver64, problems64 = self.solver, self.problems
@@ -171,6 +176,15 @@ class StackedFit:
             solved = onto_bounds(again, solved, holds)
         self.problems = None  # the results need none of it: its memory (~110 MB at MERL size) back before the caveats
         return jax.tree.map(lambda leaf: leaf[: len(samples)], solved)
+
+    def _compile_screens(self) -> None:
+        """Start compiling the caveats' screen program in the background (``caveats.screen_program``), once. A fit
+        from grid starts starts it before its search; a single fit from a given start once its solve is lowered
+        (:meth:`solve`): its tracing and lowering (~0.2 s of Python for a MERL-size Cook-Torrance fit) then run while
+        XLA compiles the solve, and no longer slow the solve's own tracing by as much (the GIL is one), and its
+        compilation overlaps that one's and the solve's run."""
+        if self._screen_program is not None and self._screen_compiling is None:
+            self._screen_compiling = compile_in_background(*self._screen_program)
 
     def _reciprocity_checked(self) -> None:
         """Wait for the reciprocity check started with the fit, if it is still under way."""
@@ -189,7 +203,9 @@ class StackedFit:
         params = [final_params(self.model, one, n_channels) for one in each]
         screens: Sequence[Screened | None] = [None] * len(params)
         reciprocals = [self._reciprocal] * len(params)  # a check started with the fit: of its one dataset
-        if self._screen_compiling is not None:  # with caveats
+        if self._screen_program is not None:  # with caveats
+            self._compile_screens()
+            assert self._screen_compiling is not None  # started now, if not before
             self._screen_compiling.join()
             screens = screen_bucket(self.model, params, self.samples, self.count)
         return [
