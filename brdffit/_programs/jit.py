@@ -33,9 +33,9 @@ CPU_COMPILER_OPTIONS = {
 #: The others keep the classic ones: Ward 4.6 and 4.8 ms, Cook-Torrance 4.7 and 5.3, an anisotropic conductor 60 and
 #: 64, principled's whole Jacobian 138 and 373. Compiling takes 0.5–1.2 s longer a program.
 EMITTER_COMPILER_OPTIONS = CPU_COMPILER_OPTIONS | {"xla_cpu_use_fusion_emitters": True}
-#: Added for a program compiled unoptimised (``jit(..., optimised=False)``): LLVM's passes skipped. A small program
-#: whose run is short, as the caveats' screens (~300 operations on a grid of a few thousand directions), compiles
-#: in a third of the time (the albedo screen's: 0.05 s against 0.15–0.19 s) and runs a few ms longer.
+#: Added for a program compiled unoptimised (``jit(..., optimised=False)``): LLVM's passes skipped, for a small
+#: program whose run is short (a single fit's caveat screens, ``caveats._screens_program``): XLA compiles the albedo
+#: screen's ~300 operations in 0.05 s instead of 0.15–0.19 s.
 UNOPTIMISED = {"xla_backend_optimization_level": 0}
 
 
@@ -139,27 +139,27 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), optimised
         values = [item for value in statics for item in (value if isinstance(value, tuple) else (value,))]
         return any(getattr(value, "fusion_emitters", False) is True for value in values)
 
-    def stored_for(args, kwargs, lowered=None):
-        """The stored program for a top-level call, or None (``stored.stored_program``, which calls ``lowered()``
-        between exporting the program and compiling it)."""
+    def stored_for(args, kwargs, on_lowered=None):
+        """The stored program for a top-level call, or None (``stored.stored_program``, which calls ``on_lowered()``
+        between exporting the program, or reading its export, and compiling it)."""
         if identity is None or kwargs:
             return None
         emitters = emitters_for(args)
         jitted, options = (lambda: top_level(emitters)), (lambda: compiler_options(emitters, optimised))
-        return stored.stored_program(stored_identity(emitters), jitted, args, static_argnums, options, lowered)
+        return stored.stored_program(stored_identity(emitters), jitted, args, static_argnums, options, on_lowered)
 
     def stored_identity(emitters: bool) -> list:
         """What names a call's stored program: the function's identity and the options it compiles with."""
         assert identity is not None  # a stored program is only ever found for a function with an identity
         return [*identity, {"fusion_emitters": emitters} | ({} if optimised else {"optimised": False})]
 
-    def with_stored(args, kwargs, key, use, otherwise, runs: bool = True, lowered=None):
+    def with_stored(args, kwargs, key, use, otherwise, runs: bool = True, on_lowered=None):
         """``use(program)`` with the stored program for the call, or ``otherwise()`` when there is none. A stored
         program that fails the first time it is compiled or run in this process (a file this cache signed, but that
         this JAX cannot read) is discarded with one warning (``stored.discard``) and exported again. ``runs``: whether
         ``use`` runs the program (else it only compiles it, which proves nothing of an executable loaded ready).
-        ``lowered``: called once a program exported now is lowered, before it is compiled (``stored_for``)."""
-        program = stored_for(args, kwargs, lowered)
+        ``on_lowered``: called once a program is exported or its export read, before it is compiled (``stored_for``)."""
+        program = stored_for(args, kwargs, on_lowered)
         if program is None:
             return otherwise()
         if program in proven:
@@ -206,8 +206,8 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), optimised
         """
         precompile_with(None, *args, **kwargs)
 
-    def precompile_with(lowered: Callable[[], None] | None, *args, **kwargs) -> None:
-        """:func:`precompile`, calling ``lowered()`` on this thread once the program is traced and lowered (or its
+    def precompile_with(on_lowered: Callable[[], None] | None, *args, **kwargs) -> None:
+        """:func:`precompile`, calling ``on_lowered()`` on this thread once the program is traced and lowered (or its
         stored export read), just before XLA compiles it; not at all where it is compiled in this process already.
         Work that holds the GIL (another program's tracing) started there runs beside the compilation, which
         releases it, instead of beside the tracing, which it would slow as much as it takes (``single/stacked.py``).
@@ -222,10 +222,10 @@ def jit(fun=None, *, name: str | None = None, closes_over: tuple = (), optimised
                 key,
                 lambda program: _compile(program, stored.dynamic_arguments(args, static_argnums)),
                 lambda: first_calls.run(
-                    key, lambda: _compile_lowered(top_level(emitters_for(args)).lower(*args, **kwargs), lowered)
+                    key, lambda: _compile_lowered(top_level(emitters_for(args)).lower(*args, **kwargs), on_lowered)
                 ),
                 runs=False,
-                lowered=lowered,
+                on_lowered=on_lowered,
             )
             compiled.add(key)
 
@@ -254,10 +254,10 @@ def _call_key(args: tuple, kwargs: dict, static_argnums: tuple[int, ...]) -> tup
     return statics, tree, tuple(stored.array_description(leaf) for leaf in leaves)
 
 
-def _compile_lowered(program, lowered: Callable[[], None] | None) -> None:
-    """Compile a lowered ``program`` (``jax.stages.Lowered``), calling ``lowered()`` first (``precompile_with``)."""
-    if lowered is not None:
-        lowered()
+def _compile_lowered(program, on_lowered: Callable[[], None] | None) -> None:
+    """Compile a lowered ``program`` (``jax.stages.Lowered``), calling ``on_lowered()`` first (``precompile_with``)."""
+    if on_lowered is not None:
+        on_lowered()
     program.compile()
 
 

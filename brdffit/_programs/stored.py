@@ -84,7 +84,7 @@ def stored_program(
     args: Sequence,
     static_argnums: Sequence[int],
     compile_options: Callable[[], dict | None],
-    lowered: Callable[[], None] | None = None,
+    on_lowered: Callable[[], None] | None = None,
 ) -> Callable | None:
     """A compiled call of the stored program for ``jitted()(*args)`` (of the dynamic arguments only), or None.
 
@@ -92,7 +92,7 @@ def stored_program(
     ``jit.jit``); ``jitted()`` gives its ``jax.jit``, used to export it the first time, and ``compile_options()`` the
     options to compile it with: both asked for only when the program is exported or compiled (finding the options
     compiles a program, ``jit.known_options``). None when programs are not being stored or the call cannot be.
-    ``lowered()`` is called once the program is exported or read, before it is compiled (``jit.precompile_with``).
+    ``on_lowered()`` is called once the program is exported or read, before it is compiled (``jit.precompile_with``).
     """
     from .cache import programs_folder
 
@@ -116,8 +116,8 @@ def stored_program(
             with _lock:
                 exported, name = _load_or_export(folder, signature, jitted, args, static_argnums)
             if exported is not None:
-                if lowered is not None:
-                    lowered()
+                if on_lowered is not None:
+                    on_lowered()
                 dynamic = dynamic_arguments(args, static_argnums)
                 program = executables.compiled_program(folder, name, secret(folder), exported, dynamic, compile_options)
             else:

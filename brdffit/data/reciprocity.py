@@ -129,7 +129,7 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
             (first, second, within), kind = isotropic, "isotropic (zeniths swapped, same |φo − φi|)"
     if len(first) < MIN_PAIRS:
         return None
-    both = np.concatenate([first, second])  # the paired samples only (a MERL-size file: 124 pairs of 1.4 million)
+    both = np.concatenate([first, second])  # the paired samples only (a MERL-size file: 123 pairs of 1.4 million)
     wi, wo = samples.wi[both], samples.wo[both]
     stored = samples.values[both] * stored_factor(in_force, wi, wo)
     ratios = {}
@@ -144,7 +144,7 @@ def reciprocity(samples: Samples) -> Reciprocity | None:
 
 class ReciprocityAhead:
     """:func:`reciprocity` of some samples, computed in a thread from when it is made, while the caller does other work
-    (a fit traces and compiles meanwhile: pairing a MERL-size file's directions is ~0.6 s, most of it in NumPy and the
+    (a fit traces and compiles meanwhile: pairing a MERL-size file's directions is ~0.3 s, most of it in NumPy and the
     k-d trees, which release the GIL). :meth:`result` waits for it, issues the warnings it met (in the caller's
     thread, :func:`~brdffit.errors.warnings_deferred`) and returns what it found or raises what it raised."""
 
@@ -415,9 +415,9 @@ REGION_CELLS = 8
 REGION_FINE = 14
 
 
-class Region(NamedTuple):
-    """Where a large file's pairs are looked for (:func:`_region`), by sample: ``queried`` (N,) whether a sample
-    lies in it (a first there is asked for its partner); ``kept``, the indices of the samples in it or within
+class _Region(NamedTuple):
+    """Where a large file's pairs are looked for (:func:`_region`): ``queried``, a mask (N,) of the samples in it
+    (a first there is asked for its partner); ``kept``, the indices of the samples in it or within
     :data:`PARTNER_SLACK` of it (the trees hold these alone); ``inner``, the indices of those that lie at least
     twice :data:`SPACING_REACH` inside it (the spacing's samples are chosen among these)."""
 
@@ -435,7 +435,7 @@ def _swap_invariants(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
     return wi[:, 2] + wo[:, 2], np.einsum("ij,ij->i", wi, wo)
 
 
-def _region(samples: Samples) -> Region | None:
+def _region(samples: Samples) -> _Region | None:
     """The region of a large file whose pairs are looked for: cells of the :data:`REGION_CELLS` grid of
     :func:`_swap_invariants`, taken in a seeded order until they hold :data:`MAX_QUERIES` firsts (as many as are
     asked of any file). A first's partner lies within :data:`MAX_TOLERANCE` of its swapped point, whose ``s`` and
@@ -458,18 +458,26 @@ def _region(samples: Samples) -> Region | None:
     cells = np.zeros(len(in_cells), bool)
     cells[order[: enough[0] + 1]] = True
     chosen = np.kron(cells.reshape(REGION_CELLS, REGION_CELLS), np.ones((REGION_FINE, REGION_FINE), bool))
-    beside = _spread(chosen, math.ceil(PARTNER_SLACK / width), np.any)
-    inner = _spread(chosen, math.ceil(2 * SPACING_REACH / width), np.all)
-    region = Region(chosen.ravel()[fine], np.flatnonzero(beside.ravel()[fine]), np.flatnonzero(inner.ravel()[fine]))
+    beside = _dilated(chosen, math.ceil(PARTNER_SLACK / width))
+    inner = _eroded(chosen, math.ceil(2 * SPACING_REACH / width))
+    region = _Region(chosen.ravel()[fine], np.flatnonzero(beside.ravel()[fine]), np.flatnonzero(inner.ravel()[fine]))
     return region if len(region.inner) >= SPACING_SAMPLE else None
 
 
-def _spread(grid: np.ndarray, reach: int, test) -> np.ndarray:
-    """Each cell of a boolean ``grid``: ``test`` (``np.any``, ``np.all``) of the cells within ``reach`` of it along
-    each axis; beyond the grid, none (``np.any``) or every one (``np.all``: no sample lies there)."""
-    padded = np.pad(grid, reach, constant_values=test is np.all)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, (2 * reach + 1, 2 * reach + 1))
-    return test(windows, axis=(2, 3))
+def _dilated(grid: np.ndarray, reach: int) -> np.ndarray:
+    """The cells of a boolean ``grid`` that lie within ``reach`` cells (along each axis) of one of its true cells."""
+    return np.asarray(_windows(np.pad(grid, reach, constant_values=False), reach).any(axis=(2, 3)))
+
+
+def _eroded(grid: np.ndarray, reach: int) -> np.ndarray:
+    """The cells of a boolean ``grid`` whose cells within ``reach`` (along each axis) are all true; beyond the grid
+    counts as true (no sample lies there)."""
+    return np.asarray(_windows(np.pad(grid, reach, constant_values=True), reach).all(axis=(2, 3)))
+
+
+def _windows(padded: np.ndarray, reach: int) -> np.ndarray:
+    """The (2·reach + 1)² windows of a grid padded by ``reach``, one a cell of the grid: (rows, columns, w, w)."""
+    return np.lib.stride_tricks.sliding_window_view(padded, (2 * reach + 1, 2 * reach + 1))
 
 
 def _paired(samples: Samples, general: bool) -> Pairs:

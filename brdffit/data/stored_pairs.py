@@ -1,6 +1,6 @@
 """The reciprocal pairs of large files, kept in the compilation cache's folder so that a machine pairs a geometry once.
 
-Pairing a MERL-size file's directions (``reciprocity.py``) takes ~0.6 s, a quarter of a warm MERL-size fit, and
+Pairing a MERL-size file's directions (``reciprocity.py``) takes ~0.3 s, half of a warm MERL-size fit, and
 depends on the directions alone: every MERL table has the same 1,458,000, and a user fits one file with several
 models. So pairings of at least :data:`STORED_FROM` samples are kept in ``programs/`` of the enabled cache
 (``brdffit.enable_compilation_cache``; the command line's default), one ``.pairs`` file each, named by a digest of

@@ -291,7 +291,7 @@ def test_a_large_file_is_paired_in_a_region_where_its_trees_find_what_trees_of_e
     region = module._region(samples)
     assert region is not None and len(region.kept) < 0.6 * samples.n_samples
     in_region = module._paired(samples, general)
-    everywhere = module.Region(region.queried, np.arange(samples.n_samples), region.inner)
+    everywhere = module._Region(region.queried, np.arange(samples.n_samples), region.inner)
     monkeypatch.setattr(module, "_region", lambda samples: everywhere)
     whole = module._paired(samples, general)
     assert len(whole[0]) >= 300 and np.any(~region.queried[whole[1]])  # some partners lie beside the region
@@ -303,6 +303,24 @@ def test_a_large_file_is_paired_in_a_region_where_its_trees_find_what_trees_of_e
     found = [module._nearest(inner, tree, module.SPACING_NEIGHBOURS) for tree in trees]
     assert np.isfinite(found[1][:, 1]).mean() > 0.3  # many have a neighbour within the reach besides themselves
     np.testing.assert_array_equal(found[0], found[1])
+
+
+def test_a_large_file_without_a_region_big_enough_asks_every_cell(monkeypatch):
+    """Where the cells hold fewer firsts than MAX_QUERIES, or too few samples lie inside them to measure the spacing
+    (SPACING_SAMPLE), there is no region (None), and the pairing asks samples from every cell, as a small file's."""
+    from brdffit.data import reciprocity as module
+
+    samples = jittered_swaps(1000, seed=8)
+    plain = module._paired(samples, True)
+    monkeypatch.setattr(module, "REGION_ABOVE", 0)
+    for name, value in (("MAX_QUERIES", samples.n_samples), ("SPACING_SAMPLE", samples.n_samples)):
+        with monkeypatch.context() as patched:
+            patched.setattr(module, name, value)
+            assert module._region(samples) is None
+            paired = module._paired(samples, True)
+            np.testing.assert_array_equal(paired[0], plain[0])
+            np.testing.assert_array_equal(paired[1], plain[1])
+            assert paired[2] == plain[2]
 
 
 def test_bands_hold_every_sample_once_where_differences_repeat(monkeypatch):

@@ -294,6 +294,27 @@ def test_lobe_shares_screened_at_a_few_samples_are_confirmed_at_every_sample_whe
         assert (whole[0] >= caveats_module.DEAD_SHARE) == alive
 
 
+def test_a_large_datasets_screens_compiled_ahead_are_those_it_runs_and_look_at_no_more_samples_when_lobes_contribute(
+    monkeypatch,
+):
+    """A single fit's screen program compiled ahead (``screen_program``, from shapes) is the one ``screen_bucket`` runs
+    on a dataset of more than SHARE_SAMPLES samples (nothing compiles twice), and where every lobe contributes at the
+    screened samples no program passes over every sample."""
+    monkeypatch.setattr(caveats_module, "SHARE_SAMPLES", 64)
+    model = get_model("ward")
+    samples = data_synth.synthesize("ward", WARD, *data_synth.uniform_random(1000, seed=4))
+    program, *shapes = caveats_module.screen_program(model, [samples], 1)
+    program.precompile(*shapes)
+    whole = []
+    shares = caveats_module._lobe_shares
+    monkeypatch.setattr(caveats_module, "_lobe_shares", lambda model, *args: whole.append(args) or shares(model, *args))
+    (screened,) = caveats_module.screen_bucket(model, [model.dictionary.to_params(WARD)], [samples], 1)
+    assert screened.lobe_shares[0] >= caveats_module.DEAD_SHARE and whole == []
+    few = caveats_module.stacked_directions([caveats_module._screened_at(samples)], "float64", 1)
+    params = jax.tree.map(lambda leaf: np.asarray(leaf)[None], model.dictionary.to_params(WARD))
+    assert program is caveats_module._screens_program(1) and program.is_compiled(model, params, *few)
+
+
 @pytest.mark.parametrize("open_rows", [[], [1], [0, 2, 3], [0, 1, 2, 3, 4]])
 def test_the_second_grid_takes_the_smaller_bound_on_the_open_fits_alone(monkeypatch, open_rows):
     """``_refined`` on made-up bounds (5 fits, 4 incidences, 2 channels) and a made-up second grid that gives each fit

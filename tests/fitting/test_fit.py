@@ -141,29 +141,35 @@ def test_the_screens_compile_once_the_solve_is_lowered_from_a_given_start_else_b
     given start starts it once its solve is lowered, so that its tracing runs beside the solve's compilation and not
     beside the solve's own tracing (``StackedFit._compile_screens``); a fit from grid starts, before its search. The
     result is the same. A step budget of its own gives the fit a solve not compiled before in this process."""
+    import threading
+
     import jax
 
     from brdffit._programs import cache
     from brdffit.fitting.single import stacked
 
     monkeypatch.setattr(cache, "_enabled", None)
-    events = []
+    events, ours = [], {threading.get_ident()}  # this fit's threads: the main one and those it starts
     lower, start = jax.stages.Traced.lower, stacked.compile_in_background
 
     def lowered(self, *args, **kwargs):
-        events.append(("lowered", self.fun_name))
-        return lower(self, *args, **kwargs)
+        program = lower(self, *args, **kwargs)
+        events.append(("lowered", self.fun_name, threading.get_ident()))
+        return program
 
     def started(program, *arguments):
-        events.append(("started", program.__name__))
-        return start(program, *arguments)
+        events.append(("started", program.__name__, threading.get_ident()))
+        thread = start(program, *arguments)
+        ours.add(thread.ident)
+        return thread
 
     monkeypatch.setattr(jax.stages.Traced, "lower", lowered)
     monkeypatch.setattr(stacked, "compile_in_background", started)
     model, options, params = CASES[1]
     samples = noiseless(model, options, params)
     result = fit(samples, model, start=params if given else None, n_starts=1, max_steps=91 + given)
-    screens, solve = events.index(("started", "_bucket_screens")), events.index(("lowered", "solve"))
+    said = [(event, name) for event, name, thread in events if thread in ours]  # not a thread an earlier test left
+    screens, solve = said.index(("started", "_bucket_screens")), said.index(("lowered", "solve"))
     assert (screens > solve) == given
     assert result.converged and result.warnings == []
 

@@ -97,8 +97,8 @@ class StackedFit:
         self._screen_program = screen_program(model, samples, self.count) if caveats else None
         self._screen_compiling: threading.Thread | None = None  # started by _compile_screens
         # One dataset's reciprocity is checked while its programs trace and compile (a MERL-size file's directions take
-        # ~0.6 s to pair); a batch's datasets mostly share their directions, whose pairs the first check keeps for the
-        # others. The solve runs once it is done (:meth:`solve`): its k-d trees (~60 MB at MERL size) and the solve's
+        # ~0.3 s to pair); a batch's datasets mostly share their directions, whose pairs the first check keeps for the
+        # others. The solve runs once it is done (:meth:`solve`): its k-d trees (~20 MB at MERL size) and the solve's
         # run never meet, and a MERL-size fit's peak memory stays under 600 MB.
         self._reciprocal = ReciprocityAhead(self.samples[0]) if caveats and len(self.samples) == 1 else None
 
