@@ -435,11 +435,12 @@ def _swap_invariants(samples: Samples) -> tuple[np.ndarray, np.ndarray]:
     return wi[:, 2] + wo[:, 2], np.einsum("ij,ij->i", wi, wo)
 
 
-def _region(samples: Samples) -> _Region | None:
+def _region(samples: Samples, firsts: np.ndarray) -> _Region | None:
     """The region of a large file whose pairs are looked for: cells of the :data:`REGION_CELLS` grid of
-    :func:`_swap_invariants`, taken in a seeded order until they hold :data:`MAX_QUERIES` firsts (as many as are
-    asked of any file). A first's partner lies within :data:`MAX_TOLERANCE` of its swapped point, whose ``s`` and
-    ``u`` are its own: within ``√2`` × 0.5° (≤ :data:`PARTNER_SLACK`) of its cell. So the trees hold the region's
+    :func:`_swap_invariants`, taken in a seeded order until they hold :data:`MAX_QUERIES` of ``firsts`` (the indices
+    of :func:`_firsts`; as many as are asked of any file). A first's partner lies within :data:`MAX_TOLERANCE` of its
+    swapped point, whose ``s`` and ``u`` are its own: within ``√2`` × 0.5° (≤ :data:`PARTNER_SLACK`) of its cell. So
+    the trees hold the region's
     samples and those beside it alone (a MERL-size file: 23% of its samples), and find every partner one tree of
     every sample finds for the same firsts; the spacing is estimated among samples whose neighbours within
     :data:`SPACING_REACH` all lie in the region (twice that inside it, ``√2`` × it in ``s`` and ``u``, with a margin
@@ -449,8 +450,8 @@ def _region(samples: Samples) -> _Region | None:
     width = 2.0 / lines
     fine = np.clip((s / width).astype(np.intp), 0, lines - 1) * lines
     fine += np.clip(((u + 1.0) / width).astype(np.intp), 0, lines - 1)
-    firsts = np.bincount(fine[samples.wi[:, 2] > samples.wo[:, 2]], minlength=lines * lines)
-    in_cells = firsts.reshape(REGION_CELLS, REGION_FINE, REGION_CELLS, REGION_FINE).sum(axis=(1, 3)).ravel()
+    in_fine = np.bincount(fine[firsts], minlength=lines * lines)
+    in_cells = in_fine.reshape(REGION_CELLS, REGION_FINE, REGION_CELLS, REGION_FINE).sum(axis=(1, 3)).ravel()
     order = np.random.default_rng(0).permutation(len(in_cells))
     enough = np.flatnonzero(np.cumsum(in_cells[order]) >= MAX_QUERIES)
     if not len(enough):
@@ -493,12 +494,12 @@ def _paired(samples: Samples, general: bool) -> Pairs:
     A file above :data:`REGION_ABOVE` samples asks those of a region alone, and its trees hold the samples in the
     region and beside it (:func:`_region`)."""
     wi, wo = samples.wi, samples.wo
-    region = _region(samples) if len(wi) > REGION_ABOVE else None
+    queries = _firsts(samples)
+    region = _region(samples, queries) if len(wi) > REGION_ABOVE else None
     every = np.arange(len(wi))
     kept, among = (every, every) if region is None else (region.kept, region.inner)
     asked, k = _spacing_asked(samples, general, among), min(len(wi), SPACING_NEIGHBOURS)
     few = len(wi) <= EVERY_PAIR_UP_TO
-    queries = _firsts(samples)
     if region is not None:
         queries = queries[region.queried[queries]]
     if len(queries) > MAX_QUERIES:

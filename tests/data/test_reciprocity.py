@@ -288,11 +288,11 @@ def test_a_large_file_is_paired_in_a_region_where_its_trees_find_what_trees_of_e
     monkeypatch.setattr(module, "REGION_ABOVE", 0)
     monkeypatch.setattr(module, "MAX_QUERIES", 600)
     monkeypatch.setattr(module, "SPACING_SAMPLE", 64)
-    region = module._region(samples)
+    region = module._region(samples, module._firsts(samples))
     assert region is not None and len(region.kept) < 0.6 * samples.n_samples
     in_region = module._paired(samples, general)
     everywhere = module._Region(region.queried, np.arange(samples.n_samples), region.inner)
-    monkeypatch.setattr(module, "_region", lambda samples: everywhere)
+    monkeypatch.setattr(module, "_region", lambda samples, firsts: everywhere)
     whole = module._paired(samples, general)
     assert len(whole[0]) >= 300 and np.any(~region.queried[whole[1]])  # some partners lie beside the region
     np.testing.assert_array_equal(in_region[0], whole[0])
@@ -316,7 +316,7 @@ def test_a_large_file_without_a_region_big_enough_asks_every_cell(monkeypatch):
     for name, value in (("MAX_QUERIES", samples.n_samples), ("SPACING_SAMPLE", samples.n_samples)):
         with monkeypatch.context() as patched:
             patched.setattr(module, name, value)
-            assert module._region(samples) is None
+            assert module._region(samples, module._firsts(samples)) is None
             paired = module._paired(samples, True)
             np.testing.assert_array_equal(paired[0], plain[0])
             np.testing.assert_array_equal(paired[1], plain[1])

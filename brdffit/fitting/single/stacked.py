@@ -159,9 +159,8 @@ class StackedFit:
         start (:meth:`starts`): Levenberg-Marquardt on every sample, then a float32 fit refined in float64, and a
         bounded parameter that ended near its bound solved again on it (:func:`onto_bounds`)."""
         samples, count, holds = self.samples, self.count, self.holds
-        if self._reciprocal is not None:  # compiled beside the check, run after it
-            if not self.solver.is_compiled(thetas, self.problems, holds, self.budget):
-                self.solver.precompile_with(self._compile_screens, thetas, self.problems, holds, self.budget)
+        if self._reciprocal is not None:  # compiled beside the check (nothing to do if compiled already), run after it
+            self.solver.precompile_with(self._compile_screens, thetas, self.problems, holds, self.budget)
             self._compile_screens()
             self._reciprocity_checked()
         solved = _best(self.solver(thetas, self.problems, holds, self.budget))
