@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-reading bench-threads bench-svbrdf lint format docs examples clean
+.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-kernels bench-reading bench-threads bench-svbrdf lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -101,6 +101,11 @@ bench-exports: $(STAMP)
 # warm, phase by phase (~5 minutes); writes benchmarks/results/phases.{json,md}, which docs/scale.md quotes.
 bench-phases: $(STAMP)
 	$(BIN)/python benchmarks/phases.py
+
+# Where a normal-equation pass's time goes (issue 32's step goal): its kernels, profiled, at MERL size, for
+# Cook-Torrance and Ward (~2 minutes); writes benchmarks/results/kernels.{json,md}, which docs/scale.md quotes.
+bench-kernels: $(STAMP)
+	$(BIN)/python benchmarks/kernels.py
 
 # Spatially varying materials (issue 31): per-texel cost against a scipy loop, where it goes, compilation, and a
 # 256 × 256 capture end to end (~5 minutes); writes benchmarks/results/svbrdf.{json,md}.

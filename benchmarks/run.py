@@ -136,8 +136,9 @@ def interleaved(repeats: int, variants: dict[str, tuple[tuple[str, ...], str]], 
     return {name: summarised(done) for name, done in runs.items()}
 
 
-def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict:
-    """(a), (d) and (e) for one model."""
+def merl_data(model_name: str, size: int, folder: Path) -> tuple[Path, Path]:
+    """(a)'s data and start for one model, written into ``folder``: ``size`` uniformly random direction pairs of
+    :data:`MATERIALS`' material with 1% noise (``.npz``), and brdffit's data-driven start of the log loss (JSON)."""
     model, loss = get_model(model_name), get_loss("log")
     wi, wo = data_synth.uniform_random(size, seed=1)
     samples = data_synth.synthesize(model_name, MATERIALS[model_name], wi, wo, noise=0.01, seed=2)
@@ -151,6 +152,12 @@ def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict
     theta = starting_points(model, loss, search, 1)[0]
     start = folder / f"{model_name}-start.json"
     start.write_text(json.dumps(model.dictionary.from_params(model.unconstrained.to_params(theta, 3))))
+    return data, start
+
+
+def merl_section(model_name: str, size: int, repeats: int, folder: Path) -> dict:
+    """(a), (d) and (e) for one model."""
+    data, start = merl_data(model_name, size, folder)
     common = ("merl", "--model", model_name, "--data", str(data), "--start", str(start))
 
     cache = str(folder / f"cache-{model_name}")
