@@ -372,7 +372,7 @@ def screen_bucket(model: LobeModel, params: list[Params], samples: Sequence[Samp
 def screen_program(model: LobeModel, samples: Sequence[Samples], stack: int) -> tuple:
     """:func:`screen_bucket`'s program followed by its arguments (the model, the shapes of the others) for
     ``samples`` stacked to ``stack`` datasets, to compile it ahead (``stacked.compile_in_background``)."""
-    n_channels, size = samples[0].n_channels, padded_size(min(samples[0].n_samples, SHARE_SAMPLES))
+    n_channels, size = samples[0].n_channels, padded_size(_screened_count(samples[0].n_samples))
     vector = np.zeros((stack, model.unconstrained.size(n_channels)))
     params = jax.eval_shape(jax.vmap(lambda v: model.unconstrained.to_params(v, n_channels)), vector)
     directions = jax.ShapeDtypeStruct((stack, size, 3), np.float64)
@@ -403,12 +403,19 @@ def _bucket_screens(model: LobeModel, stacked: Params, wi, wo, real):
     return jax.lax.map(one, (stacked, wi, wo, real))
 
 
+def _screened_count(n_samples: int) -> int:
+    """How many samples of a dataset of ``n_samples`` the screen looks at: all of them, at most :data:`SHARE_SAMPLES`
+    (:func:`_screened_at`; :func:`screen_program` compiles for this many, padded)."""
+    return min(n_samples, SHARE_SAMPLES)
+
+
 def _screened_at(samples: Samples) -> Samples:
-    """The samples whose lobe shares the screen looks at: all of a dataset of at most :data:`SHARE_SAMPLES`, else
-    that many of them, drawn with a seed (a sample drawn twice counts once in a largest share)."""
-    if samples.n_samples <= SHARE_SAMPLES:
+    """The samples whose lobe shares the screen looks at: :func:`_screened_count` of them, all of a small dataset, else
+    drawn with a seed (a sample drawn twice counts once in a largest share)."""
+    count = _screened_count(samples.n_samples)
+    if count == samples.n_samples:
         return samples
-    return samples.select(np.random.default_rng(0).integers(0, samples.n_samples, SHARE_SAMPLES))
+    return samples.select(np.random.default_rng(0).integers(0, samples.n_samples, count))
 
 
 def _confirmed_shares(
@@ -420,7 +427,7 @@ def _confirmed_shares(
     padded size, as the fits' problems are: one program for the datasets of a bucket)."""
     confirmed = shares.copy()
     for d in np.flatnonzero((shares < DEAD_SHARE).any(axis=1)).tolist():
-        if samples[d].n_samples > SHARE_SAMPLES:
+        if _screened_count(samples[d].n_samples) < samples[d].n_samples:  # else every sample was screened
             wi, wo, real = (stacked[0] for stacked in stacked_directions([samples[d]], "float64", 1))
             confirmed[d] = np.asarray(_lobe_shares(model, params[d], wi, wo, real))
     return confirmed
