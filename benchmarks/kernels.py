@@ -95,7 +95,7 @@ def kernel_seconds(run, names: set[str], passes: int = 3) -> tuple[dict[str, tup
     calls: collections.Counter = collections.Counter()
     for event in events:
         if event.get("ph") == "X" and event.get("name") in names:
-            total[event["name"]] += event.get("dur", 0) * 1e-6  # µs
+            total[event["name"]] += event.get("dur", 0) * 1e-6  # the trace gives durations in µs
             calls[event["name"]] += 1
     return {name: (total[name] / passes, calls[name] // passes) for name in total}, profiled
 
