@@ -60,9 +60,11 @@ def _output(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from .._programs.cache import enable_compilation_cache
-    from ..export.targets import TARGETS, export, export_format
+    from ..export.targets import TARGETS, check_suffix, export, export_format
 
     kind = export_format(args.to, args.format, args.output)
+    if args.output is not None:  # a default name has the format's suffix
+        check_suffix(args.to, args.output)
     if args.bin_centres and args.to != "merl":
         raise BrdfInputError(f"--bin-centres applies to --to merl, not to --to {args.to}")
     from .files import input_path

@@ -12,9 +12,11 @@ import types
 class _CallableExport(types.ModuleType):
     def __call__(self, result, to: str, path, format: str | None = None, samples=None, *, bin_centres: bool = False):
         """Write ``result`` for the renderer ``to`` (``targets.export``: ``"mitsuba"``, ``"gltf"``, ``"merl"``) to
-        ``path``; returns the lines a user should read (whether it is exact, how far it lies, notes)."""
-        from .targets import export
+        ``path``, a file named with one of the target's suffixes (``targets.check_suffix``); returns the lines a
+        user should read (whether it is exact, how far it lies, notes)."""
+        from .targets import check_suffix, export
 
+        check_suffix(to, path)
         return export(result, to, path, format, samples, bin_centres=bin_centres)
 
 

@@ -68,10 +68,11 @@ TARGETS = {
 def export_format(to: str, format: str | None = None, path: str | os.PathLike | None = None) -> str:
     """The format a target writes: ``format`` if the target takes it; else the one whose suffix ``path`` ends
     with, if any; else the target's first. One-line errors for a format the target does not write, and for a
-    ``path`` whose suffix is another of the target's formats' (``--format glb -o oak.gltf``)."""
+    ``path`` whose suffix is another of the target's formats' (``--format glb -o oak.gltf``); a path that ends with
+    none of them is :func:`check_suffix`'s."""
     choice("to", to, TARGETS)
     formats = TARGETS[to].formats
-    named = next((kind for kind, suffix in formats.items() if path and str(path).lower().endswith(suffix)), None)
+    named = _named_format(formats, path)
     kind = format or named or next(iter(formats))
     if kind not in formats:
         raise BrdfInputError(
@@ -86,13 +87,32 @@ def export_format(to: str, format: str | None = None, path: str | os.PathLike | 
     return kind
 
 
+def check_suffix(to: str, path: str | os.PathLike) -> None:
+    """A one-line error for a file ``path`` (``-``, standard output, aside) whose name ends with none of the suffixes
+    of the target ``to``'s formats: ``--to mitsuba -o oak.json`` would put XML where every other command reads a
+    result, ``--to merl -o oak.csv`` a binary table where they read samples."""
+    choice("to", to, TARGETS)
+    formats = TARGETS[to].formats
+    if str(path) != "-" and _named_format(formats, path) is None:
+        written = " or ".join(f"{suffix} ({kind})" for kind, suffix in formats.items())
+        raise BrdfInputError(
+            Argument("path", str(path)), f": a {to} export is written to a {written} file; give the file that name"
+        )
+
+
+def _named_format(formats: dict[str, str], path: str | os.PathLike | None) -> str | None:
+    """The format among ``formats`` (name → suffix) whose suffix ``path``'s name ends with, or None."""
+    return next((kind for kind, suffix in formats.items() if path and str(path).lower().endswith(suffix)), None)
+
+
 def export(
     result, to: str, path: str | os.PathLike, format: str | None = None, samples=None, *, bin_centres: bool = False
 ) -> list[str]:
     """Write ``result`` (a :class:`~brdffit.FitResult`) for the renderer ``to`` (:data:`TARGETS`) to ``path``,
     atomically, in ``format`` (default: the one ``path``'s suffix names, else the target's first:
     :func:`export_format`); returns the lines a user should read (whether it is exact, how far it lies otherwise,
-    notes). ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read
+    notes). ``path`` is written as it is: ``brdffit.export`` and ``brdffit export`` refuse a name without the
+    target's suffixes first (:func:`check_suffix`; the command checks the name given, whose link it then resolves). ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read
     it), at whose directions the export is evaluated as its renderer evaluates it and compared (``at_data.py``):
     printed first, and stored in the file where the format has room (Mitsuba's, glTF's). ``bin_centres`` (MERL):
     each bin evaluated at its centre, not its lower edge (``physics/merl_table.py``)."""

@@ -157,6 +157,10 @@ def test_render_without_mitsuba_names_the_extra(results, tmp_path, capsys, monke
         (["export", "{m}", "--to", "mitsuba", "-o", "{m}"], "is the input"),
         (["export", "{t}/none.json", "--to", "mitsuba", "-o", "{t}/x.xml"], "none.json: no such file"),
         (["export", "{m}", "--to", "gltf", "--format", "glb", "-o", "{t}/s.gltf"], "--format glb writes .glb files"),
+        # a name without the target's suffix: XML in a .json file would read as a broken result everywhere else
+        (["export", "{m}", "--to", "mitsuba", "-o", "{t}/x.json"], "-o {t}/x.json: a mitsuba export is written to a"),
+        (["export", "{m}", "--to", "merl", "-o", "{t}/x.csv"], "a merl export is written to a .binary (binary) file"),
+        (["export", "{m}", "--to", "gltf", "-o", "{t}/x"], "a gltf export is written to a .gltf (gltf) or .glb (glb)"),
         (["export", "{m}", "--to", "merl", "--samples", "{t}/no.csv", "-o", "{t}/x.binary"], "no.csv: no such file"),
         (["export", "{m}", "--to", "merl", "--samples", "{m}", "-o", "{m}"], "is the input"),
         (["render", "{m}", "-o", "{t}/s.jpg"], "-o {t}/s.jpg: the image must end in .png or .exr"),
