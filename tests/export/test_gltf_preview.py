@@ -177,4 +177,3 @@ def test_the_format_follows_the_file_name_and_a_contradiction_is_one_line():
         with pytest.raises(BrdfInputError) as error:
             export_format(to, kind, path)
         assert message in str(error.value) and "\n" not in str(error.value)
-
