@@ -112,10 +112,11 @@ def export(
     atomically, in ``format`` (default: the one ``path``'s suffix names, else the target's first:
     :func:`export_format`); returns the lines a user should read (whether it is exact, how far it lies otherwise,
     notes). ``path`` is written as it is: ``brdffit.export`` and ``brdffit export`` refuse a name without the
-    target's suffixes first (:func:`check_suffix`; the command checks the name given, whose link it then resolves). ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read
-    it), at whose directions the export is evaluated as its renderer evaluates it and compared (``at_data.py``):
-    printed first, and stored in the file where the format has room (Mitsuba's, glTF's). ``bin_centres`` (MERL):
-    each bin evaluated at its centre, not its lower edge (``physics/merl_table.py``)."""
+    target's suffixes first (:func:`check_suffix`; the command checks the name given, whose link it then resolves).
+    ``samples``: the data the fit was made from (a :class:`~brdffit.Samples` or a file, read as the fit read it), at
+    whose directions the export is evaluated as its renderer evaluates it and compared (``at_data.py``): printed
+    first, and stored in the file where the format has room (Mitsuba's, glTF's). ``bin_centres`` (MERL): each bin
+    evaluated at its centre, not its lower edge (``physics/merl_table.py``)."""
     kind = export_format(to, format, path)
     if bin_centres and to != "merl":
         raise BrdfInputError(Argument("bin_centres"), f" applies to MERL tables (to='merl'), not to {to}")
