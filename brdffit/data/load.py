@@ -124,8 +124,11 @@ def load_samples(
     for name, given_here in (("subsample", subsample is not None), ("bin_centres", bool(bin_centres))):
         if kind != "merl" and given_here:
             raise BrdfInputError(Argument(name), f" applies to MERL files; {where} is {kind}")
+    reading = _reading(format, angles, spectral_to, illuminant, observer, bin_centres)
     if frame:  # a CSV's table, without a file or its header
-        return _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer)
+        return _read(
+            _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer), reading
+        )
     path = where
     reader_options: dict[str, dict[str, Any]] = {
         "csv": {"angles": angles},
@@ -145,7 +148,28 @@ def load_samples(
                 f"{path}: the values are read as ", Argument("quantity", given), f", not as the header says ({header})"
             )
         )
-    return _as_quantity(samples, given, header, spectral_to, illuminant, observer)
+    return _read(_as_quantity(samples, given, header, spectral_to, illuminant, observer), reading)
+
+
+def _reading(format, angles, spectral_to, illuminant, observer, bin_centres) -> tuple[tuple[str, Any], ...]:
+    """The options of :func:`load_samples` that make what a file gives and differ from their defaults, as ``(name,
+    value)`` pairs (``Provenance.reading``): the format given, radians, a spectral conversion (with its illuminant
+    and observer), MERL's bin centres. Not ``quantity`` (a result records it apart) nor a subsample (a fit of part
+    of a file is compared with all of it)."""
+    kept: dict[str, Any] = {} if format is None else {"format": format}
+    if angles != "degrees":
+        kept["angles"] = angles
+    if spectral_to != "keep":
+        kept |= {"spectral_to": spectral_to, "illuminant": illuminant, "observer": observer}
+    if bin_centres:
+        kept["bin_centres"] = True
+    return tuple(kept.items())
+
+
+def _read(samples: Samples, reading: tuple[tuple[str, Any], ...]) -> Samples:
+    """``samples`` with how they were read (:func:`_reading`) in their provenance."""
+    assert samples.provenance is not None  # read from a file or a DataFrame
+    return replace(samples, provenance=replace(samples.provenance, reading=reading))
 
 
 def _as_quantity(

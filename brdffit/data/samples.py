@@ -6,6 +6,7 @@ are built (:meth:`Samples.from_arrays`, or a reader of ``load.py``).
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -23,6 +24,9 @@ class Provenance:
     kind of row left out (below the horizon, missing). ``header_quantity``: what the file's header says its
     values are (None where it does not say). ``quantity``: what they were read as (``quantities.py``),
     ``quantity_given``: whether a user said so. ``sigma_from``: where a sigma came from, if not a column.
+    ``reading``: the options of :func:`brdffit.load_samples`, other than ``quantity``, that were not their defaults
+    and that make what is read (the format given, radians, a spectral conversion, MERL's bin centres), as ``(name,
+    value)`` pairs: a fit's result records them, so that its export reads the file as the fit did.
     """
 
     format: str
@@ -32,6 +36,7 @@ class Provenance:
     quantity: str = "brdf"
     quantity_given: bool = False
     sigma_from: str | None = None
+    reading: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)

@@ -100,10 +100,11 @@ class DataError:
 
 def data_for(result: FitResult, samples: "Samples | str | os.PathLike", subset: bool = True) -> Samples:
     """The data an export of ``result`` is compared with: ``samples`` (a :class:`~brdffit.Samples`, or a file read
-    as the fit read it: its ``quantity``), limited to the fit's ``max_theta``, with the result's channels (a one-line
-    error otherwise); with ``subset``, at most :data:`MAX_PAIRS` pairs (a seeded random subset)."""
+    as the fit read it: its ``quantity`` and its ``reading``, the angles' unit, a spectral conversion…), limited to the
+    fit's ``max_theta``, with the result's channels (a one-line error otherwise); with ``subset``, at most
+    :data:`MAX_PAIRS` pairs (a seeded random subset)."""
     if not isinstance(samples, Samples):
-        samples = load_samples(samples, quantity=result.quantity)
+        samples = load_samples(samples, quantity=result.quantity, **result.reading)
     samples = samples.within(result.max_theta)
     if tuple(samples.channels) != tuple(result.channels):
         raise BrdfInputError(

@@ -197,6 +197,7 @@ def test_fit_prints_a_table_and_writes_the_result(tmp_path, capsys):
         "warnings",
         "quantity",
         "max_theta",
+        "reading",
         "fixed",
         "bounds",
         "n_values",

@@ -130,6 +130,7 @@ def result_of(
         warnings=[*found, *more_caveats],
         quantity=samples.provenance.quantity if samples.provenance else None,
         max_theta=max_theta,
+        reading=dict(samples.provenance.reading) if samples.provenance else {},
         fixed={} if constraints is None else dict(constraints.fixed),
         bounds={} if constraints is None else dict(constraints.bounds),
     )

@@ -103,7 +103,9 @@ class FitResult:
     at a plausible bound, data that are not reciprocal), one line each.
     ``quantity`` and ``max_theta`` say how the samples were read and selected
     (what their values were taken as, ``docs/quantities.md``; None for samples
-    made from arrays), so that they can be read the same way again. ``fixed``
+    made from arrays), so that they can be read the same way again, as does ``reading``: the options the samples
+    file was read with that were not their defaults (``Provenance.reading``: ``format``, ``angles``, ``spectral_to``
+    with its ``illuminant`` and ``observer``, ``bin_centres``; empty for the defaults and for arrays). ``fixed``
     and ``bounds`` are the parameters the fit held (``fitting/single/constraints.py``):
     name → value (a list per channel for an albedo), and name → ``[lo, hi]``.
     ``n_values``: the values fitted (samples with a nonzero weight × channels; None in files written before it was
@@ -138,6 +140,7 @@ class FitResult:
     uncertainty: Uncertainty | None = None
     brdffit_version: str = field(default=__version__)
     draws: np.ndarray | None = field(default=None, repr=False, compare=False)
+    reading: dict[str, Any] = field(default_factory=dict)  # last: the fields before it keep their positions
 
     # ------------------------------------------------------------------ lmfit's figures
     @functools.cached_property
@@ -232,6 +235,7 @@ class FitResult:
                 "warnings": list(self.warnings),
                 "quantity": self.quantity,
                 "max_theta": self.max_theta,
+                "reading": dict(self.reading),
                 "fixed": dict(self.fixed),
                 "bounds": dict(self.bounds),
                 "n_values": self.n_values,
@@ -287,6 +291,7 @@ class FitResult:
                 warnings=list(fit.get("warnings", [])),
                 quantity=None if fit.get("quantity") is None else str(fit["quantity"]),
                 max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
+                reading=_reading(fit.get("reading", {})),
                 fixed=_object(fit.get("fixed", {}), "fit.fixed"),
                 bounds=_object(fit.get("bounds", {}), "fit.bounds"),
                 n_values=None if fit.get("n_values") is None else int(fit["n_values"]),
@@ -320,6 +325,21 @@ class FitResult:
         from .table import result_html
 
         return result_html(self)
+
+
+#: What ``fit.reading`` may hold: each option's name and the type of its value (``load_samples`` checks the value).
+READING = {"format": str, "angles": str, "spectral_to": str, "illuminant": str, "observer": str, "bin_centres": bool}
+
+
+def _reading(value: Any) -> dict[str, Any]:
+    """``fit.reading`` of a result file: options of ``load_samples`` (:data:`READING`), each of its type."""
+    reading = _object(value, "fit.reading")
+    for name, option in reading.items():
+        if name not in READING or not isinstance(option, READING[name]):
+            raise TypeError(
+                f"fit.reading: {name} = {option!r}; it holds {', '.join(READING)} (strings; bin_centres true or false)"
+            )
+    return reading
 
 
 def _object(value: Any, name: str) -> dict[str, Any]:
