@@ -235,7 +235,7 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
     elif len(results) == 1:
         print(results[0].table(source=args.samples[0]), file=stream)
         caveats_seen = stream is sys.stderr or (sys.stdout.isatty() and sys.stderr.isatty())
-        written = [*(outputs or []), args.chain, args.corner]
+        written = [*(outputs or ["-"]), args.chain, args.corner]  # None: -o - (the result on standard output)
         if any(written):
             print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
     else:

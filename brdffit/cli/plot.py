@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
                 KINDS[kind](results, samples, lights=args.lights, path=path)
             else:
                 KINDS[kind](results, samples, incidences=incidences, path=path)
-            written.append(str(path))
+            written.append("-" if args.output == "-" else str(path))  # -: a temporary file, copied to standard output
     print(f"wrote {', '.join(written)}")
     return EXIT_OK
 

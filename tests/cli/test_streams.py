@@ -70,6 +70,10 @@ def test_products_go_to_standard_output_and_the_rest_to_standard_error(stdin, tm
     assert main(["synth", "--model", "lambert", "--params", '{"rho_d": [0.5]}', "-o", "-", "-q"]) == 0
     out, err = capsys.readouterr()
     assert out.startswith("theta_i,phi_i,theta_o,phi_o,value") and err == ""
+    # every command says "wrote -" (plot named its temporary file, deleted by then; fit said nothing)
+    assert main(["fit", str(EXAMPLE), "--model", "lambert", "-o", "-"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["model"] == "lambert" and err.rstrip().endswith("wrote -")
     assert sorted(path.name for path in tmp_path.iterdir()) == []  # nothing written here
 
 
@@ -84,6 +88,16 @@ def test_bad_input_on_standard_input_is_one_line_naming_it(stdin, tmp_path, monk
     assert out == "" and err.startswith("brdffit: error: -: not a readable JSON file")
     assert main(["plot", "-", "-", "-o", "x.png"]) == 2
     assert "only one input can be - (standard input is one stream)" in capsys.readouterr().err
+
+
+def test_a_figure_on_standard_output_says_wrote_dash(tmp_path):
+    """``plot -o -`` said it wrote its temporary file, deleted by then (found trying the tool as a new user)."""
+    result = tmp_path / "ward.json"
+    WARD.save(result)
+    argv = [sys.executable, "-m", "brdffit", "plot", str(result), str(EXAMPLE), "--kind", "slices", "-o", "-"]
+    done = subprocess.run(argv, capture_output=True, cwd=tmp_path, timeout=300)
+    assert done.returncode == 0 and done.stdout.startswith(b"\x89PNG"), done.stderr
+    assert done.stderr.decode() == "wrote -\n"
 
 
 def test_a_binary_product_reaches_standard_output_byte_for_byte(tmp_path):
