@@ -235,9 +235,9 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
     elif len(results) == 1:
         print(results[0].table(source=args.samples[0]), file=stream)
         caveats_seen = stream is sys.stderr or (sys.stdout.isatty() and sys.stderr.isatty())
-        written = [*(outputs or ["-"]), args.chain, args.corner]  # None: -o - (the result on standard output)
-        if any(written):
-            print(f"wrote {', '.join(str(path) for path in written if path)}", file=stream)
+        files: list[str | Path | None] = [*(outputs or ["-"]), args.chain, args.corner]  # ["-"]: -o -
+        if any(files):
+            print(f"wrote {', '.join(str(path) for path in files if path)}", file=stream)
     else:
         print(summary(args.samples, results, written), file=stream)
     for path, result, problem in zip(args.samples, results, problems, strict=True):
