@@ -235,7 +235,8 @@ def _report(args: argparse.Namespace, results: list, outputs: list[Path] | None,
     elif len(results) == 1:
         print(results[0].table(source=args.samples[0]), file=stream)
         caveats_seen = stream is sys.stderr or (sys.stdout.isatty() and sys.stderr.isatty())
-        files: list[str | Path | None] = [*(outputs or ["-"]), args.chain, args.corner]  # ["-"]: -o -
+        files: list[str | Path | None] = ["-"] if outputs is None else [*outputs]  # None: -o -
+        files += [args.chain, args.corner]
         if any(files):
             print(f"wrote {', '.join(str(path) for path in files if path)}", file=stream)
     else:
