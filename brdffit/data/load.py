@@ -62,6 +62,11 @@ def detect_format(path: Path, format: str | None = None) -> str:
     """``format`` when given (checked), else the format of ``path`` from its suffix and first lines."""
     if format is not None:
         return choice("format", format, FORMATS)
+    if path.suffix.lower() == ".json":  # read as a CSV, a result file said it had "no geometry columns"
+        raise BrdfInputError(
+            f"{path}: a JSON file, not samples: samples are read from CSV, MERL, ALTA and ASTM files; a fit's result"
+            " file goes to export, plot, render or fit --start"
+        )
     by_suffix = next((name for name, kind in FORMATS.items() if path.suffix.lower() == kind.suffixes[0]), None)
     if by_suffix in ("csv", "merl", "astm"):
         return by_suffix

@@ -124,7 +124,7 @@ def test_not_a_text_file(tmp_path, capsys):
             ["--model", "lafortun"],
             ["'lafortun' is not a model; choose one of: lambert, ward, ward-aniso, ward-duer, cook-torrance"],
         ),
-        (["--loss", "l3"], ["'l3' is not a loss; choose one of: log, l2, cosine, cbrt, relative"]),
+        (["--loss", "l3"], ["--loss 'l3' is not a loss; choose one of: log, l2, cosine, cbrt, relative"]),
         (["--fresnel", "schlick"], ["--fresnel does not apply to model ward"]),
         (["--model", "cook-torrance", "--fresnel", "glass"], ["--fresnel 'glass' is not known"]),
         (["--model", "lafortune", "--lobes", "0"], ["--lobes 0 is not allowed"]),
@@ -137,7 +137,7 @@ def test_not_a_text_file(tmp_path, capsys):
         (["--max-theta", "abc"], ["argument --max-theta: invalid float value: 'abc'"]),
         (["--starts", "0"], ["--starts 0 is not allowed; give a whole number ≥ 1"]),
         (["--start", "{bad json"], ["--start (inline JSON): not valid JSON"]),
-        (["--start", '{"rho_d": [0.1]}'], ["ward: missing parameter 'rho_s'"]),
+        (["--start", '{"rho_d": [0.1]}'], ["--start: ward: missing parameter 'rho_s'"]),
         (
             ["--model", "phong", "--start", '{"rho_d": [0.1, 0.1, 0.1], "rho_s": [0.1, 0.1, 0.1], "n": 1e9}'],
             ["--start: n = 1e+09 is far beyond its plausible range (≤ 10000), where a fit cannot move"],
@@ -151,6 +151,20 @@ def test_bad_options(argv, pieces, tmp_path, capsys):
     samples.write_text(EXAMPLE.read_text())
     status, out, err = run(["fit", samples, "-o", tmp_path / "result.json", *argv], capsys)
     assert_bad_input(status, out, err, pieces, tmp_path, ["samples.csv"])
+
+
+def test_a_result_or_a_folder_given_for_another_file_is_named_so(tmp_path, capsys):
+    """A result file given as samples said "no geometry columns", a folder given as a result "[Errno 21] Is a
+    directory" (found trying the tool as a new user)."""
+    result = tmp_path / "result.json"
+    assert run(["fit", EXAMPLE, "--model", "lambert", "-o", result], capsys)[0] == 0
+    for argv, piece in [
+        (["info", result], f"{result}: a JSON file, not samples: samples are read from CSV, MERL, ALTA and ASTM"),
+        (["fit", result, "-o", tmp_path / "again.json"], f"{result}: a JSON file, not samples"),
+        (["export", tmp_path, "--to", "mitsuba", "-o", tmp_path / "x.xml"], f"{tmp_path}: is a folder; give a brdffit"),
+    ]:
+        status, out, err = run(argv, capsys)
+        assert_bad_input(status, out, err, [piece], tmp_path, ["result.json"])
 
 
 def test_missing_file(tmp_path, capsys):

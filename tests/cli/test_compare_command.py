@@ -51,7 +51,7 @@ def test_dash_writes_the_json_to_standard_output(samples_file, capsys):
             "brdffit: error: model spec 'lafortune:x': lobes='x' is not allowed; give a whole number from 1 to 8",
         ),
         (["--folds", "1"], "brdffit: error: --folds 1 is not allowed; give a whole number ≥ 2"),
-        (["--loss", "l3"], "brdffit: error: 'l3' is not a loss"),
+        (["--loss", "l3"], "brdffit: error: --loss 'l3' is not a loss"),
         (["--models", ""], "brdffit: error: --models: give at least one model to compare"),
     ],
 )

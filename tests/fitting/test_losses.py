@@ -54,5 +54,7 @@ def test_l2_scale_is_sqrt_weight_over_sigma():
 
 
 def test_unknown_loss():
-    with pytest.raises(BrdfInputError, match=r"^'l1' is not a loss; choose one of: log, l2, cosine, cbrt, relative$"):
+    with pytest.raises(
+        BrdfInputError, match=r"^loss='l1' is not a loss; choose one of: log, l2, cosine, cbrt, relative$"
+    ):
         get_loss("l1")

@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..._jax import jax, jnp
-from ...errors import BrdfInputError
+from ...errors import not_a_choice
 
 #: ε of the ``relative`` loss, in 1/sr: values below it count as if they were ε.
 RELATIVE_FLOOR = 1e-4
@@ -72,7 +72,7 @@ def get_loss(name: "str | Loss") -> Loss:
     if isinstance(name, Loss):
         return name
     if name not in LOSSES:
-        raise BrdfInputError(f"{name!r} is not a loss; choose one of: {', '.join(LOSSES)}")
+        raise not_a_choice("loss", name, LOSSES, "is not a loss")
     return LOSSES[name]
 
 

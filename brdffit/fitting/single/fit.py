@@ -188,7 +188,10 @@ def start_vector(model: Model, start: dict[str, Any], n_channels: int) -> np.nda
     upper end a fit cannot move (a Phong exponent of 10⁹ is a delta function, flat to every step) and would report
     a converged fit that never moved. An albedo can start anywhere: the fit moves its logarithm."""
     assert isinstance(model, LobeModel), f"start_vector takes a lobe model, not {type(model).__name__}"
-    params = model.dictionary.to_params(start)
+    try:
+        params = model.dictionary.to_params(start)
+    except BrdfInputError as error:  # the dictionary's own message, said of the start
+        raise BrdfInputError(Argument("start"), ": ", *error.parts) from None
     if params.diffuse.size != n_channels:
         raise BrdfInputError(
             Argument("start"), f" parameters have {params.diffuse.size} channel(s) but the samples have {n_channels}"

@@ -385,6 +385,8 @@ def read_json_object(path: str | os.PathLike, what: str) -> dict[str, Any]:
         content = parse_json(read_json_text(path))
     except FileNotFoundError:
         raise BrdfInputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise BrdfInputError(f"{path}: is a folder; give a {what}") from None
     except (OSError, ValueError) as error:  # ValueError: JSON's, and UnicodeDecodeError
         raise BrdfInputError(f"{path}: not a readable JSON file ({error})") from None
     if not isinstance(content, dict):
