@@ -26,7 +26,7 @@ from ..fitting.options import HOLDING_NOTHING, Holding, Solving
 from ..fitting.single.caveats import ALBEDO_INCIDENCE, albedo_directions, albedo_quadrature
 from ..fitting.single.fit import fit_one, start_vector
 from ..fitting.single.result import FitResult
-from ..physics.geometry import direction_to_spherical, in_turned_frame, spherical_to_direction
+from ..physics.geometry import direction_to_spherical, in_turned_frame, mirror_direction, spherical_to_direction
 from ..physics.models.model import Model
 from ..physics.models.registry import get_model
 
@@ -372,3 +372,31 @@ def _albedos(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], turns: int = 
     wi, wo = turned(albedo_directions(n), turns)
     values = np.asarray(brdf(wi, wo))
     return np.stack([albedo_quadrature(block, n)[0] for block in np.split(values, turns)])
+
+
+#: A fitted BRDF that sends this many times more light back towards the light than into the mirror direction is a
+#: retro-reflector. The renderers' models peak near the mirror direction: glTF's retro/mirror ratio is at most ~1.03
+#: (θi = 60°, the dielectric's diffuse term dimmed by the mirror's larger Fresnel term), and Mitsuba's microfacet
+#: BSDFs, a lobe about the half vector beside a Lambertian term, have none that sends more back than forward.
+RETRO_RATIO = 1.1
+RETRO_INCIDENCE = (30.0, 60.0)
+
+
+def retro_reflection_note(result: FitResult, renderers_model: str, none_of_its: str) -> list[str]:
+    """A note when ``result`` reflects more light back towards the light than into the mirror direction by
+    :data:`RETRO_RATIO` or more at an incidence of :data:`RETRO_INCIDENCE`, in every channel: the renderer's model
+    (``renderers_model``, "glTF's BRDF") peaks near the mirror direction, so ``none_of_its`` ("no glTF material")
+    reproduces it."""
+    theta = np.radians(np.array(RETRO_INCIDENCE))
+    wi = spherical_to_direction(theta, np.zeros_like(theta))
+    retro = np.asarray(result.predict(wi, wi))
+    mirror = np.asarray(result.predict(wi, mirror_direction(wi)))
+    ratio = (retro / np.maximum(mirror, 1e-300)).min(axis=1)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] < RETRO_RATIO:
+        return []
+    return [
+        f"the fitted BRDF is retro-reflective (at θi = {RETRO_INCIDENCE[worst]:g}° it sends {ratio[worst]:.3g} times"
+        f" more light back towards the light than into the mirror direction); {renderers_model} peaks near the mirror"
+        f" direction, so {none_of_its} can reproduce it: the export is only the closest one in the loss"
+    ]

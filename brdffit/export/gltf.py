@@ -36,11 +36,18 @@ from ..fitting.objective.losses import get_loss
 from ..fitting.options import MAX_STEPS, Holding
 from ..fitting.single.result import FitResult, json_text
 from ..fitting.solver.compiled import TOLERANCES
-from ..physics.geometry import mirror_direction, spherical_to_direction
 from ..physics.models.registry import MODELS
 from ..physics.renderers.gltf import DEFAULT_F0, DEFAULT_IOR, ior_f0, material_brdf
 from ..views.render import display_rgb
-from .approximate import Approximation, Reference, approximation_error, coarse_refit, reference, refined
+from .approximate import (
+    Approximation,
+    Reference,
+    approximation_error,
+    coarse_refit,
+    reference,
+    refined,
+    retro_reflection_note,
+)
 from .at_data import data_error
 from .gltf_material import GltfMaterial
 from .gltf_material import gltf_brdf as gltf_brdf  # the BRDF's name where the documentation once gave it
@@ -71,11 +78,6 @@ START_METALLIC = (0.02, 0.98)
 #: layer (``specular`` weight 0.1) whose Fresnel term is nearly flat (``f0`` 0.9): a lobe without glTF's rise
 #: towards grazing angles (Ward, Phong, Lafortune), which the core model's ``f0 = 0.04`` cannot give.
 START_FLAT_FRESNEL = (0.1, 0.9)
-#: A fitted BRDF that sends this many times more light back towards the light than into the mirror direction is a
-#: retro-reflector. glTF's BRDF peaks near the mirror direction: its retro/mirror ratio is at most ~1.03 (θi = 60°,
-#: the dielectric's diffuse term dimmed by the mirror's larger Fresnel term).
-RETRO_RATIO = 1.1
-RETRO_INCIDENCE = (30.0, 60.0)
 #: What evaluates a glTF material at the data's directions: no viewer runs in Python, so the BRDF the specification
 #: defines, as the Khronos Sample Viewer implements it (``gltf_material.py``).
 EVALUATED_BY = "the glTF specification's BRDF (Khronos Sample Viewer form)"
@@ -347,24 +349,6 @@ def _channel_plan(channels: Sequence[str]) -> tuple[str, list[str]]:
     )
 
 
-def _retro_reflection_note(result: FitResult) -> list[str]:
-    """A note when ``result`` reflects more light back towards the light than into the mirror direction by
-    :data:`RETRO_RATIO` or more at an incidence of :data:`RETRO_INCIDENCE`, in every channel."""
-    theta = np.radians(np.array(RETRO_INCIDENCE))
-    wi = spherical_to_direction(theta, np.zeros_like(theta))
-    retro = np.asarray(result.predict(wi, wi))
-    mirror = np.asarray(result.predict(wi, mirror_direction(wi)))
-    ratio = (retro / np.maximum(mirror, 1e-300)).min(axis=1)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] < RETRO_RATIO:
-        return []
-    return [
-        f"the fitted BRDF is retro-reflective (at θi = {RETRO_INCIDENCE[worst]:g}° it sends {ratio[worst]:.3g} times"
-        " more light back towards the light than into the mirror direction); glTF's BRDF peaks near the mirror"
-        " direction, so no glTF material can reproduce it: the material is only the closest one in the loss"
-    ]
-
-
 def _in_channels(material: GltfMaterial, plan: str):
     """The material's BRDF in the fit's channels, as ``brdf(wi, wo) -> (N, C)``: its RGB converted back to XYZ
     (``plan`` xyz), its r channel (grey), or its RGB."""
@@ -440,7 +424,8 @@ def _fit(result: FitResult) -> tuple[GltfMaterial, Approximation, list[str], str
         material, fit_notes = fit_material(*fine, result.loss, search=coarse)
     approximation = approximation_error(result, _in_channels(material, plan), known)
     warnings = approximation.warnings("glTF's metallic-roughness BRDF")
-    return material, approximation, notes + fit_notes + _retro_reflection_note(result) + warnings, plan
+    retro = retro_reflection_note(result, "glTF's BRDF", "no glTF material")
+    return material, approximation, notes + fit_notes + retro + warnings, plan
 
 
 #: An anisotropic fit's glTF stand-in has no clear coat, as the isotropic one has none (:func:`fit_material`): a free

@@ -165,7 +165,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     exact = exact_bsdf(result)
     if exact is not None and _in_range(result):
         return MitsubaExport(exact, source, result, None, notes + _tangent_notes(result))
-    from .approximate import approximation_error, reference, refit
+    from .approximate import approximation_error, reference, refit, retro_reflection_note
 
     if exact is not None and (without := _without_negligible_diffuse(result)) is not None:
         diffuse = _albedo_maxima(result)[0]
@@ -189,6 +189,7 @@ def mitsuba_bsdf(result: FitResult) -> MitsubaExport:
     else:
         exported, approximation = _best_stand_in(known)
     notes += _tangent_notes(exported) + approximation.warnings("Mitsuba's microfacet model")
+    notes += retro_reflection_note(result, "Mitsuba's microfacet model", "no Mitsuba BSDF brdffit writes")
     return MitsubaExport(exact_bsdf_of(exported), source, exported, approximation, notes)
 
 

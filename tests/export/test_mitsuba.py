@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from paths import EXAMPLE
+from paths import EXAMPLE, TAPE
 
 from brdffit import FitResult, Samples, data_synth, evaluate, fit, load_samples
 from brdffit.export.approximate import approximation_error
@@ -257,3 +257,16 @@ def test_a_metals_negligible_diffuse_albedo_is_left_out_and_said():
     assert exported.approximation.relative_rmse < 1e-5
     bsdf = mi.load_string(exported.to_xml())
     np.testing.assert_allclose(mitsuba_brdf(bsdf, WI, WO), exported.brdf(WI, WO), rtol=1e-4, atol=1e-7)
+
+
+def test_a_retro_reflector_says_it_cannot_be_a_mitsuba_bsdf():
+    """The real tape's 2-lobe Lafortune fit sends light back towards the light: the glTF export said no material of
+    its could reproduce that, the Mitsuba export only that its model missed the shape (found trying the tool as a new
+    user). Both say it now; a forward-scattering fit (the oak example's Ward) says nothing of the kind."""
+    tape = fit(load_samples(TAPE, quantity="cosine-weighted-out"), "lafortune", lobes=2)
+    notes = mitsuba_bsdf(tape).notes
+    assert any(
+        "retro-reflective" in note and "no Mitsuba BSDF brdffit writes can reproduce it" in note for note in notes
+    )
+    oak = fit(load_samples(EXAMPLE), "ward")
+    assert not any("retro-reflective" in note for note in mitsuba_bsdf(oak).notes)
