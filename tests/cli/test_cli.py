@@ -122,7 +122,7 @@ def test_not_a_text_file(tmp_path, capsys):
     [
         (
             ["--model", "lafortun"],
-            ["'lafortun' is not a model; choose one of: lambert, ward, ward-aniso, ward-duer, cook-torrance"],
+            ["--model 'lafortun' is not a model; choose one of: lambert, ward, ward-aniso, ward-duer, cook-torrance"],
         ),
         (["--loss", "l3"], ["--loss 'l3' is not a loss; choose one of: log, l2, cosine, cbrt, relative"]),
         (["--fresnel", "schlick"], ["--fresnel does not apply to model ward"]),

@@ -471,7 +471,9 @@ def test_registry_names_models_and_options():
         "roughplastic",
         "pca",
     ]
-    with pytest.raises(BrdfInputError, match=r"^'lafortun' is not a model; choose one of: lambert, ward, ward-aniso"):
+    with pytest.raises(
+        BrdfInputError, match=r"^model='lafortun' is not a model; choose one of: lambert, ward, ward-aniso"
+    ):
         get_model("lafortun")
     with pytest.raises(BrdfInputError, match=r"^fresnel does not apply to model ward; it takes no options"):
         get_model("ward", fresnel="schlick")

@@ -10,7 +10,7 @@ from functools import cache
 from typing import Any
 
 from ...datadriven.model import PCA
-from ...errors import Argument, BrdfInputError
+from ...errors import Argument, BrdfInputError, not_a_choice
 from ..renderers.gltf_model import GLTF
 from ..renderers.principled_model import PRINCIPLED
 from ..renderers.roughplastic_model import ROUGHPLASTIC
@@ -92,7 +92,7 @@ def get_model(model: "str | Model", **options: Any) -> Model:
             raise BrdfInputError(f"options {', '.join(options)} cannot be applied to an already built model")
         return model
     if model not in MODELS:
-        raise BrdfInputError(f"{model!r} is not a model; choose one of: {', '.join(MODELS)}")
+        raise not_a_choice("model", model, MODELS, "is not a model")
     accepted = model_option_names(model)
     for key in options:
         if key not in accepted:
