@@ -254,7 +254,7 @@ def _render(args: argparse.Namespace) -> int:
     from ..svbrdf import read_maps, render
     from ..svbrdf.images import srgb_encoded, write_exr, write_png
 
-    output = output_file(args.output, "-o")
+    output = output_file(args.output, "-o", ".png")  # -: a PNG on standard output, as render and plot write
     suffix = output.suffix.lower()
     if suffix not in RENDER_SUFFIXES:
         raise BrdfInputError(f"-o {args.output}: write {', '.join(RENDER_SUFFIXES)}")

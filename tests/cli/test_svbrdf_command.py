@@ -2,6 +2,8 @@
 says, and bad input refused in one line before anything is written."""
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -55,6 +57,12 @@ def test_fit_then_render(capture, tmp_path, capsys):
         assert status == 0 and out.startswith(f"wrote {image}: 8 × 8 image of {maps}"), err
     assert (tmp_path / "relit.png").read_bytes().startswith(PNG)
     np.testing.assert_allclose(read_image(tmp_path / "relit.exr"), np.load(tmp_path / "relit.npy"), rtol=1e-7)
+    # -o -: the PNG on standard output, as every command that writes an image (refused before; found trying the tool
+    # as a new user), byte for byte the file's
+    argv = [sys.executable, "-m", "brdffit", "svbrdf", "render", maps, "--light", "20,-60,250", "--camera", "0,0,400"]
+    done = subprocess.run([*map(str, argv), "-o", "-"], capture_output=True, cwd=tmp_path, timeout=300)
+    assert done.returncode == 0 and done.stdout == (tmp_path / "relit.png").read_bytes(), done.stderr
+    assert done.stderr.decode().startswith("wrote -: 8 × 8 image of")
     status, out, err = run(["-q", "svbrdf", "fit", capture, "--no-textures", "-o", tmp_path / "quiet"], capsys)
     assert status == 0 and out == "" and err == "" and not (tmp_path / "quiet" / "textures").exists()
 
