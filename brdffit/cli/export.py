@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
 
     kind = export_format(args.to, args.format, args.output)
     if args.output is not None:  # a default name has the format's suffix
-        check_suffix(args.to, args.output)
+        check_suffix(args.to, args.output, standard_output=True)
     if args.bin_centres and args.to != "merl":
         raise BrdfInputError(f"--bin-centres applies to --to merl, not to --to {args.to}")
     from .files import input_path

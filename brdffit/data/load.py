@@ -32,7 +32,7 @@ from .csv import ANGLE_UNITS, read_csv, read_data_frame, write_csv
 from .merl import read_merl
 from .quantities import canonical, to_brdf
 from .samples import Samples
-from .spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER
+from .spectral import DEFAULT_ILLUMINANT, DEFAULT_OBSERVER, SPECTRAL_TARGETS
 
 if TYPE_CHECKING:
     import pandas
@@ -129,11 +129,9 @@ def load_samples(
     for name, given_here in (("subsample", subsample is not None), ("bin_centres", bool(bin_centres))):
         if kind != "merl" and given_here:
             raise BrdfInputError(Argument(name), f" applies to MERL files; {where} is {kind}")
+    if frame:  # a CSV's table, without a file or its header: no file to read again, so no reading to record
+        return _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer)
     reading = _reading(format, angles, spectral_to, illuminant, observer, bin_centres)
-    if frame:  # a CSV's table, without a file or its header
-        return _read(
-            _as_quantity(read_data_frame(path, angles), given, None, spectral_to, illuminant, observer), reading
-        )
     path = where
     reader_options: dict[str, dict[str, Any]] = {
         "csv": {"angles": angles},
@@ -169,6 +167,35 @@ def _reading(format, angles, spectral_to, illuminant, observer, bin_centres) -> 
     if bin_centres:
         kept["bin_centres"] = True
     return tuple(kept.items())
+
+
+#: The options :func:`_reading` records and what each may be: a result file, which holds them (``fit.reading``), is
+#: input, so :func:`checked_reading` checks them when it is read.
+READING_OPTIONS: dict[str, Any] = {
+    "format": tuple(FORMATS),
+    "angles": ANGLE_UNITS,
+    "spectral_to": SPECTRAL_TARGETS,
+    "illuminant": str,
+    "observer": str,
+    "bin_centres": bool,
+}
+
+
+def checked_reading(reading: dict[str, Any]) -> dict[str, Any]:
+    """``reading`` (a result's ``fit.reading``) if each of its entries is an option of :data:`READING_OPTIONS` with
+    a value it may take, else ``TypeError`` naming the first that is not."""
+    for name, value in reading.items():
+        allowed = READING_OPTIONS.get(name)
+        if isinstance(allowed, tuple):
+            fits = isinstance(value, str) and value in allowed
+        else:
+            fits = allowed is not None and isinstance(value, allowed)
+        if not fits:
+            raise TypeError(
+                f"fit.reading: {name} = {value!r}; it holds {', '.join(READING_OPTIONS)} (format, angles and"
+                " spectral_to as load_samples takes them, bin_centres true or false)"
+            )
+    return reading
 
 
 def _read(samples: Samples, reading: tuple[tuple[str, Any], ...]) -> Samples:

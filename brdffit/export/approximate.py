@@ -376,8 +376,9 @@ def _albedos(brdf: Callable[[np.ndarray, np.ndarray], np.ndarray], turns: int = 
 
 #: A fitted BRDF that sends this many times more light back towards the light than into the mirror direction is a
 #: retro-reflector. The renderers' models peak near the mirror direction: glTF's retro/mirror ratio is at most ~1.03
-#: (θi = 60°, the dielectric's diffuse term dimmed by the mirror's larger Fresnel term), and Mitsuba's microfacet
-#: BSDFs, a lobe about the half vector beside a Lambertian term, have none that sends more back than forward.
+#: (θi = 60°, the dielectric's diffuse term dimmed by the mirror's larger Fresnel term); among Mitsuba's, principled's
+#: Disney diffuse term (its retro-reflection, F_D90 = 0.5 + 2·roughness·cos²θd) comes nearest, ~1.1 at θi = 60° by a
+#: hand estimate, a lobe about the half vector beside a Lambertian term well below 1.
 RETRO_RATIO = 1.1
 RETRO_INCIDENCE = (30.0, 60.0)
 

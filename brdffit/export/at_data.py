@@ -104,7 +104,15 @@ def data_for(result: FitResult, samples: "Samples | str | os.PathLike", subset: 
     fit's ``max_theta``, with the result's channels (a one-line error otherwise); with ``subset``, at most
     :data:`MAX_PAIRS` pairs (a seeded random subset)."""
     if not isinstance(samples, Samples):
-        samples = load_samples(samples, quantity=result.quantity, **result.reading)
+        try:
+            samples = load_samples(samples, quantity=result.quantity, **result.reading)
+        except BrdfInputError as error:
+            if not result.reading:
+                raise
+            said = ", ".join(f"{name}={value}" for name, value in result.reading.items())
+            raise BrdfInputError(
+                f"{samples}: read as the fit read its samples (the result's fit.reading: {said}): ", *error.parts
+            ) from None
     samples = samples.within(result.max_theta)
     if tuple(samples.channels) != tuple(result.channels):
         raise BrdfInputError(

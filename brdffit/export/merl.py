@@ -34,9 +34,10 @@ def write_merl(
     (``fresnel=``). An anisotropic BRDF (:func:`anisotropy` above :data:`ISOTROPY_TOLERANCE`) is refused: the table
     would hold one slice of it.
     """
-    change = anisotropy(model, params, **model_options)
+    change, name = anisotropy(model, params, **model_options), getattr(model, "name", model)
+    if not np.isfinite(change):
+        raise BrdfInputError(f"{path}: {name} with these parameters gives values that are not finite numbers")
     if change > ISOTROPY_TOLERANCE:
-        name = getattr(model, "name", model)
         raise BrdfInputError(
             f"{path}: {name} with these parameters is anisotropic (turning both directions about the normal changes"
             f" its values by up to {change:.3g} of its largest); a MERL table holds an isotropic BRDF only: export"
@@ -82,7 +83,8 @@ def merl_brdf(path: str | os.PathLike, bin_centres: bool = False):
 def anisotropy(model, params: dict, **model_options) -> float:
     """How far ``model`` with ``params`` is from isotropic: the largest change of its values when both directions
     of a pair turn about the normal by each of :data:`TURNS`, over :data:`TURNED_PAIRS` seeded pairs of each kind
-    (spread; near the mirror direction), as a fraction of its largest value there (0 for a BRDF that is 0 there)."""
+    (spread; near the mirror direction; those with a direction at the horizon or below left out), as a fraction of
+    its largest value there (0 for a BRDF that is 0 there; NaN where a value is not a finite number)."""
     rng = np.random.default_rng(0)
     spread_i, spread_o = (
         spherical_to_direction(np.arccos(rng.uniform(0.1, 1.0, TURNED_PAIRS)), rng.uniform(0, 2 * np.pi, TURNED_PAIRS))
@@ -100,5 +102,7 @@ def anisotropy(model, params: dict, **model_options) -> float:
     turned_i = np.concatenate([wi, *(in_turned_frame(wi, turn) for turn in TURNS)])
     turned_o = np.concatenate([wo, *(in_turned_frame(wo, turn) for turn in TURNS)])
     values = evaluate(model, params, turned_i, turned_o, **model_options).reshape(1 + len(TURNS), len(wi), -1)
+    if not np.all(np.isfinite(values)):
+        return float("nan")
     largest = np.max(np.abs(values[0]))
     return float(np.max(np.abs(values[1:] - values[0])) / largest) if largest > 0 else 0.0

@@ -87,13 +87,14 @@ def export_format(to: str, format: str | None = None, path: str | os.PathLike | 
     return kind
 
 
-def check_suffix(to: str, path: str | os.PathLike) -> None:
-    """A one-line error for a file ``path`` (``-``, standard output, aside) whose name ends with none of the suffixes
-    of the target ``to``'s formats: ``--to mitsuba -o oak.json`` would put XML where every other command reads a
-    result, ``--to merl -o oak.csv`` a binary table where they read samples."""
+def check_suffix(to: str, path: str | os.PathLike, standard_output: bool = False) -> None:
+    """A one-line error for a file ``path`` whose name ends with none of the suffixes of the target ``to``'s formats:
+    ``--to mitsuba -o oak.json`` would put XML where every other command reads a result, ``--to merl -o oak.csv`` a
+    binary table where they read samples. ``standard_output``: ``-`` is standard output (the command's ``-o -``),
+    not a file named ``-``."""
     choice("to", to, TARGETS)
     formats = TARGETS[to].formats
-    if str(path) != "-" and _named_format(formats, path) is None:
+    if not (standard_output and str(path) == "-") and _named_format(formats, path) is None:
         written = " or ".join(f"{suffix} ({kind})" for kind, suffix in formats.items())
         raise BrdfInputError(
             Argument("path", str(path)), f": a {to} export is written to a {written} file; give the file that name"

@@ -171,14 +171,36 @@ def test_samples_are_read_for_the_export_as_the_fit_read_them(tmp_path, capsys):
     # read as the fit read them, the fit's own median error is the oak fit's (0.67%); misread, it was 11.6%
     own = float(re.search(r"the fit itself: median error ([0-9.]+)%", out).group(1))
     assert own < 1.0 and err == "", (out, err)
+    # a comparison file keeps the reading of its samples for its best model's export
+    comparison = tmp_path / "comparison.json"
+    argv = ["compare", str(radians), "--angles", "radians", "--spectral-to", "xyz", "--models", "lambert,ward"]
+    assert main([*argv, "--folds", "2", "-o", str(comparison)]) == 0
+    assert json.loads(comparison.read_text())["reading"] == reading
+    capsys.readouterr()
+    assert main(["export", str(comparison), "--to", "gltf", "--samples", str(radians), "-o", str(output)]) == 0
+    assert "the fit itself: median error" in capsys.readouterr().out
 
 
 def test_a_bad_reading_in_a_result_file_is_one_line(tmp_path):
     fitted = FitResult("ward", {}, ("r", "g", "b"), OAK, "log", 0.0, 0.0, 0, 0, True, reading={"angles": "radians"})
     assert FitResult.from_dict(json.loads(fitted.to_json())).reading == {"angles": "radians"}
     content = json.loads(fitted.to_json())
-    content["fit"]["reading"] = {"angle": "radians"}
-    with pytest.raises(
-        BrdfInputError, match=r"^r\.json: not a brdffit result file \(missing or bad fit\.reading: angle"
-    ):
-        FitResult.from_dict(content, "r.json")
+    for bad, named in [
+        ({"angle": "radians"}, "angle"),
+        ({"angles": "gradians"}, "angles"),
+        ({"bin_centres": 1}, "bin"),
+    ]:
+        content["fit"]["reading"] = bad
+        match = rf"^r\.json: not a brdffit result file \(missing or bad fit\.reading: {named}"
+        with pytest.raises(BrdfInputError, match=match):
+            FitResult.from_dict(content, "r.json")
+
+
+def test_a_reading_the_samples_do_not_take_is_said_to_be_the_results():
+    # the fit read a MERL table at its bins' centres; the file given now is a CSV: the error says whose option it is
+    fitted = FitResult("ward", {}, ("r", "g", "b"), OAK, "log", 0.0, 0.0, 0, 0, True, reading={"bin_centres": True})
+    with pytest.raises(BrdfInputError) as error:
+        data_for(fitted, EXAMPLE)
+    message = str(error.value)
+    said = f"{EXAMPLE}: read as the fit read its samples (the result's fit.reading: bin_centres=True): "
+    assert message.startswith(said) and "applies to MERL files" in message and "\n" not in message

@@ -19,9 +19,11 @@ def test_a_file_without_the_targets_suffix_is_refused_before_anything_is_written
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(BrdfInputError, match="'blender' is not allowed"):
         check_suffix("blender", "oak.xml")
+    with pytest.raises(BrdfInputError, match="path=-: a mitsuba export"):  # in Python "-" is a file named so
+        brdffit.export(result, "mitsuba", "-")
 
 
 def test_the_targets_suffixes_and_standard_output_pass(tmp_path):
-    check_suffix("mitsuba", "-")  # standard output: the command writes a temporary file with the suffix, then copies it
+    check_suffix("mitsuba", "-", standard_output=True)  # the command's -o -: a temporary file with the suffix, copied
     for to, name in [("mitsuba", "oak.XML"), ("mitsuba", "oak.mitsuba.py"), ("gltf", "oak.glb"), ("merl", "o.binary")]:
         check_suffix(to, tmp_path / name)

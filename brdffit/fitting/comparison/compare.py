@@ -46,7 +46,7 @@ from ..objective.problem import Problem, build_problem, cost, residuals, sample_
 from ..options import Holding, Solving, holding_of, solving_of
 from ..single.constraints import constraints_for, parameter_names
 from ..single.fit import checked, fit_checked, fit_one
-from ..single.result import FitResult, json_text, read_json_object
+from ..single.result import FitResult, json_text, read_json_object, reading_of
 from ..solver.compiled import compiled_solver
 from .folds import Folds, make_folds
 
@@ -127,6 +127,7 @@ class ModelScore:
             bounds=dict(entry.get("bounds", {})),
             quantity=None if comparison.get("quantity") is None else str(comparison["quantity"]),
             max_theta=None if comparison.get("max_theta") is None else float(comparison["max_theta"]),
+            reading=reading_of(comparison.get("reading", {})),
         )
         aic, bic, cv_loss, cv_stderr = (_number(entry[key]) for key in ("aic", "bic", "cv_loss", "cv_stderr"))
         return cls(
@@ -187,6 +188,7 @@ class Comparison:
             "channels": list(self.channels),
             "quantity": self.best.result.quantity,
             "max_theta": self.best.result.max_theta,
+            "reading": dict(self.best.result.reading),
             "loss": self.loss,
             "folds": self.folds,
             "fold_kind": self.fold_kind,

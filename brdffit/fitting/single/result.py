@@ -291,7 +291,7 @@ class FitResult:
                 warnings=list(fit.get("warnings", [])),
                 quantity=None if fit.get("quantity") is None else str(fit["quantity"]),
                 max_theta=None if fit.get("max_theta") is None else float(fit["max_theta"]),
-                reading=_reading(fit.get("reading", {})),
+                reading=reading_of(fit.get("reading", {})),
                 fixed=_object(fit.get("fixed", {}), "fit.fixed"),
                 bounds=_object(fit.get("bounds", {}), "fit.bounds"),
                 n_values=None if fit.get("n_values") is None else int(fit["n_values"]),
@@ -327,19 +327,11 @@ class FitResult:
         return result_html(self)
 
 
-#: What ``fit.reading`` may hold: each option's name and the type of its value (``load_samples`` checks the value).
-READING = {"format": str, "angles": str, "spectral_to": str, "illuminant": str, "observer": str, "bin_centres": bool}
+def reading_of(value: Any) -> dict[str, Any]:
+    """``fit.reading`` of a result file, checked (``data.load.checked_reading``)."""
+    from ...data.load import checked_reading
 
-
-def _reading(value: Any) -> dict[str, Any]:
-    """``fit.reading`` of a result file: options of ``load_samples`` (:data:`READING`), each of its type."""
-    reading = _object(value, "fit.reading")
-    for name, option in reading.items():
-        if name not in READING or not isinstance(option, READING[name]):
-            raise TypeError(
-                f"fit.reading: {name} = {option!r}; it holds {', '.join(READING)} (strings; bin_centres true or false)"
-            )
-    return reading
+    return checked_reading(_object(value, "fit.reading"))
 
 
 def _object(value: Any, name: str) -> dict[str, Any]:
