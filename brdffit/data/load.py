@@ -65,7 +65,7 @@ def detect_format(path: Path, format: str | None = None) -> str:
     if path.suffix.lower() == ".json":  # read as a CSV, a result file said it had "no geometry columns"
         raise BrdfInputError(
             f"{path}: a JSON file, not samples: samples are read from CSV, MERL, ALTA and ASTM files; a fit's result"
-            " file goes to export, plot, render or fit --start"
+            " file is read by export, plot and render, and as a fit's start"
         )
     by_suffix = next((name for name, kind in FORMATS.items() if path.suffix.lower() == kind.suffixes[0]), None)
     if by_suffix in ("csv", "merl", "astm"):
