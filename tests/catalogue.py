@@ -168,6 +168,14 @@ def reciprocal(case) -> bool:
 RECIPROCAL_CASES = [case for case in CASES if reciprocal(case)]
 
 
+def anisotropic(case) -> bool:
+    """Whether the case's BRDF may change when both directions turn about the normal: ``ward-aniso``'s, an
+    anisotropic Cook-Torrance's, glTF's with an anisotropy strength, principled's with an ``anisotropic`` above 0."""
+    model, options, params = case
+    stretch = params.get("anisotropy_strength", 0) > 0 or params.get("anisotropic", 0) > 0
+    return model == "ward-aniso" or bool(options.get("anisotropic")) or stretch
+
+
 def case_id(case) -> str:
     model, options, params = case
     name = model + "".join(f"-{key if value is True else value}" for key, value in options.items())
