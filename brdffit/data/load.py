@@ -200,7 +200,7 @@ def checked_reading(reading: dict[str, Any]) -> dict[str, Any]:
 
 def _read(samples: Samples, reading: tuple[tuple[str, Any], ...]) -> Samples:
     """``samples`` with how they were read (:func:`_reading`) in their provenance."""
-    assert samples.provenance is not None  # read from a file or a DataFrame
+    assert samples.provenance is not None  # every reader records how it read the file
     return replace(samples, provenance=replace(samples.provenance, reading=reading))
 
 
