@@ -14,10 +14,18 @@ import tempfile
 import jax
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from brdffit._programs import stored as stored_programs
 
 jax.config.update("jax_enable_x64", True)
+
+# Every random choice takes a seed, hypothesis's too: its examples are derived from each test's name (``derandomize``),
+# so a run repeats the one before it on any machine, and nothing is kept between runs (``database=None``). A developer
+# who wants fresh examples runs ``HYPOTHESIS_PROFILE=explore pytest ...`` (random draws; a failure prints its seed).
+settings.register_profile("seeded", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False, database=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "seeded"))
 
 # The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own, one for each
 # pytest-xdist worker (the controller's, which the workers inherit, was shared by both: two processes writing one
