@@ -28,7 +28,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         nargs="+",
         help="one or more result files (or a comparison file from brdffit compare -o), then the samples file last;"
-        " the samples are read as the fits read them (their quantity and --max-theta) unless told otherwise",
+        " the samples are read as the fits read them (their quantity, the reading options below they were fitted"
+        " with, and --max-theta) unless told otherwise",
     )
     parser.add_argument(
         "--kind",
@@ -107,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     if "residuals" in kinds:  # several fits' maps on one colour scale, so that they compare
         limit = max(colour_limit(result, samples) for result in results)
     with warnings.catch_warnings():  # each figure's word on a fit read otherwise: _read_as_fitted said it, once
-        warnings.filterwarnings("ignore", ".* was fitted to samples read as ", InputWarning)
+        warnings.filterwarnings("ignore", ".* was fitted to samples read ", InputWarning)
         for (kind, index), path in zip(figures, outputs, strict=True):
             if kind == "residuals":
                 KINDS[kind](results[index], samples, limit=limit, path=path)
@@ -158,22 +159,48 @@ def _not_a_result(path: str) -> None:
 
 
 def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> float | None:
-    """Read the samples as the fits did: their quantity (unless ``--quantity`` says otherwise, which is then
-    warned about) and their ``max_theta``, when the fits agree; returns that ``max_theta``."""
-    quantities = {fit.quantity for _, fit in fits if fit.quantity is not None}
-    if args.quantity is None and len(quantities) == 1:
-        args.quantity = quantities.pop()
-    else:
-        for path, fit in fits:
-            if fit.quantity is not None and fit.quantity != (args.quantity or "brdf"):
+    """Read the samples as the fits did: their quantity and the options their files were read with (``fit.reading``:
+    a format given, radians, a spectral conversion, MERL's bin centres), each where the command line leaves it at its
+    default and the fits agree (else a fit that read its samples otherwise is warned about), and their ``max_theta``
+    when the fits agree, which is returned."""
+    import inspect
+
+    from ..data.load import READING_OPTIONS, load_samples
+
+    defaults = {name: parameter.default for name, parameter in inspect.signature(load_samples).parameters.items()}
+    for name in ["quantity", *READING_OPTIONS]:
+        # What each fit read with: a quantity not recorded is unknown; a reading option not recorded, its default.
+        used = [
+            (path, fit.quantity if name == "quantity" else fit.reading.get(name, defaults[name]))
+            for path, fit in fits
+            if name != "quantity" or fit.quantity is not None
+        ]
+        values = {repr(value) for _, value in used}
+        if getattr(args, name) == defaults[name] and len(values) == 1:
+            setattr(args, name, used[0][1])
+            continue
+        given = "brdf" if name == "quantity" and args.quantity is None else getattr(args, name)
+        for path, value in used:
+            if value != given:
                 warn(
                     InputWarning(
-                        f"{path} was fitted to samples read as {fit.quantity}; {samples_path} is read as"
-                        f" {args.quantity or 'brdf'}"
+                        f"{path} was fitted to samples read {_read_with(name, value)}; {samples_path} is read"
+                        f" {_read_with(name, given)}"
                     )
                 )
     limits = {fit.max_theta for _, fit in fits}
     return limits.pop() if len(limits) == 1 else None
+
+
+def _read_with(name: str, value) -> str:
+    """How a reading option's value reads in a warning: ``as brdf`` (the quantity), ``with --angles radians``,
+    ``without --format``."""
+    option = "--" + name.replace("_", "-")
+    if name == "quantity":
+        return f"as {value}"
+    if value is None or value is False:
+        return f"without {option}"
+    return f"with {option}" if value is True else f"with {option} {value}"
 
 
 def _incidences(text: str | None):

@@ -99,13 +99,19 @@ def check_figure_path(path, argument: str = "path") -> Path:
 
 def checked_samples(samples, results: Sequence[FitResult] = ()) -> Samples:
     """``samples`` if it is a :class:`Samples`, else a one-line error naming the argument. A path is read with
-    :func:`brdffit.load_samples`'s defaults, but as ``results``' samples were read (their ``quantity``) when they
-    record one and agree. Warns (:class:`~brdffit.InputWarning`) about a result fitted to values read as another
-    quantity than these samples' (``brdf`` and ``cosine-weighted-out`` values of one file are different BRDFs): the
-    figure would compare them without a word."""
+    :func:`brdffit.load_samples`'s defaults, but as ``results``' samples were read where they agree: their
+    ``quantity`` (when they record one) and the options of ``fit.reading`` (radians, a spectral conversion, ...).
+    Warns (:class:`~brdffit.InputWarning`) about a result fitted to values read as another quantity than these
+    samples' (``brdf`` and ``cosine-weighted-out`` values of one file are different BRDFs): the figure would compare
+    them without a word."""
     if isinstance(samples, str | os.PathLike):
         quantities = {result.quantity for result in results if result.quantity is not None}
-        samples = as_samples(samples, **({"quantity": quantities.pop()} if len(quantities) == 1 else {}))
+        readings = {tuple(result.reading.items()) for result in results}
+        samples = as_samples(
+            samples,
+            **({"quantity": quantities.pop()} if len(quantities) == 1 else {}),
+            **(dict(readings.pop()) if len(readings) == 1 else {}),
+        )
     if not isinstance(samples, Samples):
         kind = f"an empty {type(samples).__name__}" if isinstance(samples, Sequence) and not samples else None
         raise BrdfInputError(

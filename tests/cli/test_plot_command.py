@@ -117,6 +117,38 @@ def test_the_samples_are_read_as_the_fit_read_them(tmp_path, capsys):
     )
 
 
+def test_the_samples_are_read_with_the_options_the_fit_read_them_with(files, tmp_path, capsys, monkeypatch):
+    """A fit of a CSV whose angles are radians records ``fit.reading = {"angles": "radians"}``; plot reads the file
+    so again without being told (read in degrees, every direction would lie within 1.6° of the normal, and the
+    figures would compare the fit with other data), and says so when told otherwise."""
+    import numpy as np
+
+    table = np.genfromtxt(files / "ward.csv", delimiter=",", names=True)
+    radians = tmp_path / "radians.csv"
+    columns = list(table.dtype.names)
+    rows = [[np.radians(row[c]) if c.startswith(("theta", "phi")) else row[c] for c in columns] for row in table]
+    radians.write_text(",".join(columns) + "\n" + "\n".join(",".join(repr(float(v)) for v in r) for r in rows) + "\n")
+    result = tmp_path / "radians.json"
+    assert main(["fit", str(radians), "--model", "ward", "--angles", "radians", "-q", "-o", str(result)]) == 0
+    assert json.loads(result.read_text())["fit"]["reading"] == {"angles": "radians"}
+    capsys.readouterr()
+    import brdffit.cli.plot
+    from brdffit import load_samples
+
+    read = []
+    monkeypatch.setattr(brdffit.cli.plot, "load", lambda *a: read.append(brdffit.cli.arguments.load(*a)) or read[-1])
+    status, _, err = run(["plot", result, radians, "--kind", "residuals", "-o", tmp_path / "r.png"], capsys)
+    assert status == 0 and err == "", err
+    assert read[0].wi.tolist() == load_samples(radians, angles="radians").wi.tolist()
+    # the other way round: a fit of degrees, the file read in radians as told
+    status, _, err = run(
+        ["plot", files / "ward.json", radians, "--kind", "residuals", "--angles", "radians", "-o", tmp_path / "d.png"],
+        capsys,
+    )
+    assert status == 0
+    assert f"{files / 'ward.json'} was fitted to samples read with --angles degrees; {radians} is read with" in err
+
+
 def test_an_existing_file_is_no_folder(files, tmp_path, capsys):
     afile = tmp_path / "afile"
     afile.write_text("")
