@@ -1,12 +1,12 @@
 # Two commands set everything up on a machine with python3 and make:
 #   make demo   builds .venv and fits the shipped example, printing the fitted table
-#   make test   builds .venv and runs the tests (what CI runs)
+#   make test   builds .venv and runs the tests but the slow ones (CI runs it, then make test-slow)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-kernels bench-reading bench-threads bench-svbrdf lint format docs examples clean
+.PHONY: demo test test-slow test-install test-lowest test-heavy notebooks bench bench-pca bench-renderers bench-exports bench-phases bench-kernels bench-reading bench-threads bench-svbrdf lint format docs examples clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -25,8 +25,13 @@ $(VALIDATOR): $(STAMP)
 		npm install --silent --no-audit --no-fund --prefix $(VENV)/node gltf-validator@2.0.0-dev.3.10; \
 	else echo "npm not found: the tests that run the Khronos glTF validator will skip"; fi
 
+# The tests in two parts: `make test` all but the slow ones (11-17 minutes on 2 cores), `make test-slow` those marked slow
+# (cases of ten seconds or more, the catalogue's models beyond one of each kind: 8-15 minutes). CI runs both.
 test: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q
+
+test-slow: $(STAMP) $(VALIDATOR)
+	$(BIN)/python -m pytest -n 2 -q -m 'slow and not heavy'
 
 # The lowest versions pyproject.toml allows (issue 30: what `pip install brdffit` may give a user): a second venv
 # resolved by uv with --resolution lowest-direct (every direct dependency at its lower limit, the package installed
@@ -51,7 +56,7 @@ test-lowest: $(STAMP) $(VALIDATOR)
 	cd $(LOWEST) && BRDFFIT_CACHE_DIR=cache bin/brdffit fit ../examples/ward-pickled-oak.csv --model ward -q -o ward.json
 	$(BIN)/uv build --quiet --sdist --wheel --out-dir $(LOWEST)/dist
 	$(BIN)/python tests/dist_contents.py $(LOWEST)/dist
-	$(LOWEST)/bin/python -m pytest -n 2 -q $(LOWEST_TESTS)
+	$(LOWEST)/bin/python -m pytest -n 2 -q -m 'not heavy' $(LOWEST_TESTS)
 
 # `pip install <clone>` as a user does it (issue 30): a third venv, the package installed from the clone as a wheel (not
 # editable) with the pinned versions, then `python -m brdffit --version` and a fit of the example from another folder,

@@ -182,5 +182,34 @@ def case_id(case) -> str:
     return name + ("-metal" if params.get("metallic", 0.0) > 0.5 else "")
 
 
+#: The cases a per-case test runs in ``make test``, one of each kind: the diffuse model, Ward isotropic and
+#: anisotropic, Cook-Torrance with Beckmann, V-groove and Schlick, a renderer's metal (GGX, Smith, a complex index),
+#: one Lafortune lobe. The others (the variants of these, and the renderers' whole-lobe models, the costliest to
+#: compile: glTF's, principled, roughplastic, ~10–30 s a test) are marked ``slow``: ``make test-slow``, which CI runs
+#: too; the export tests (``tests/export``) fit and check the renderers' models in ``make test``.
+QUICK_CASES = {
+    "lambert",
+    "ward",
+    "ward-aniso",
+    "cook-torrance-schlick",
+    "cook-torrance-conductor-ggx-smith",
+    "lafortune-1",
+}
+
+
+def case_params(cases=CASES, *, as_one: bool = False) -> list:
+    """``pytest.param`` of each case (its three parts, or the case as one argument with ``as_one``), named by
+    :func:`case_id`, marked ``slow`` outside :data:`QUICK_CASES`."""
+    return [
+        pytest.param(
+            *([case] if as_one else case),
+            id=case_id(case),
+            marks=() if case_id(case) in QUICK_CASES else pytest.mark.slow,
+        )
+        for case in cases
+    ]
+
+
 def parametrize_cases(cases=CASES):
-    return pytest.mark.parametrize(("model", "options", "params"), cases, ids=[case_id(c) for c in cases])
+    """The test once per case, as ``(model, options, params)``: :func:`case_params`."""
+    return pytest.mark.parametrize(("model", "options", "params"), case_params(cases))

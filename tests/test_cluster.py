@@ -15,6 +15,8 @@ import pytest
 
 from brdffit import BrdfInputError, data_synth, fit_batch, save_samples
 
+pytestmark = pytest.mark.slow  # each test starts a Dask cluster of processes: ~100 s in all
+
 distributed = pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")
 
 #: Results of the same programs on the same machine agree to rounding; a program for another number of stacked

@@ -64,6 +64,14 @@ CASES = [case for case in examples() if runnable(case[2])]
 #: Commands whose examples take a minute (``report`` compares every model and estimates errors): run with the heavy
 #: cases (``make test-heavy``).
 SLOW = ("report",)
+#: Commands whose examples take ten seconds or more (``compare`` fits every candidate on every fold): marked ``slow``
+#: (``make test-slow``, which CI runs too).
+TENS_OF_SECONDS = ("compare",)
+
+
+def _marks(command: str):
+    """``heavy`` for a command of :data:`SLOW`, ``slow`` for one of :data:`TENS_OF_SECONDS`."""
+    return pytest.mark.heavy if command in SLOW else pytest.mark.slow if command in TENS_OF_SECONDS else ()
 
 
 def _skeleton(line: str) -> tuple[str, list[float]]:
@@ -99,12 +107,7 @@ def matches(expected: list[str], actual: list[str]) -> str | None:
 
 @pytest.mark.parametrize(
     ("page", "number", "command", "expected"),
-    [
-        pytest.param(
-            *case, marks=pytest.mark.heavy if case[2].split()[1] in SLOW else (), id=f"{case[0].name}:{case[1]}"
-        )
-        for case in CASES
-    ],
+    [pytest.param(*case, marks=_marks(case[2].split()[1]), id=f"{case[0].name}:{case[1]}") for case in CASES],
 )
 def test_a_pages_example_says_what_the_command_says(page, number, command, expected, tmp_path, monkeypatch, capsys):
     shutil.copytree(ROOT / "examples", tmp_path / "examples")

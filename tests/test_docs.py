@@ -13,6 +13,7 @@ def python_blocks(page: str) -> str:
     return "\n\n".join(re.findall(r"```python\n(.*?)```", (ROOT / "docs" / page).read_text(), re.S))
 
 
+@pytest.mark.slow
 def test_adding_a_model_defines_registers_and_fits_a_model_that_is_not_built_in():
     code = python_blocks("adding-a-model.md")
     assert "register_model" in code and "brdffit.fit(" in code

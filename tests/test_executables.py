@@ -186,6 +186,7 @@ print(repr(value), len(lowered), ",".join(kinds))
 """
 
 
+@pytest.mark.slow
 @needs_cpu_features
 def test_a_later_process_runs_the_executable_without_lowering(tmp_path):
     """Across processes, with JAX's compilation cache on: the first compiles and stores; the second loads the

@@ -13,6 +13,7 @@ import sys
 import warnings
 
 import numpy as np
+import pytest
 from paths import EXAMPLE, ROOT
 
 import brdffit
@@ -48,6 +49,7 @@ print(json.dumps({{
 """
 
 
+@pytest.mark.slow
 def test_brdffit_computes_in_float64_and_leaves_the_users_float32_alone():
     code = SCRIPT.format(example=str(EXAMPLE))
     done = subprocess.run(

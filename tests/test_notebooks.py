@@ -28,6 +28,7 @@ def run_cell(source: str, name: str, namespace: dict):
     return eval(compile(ast.Expression(last.value), name, "eval"), namespace)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[path.stem for path in NOTEBOOKS])
 def test_notebook_runs(notebook, monkeypatch):
     import matplotlib.pyplot as plt

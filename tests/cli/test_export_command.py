@@ -37,6 +37,7 @@ def run(argv, capsys):
     return status, out, err
 
 
+@pytest.mark.slow
 def test_mitsuba_xml_and_dict(results, tmp_path, capsys, monkeypatch):
     mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed")
     mi.set_variant("scalar_rgb")
@@ -76,6 +77,7 @@ def test_render_writes_a_png(results, tmp_path, capsys):
     assert output.read_bytes().startswith(PNG) and out.startswith(f"wrote {output}: Mitsuba 3 rendered a sphere")
 
 
+@pytest.mark.slow
 def test_render_beside_the_data(results, tmp_path, capsys):
     """``--samples``: the render beside the fit's sphere and the data's, at one exposure, and the export's error at
     the data's directions; an .exr holds one image, so it is refused with the data, before any work."""
@@ -177,6 +179,7 @@ def test_bad_input_is_one_line_and_writes_nothing(results, tmp_path, capsys, arg
     json.loads(before)
 
 
+@pytest.mark.slow
 def test_gltf_says_how_far_it_lies(results, tmp_path, capsys):
     output = tmp_path / "metal.gltf"
     status, out, err = run(["export", results / "metal.json", "--to", "gltf", "-o", output], capsys)
@@ -189,6 +192,7 @@ def test_gltf_says_how_far_it_lies(results, tmp_path, capsys):
     assert material["extras"]["brdffit"]["approximation"]["rmse"] > 0
 
 
+@pytest.mark.slow
 def test_an_exact_gltf_export_never_says_approximate(tmp_path, capsys):
     """A ``gltf`` fit's export writes its numbers unchanged: "exact", then how far the written material lies from
     the fit (rounding alone), never "approximate" (it once said both)."""

@@ -52,6 +52,7 @@ def test_a_result_with_fixed_parameters_is_a_start(samples_file, tmp_path, capsy
     assert free["fit"]["fixed"] == {} and free["fit"]["cost"] <= held["fit"]["cost"] * (1 + 1e-9)
 
 
+@pytest.mark.slow
 def test_compare_holds_the_models_that_have_the_parameter(samples_file, tmp_path, capsys):
     output = tmp_path / "compare.json"
     models = "cook-torrance:fresnel=dielectric,ward"

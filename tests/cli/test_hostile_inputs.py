@@ -241,6 +241,7 @@ def not_dask():
     thread.join(timeout=10)
 
 
+@pytest.mark.slow
 def test_a_scheduler_address_that_is_not_dask_is_one_line(files, tmp_path, capsys, no_fit, not_dask):
     """Dask read the HTTP bytes as a frame length and asked for 3 EiB: a MemoryError traceback, exit 1."""
     pytest.importorskip("distributed", reason="dask[distributed] (the cluster extra) is not installed")

@@ -32,6 +32,7 @@ def stdin(monkeypatch):
     return give
 
 
+@pytest.mark.slow
 def test_samples_and_results_come_from_standard_input(stdin, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     temporary = tmp_path.parent / f"{tmp_path.name}-temporary"  # this test's own: another test's may come and go
@@ -56,6 +57,7 @@ def test_samples_and_results_come_from_standard_input(stdin, tmp_path, monkeypat
     assert list(temporary.iterdir()) == []  # every temporary copy removed
 
 
+@pytest.mark.slow
 def test_products_go_to_standard_output_and_the_rest_to_standard_error(stdin, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     stdin(WARD.to_json())

@@ -55,6 +55,7 @@ def test_convert_round_trips_samples(suffix, small, tmp_path, capsys):
     assert back.channels == samples.channels
 
 
+@pytest.mark.slow
 def test_convert_a_result_to_merl_and_fit_it_back(tmp_path, capsys):
     result = tmp_path / "ward.json"
     fit_block = {"loss": "log", "cost": 0.0, "rmse": 0.0, "n_samples": 1, "n_steps": 0, "converged": True}
@@ -118,6 +119,7 @@ def load_samples_from_arrays(wi, wo, values, channels):
     return Samples.from_arrays(wi, wo, values, channels=channels)
 
 
+@pytest.mark.slow
 def test_retro_reflective_tape(tmp_path, capsys):
     """The real ALTA measurement: two Lafortune lobes find the retro-reflective one (cxy > 0) and fit several
     times better than Lambert (issue 5 acceptance)."""

@@ -21,6 +21,7 @@ def test_a_rank_two_library_has_two_components(linear_library):
         build_basis(paths, components=3, mapping="none")
 
 
+@pytest.mark.slow
 def test_streamed_build_matches_a_direct_svd(library):
     """The two-pass Gram build gives the variances and the subspace of numpy's SVD of the whole mapped library
     (both exact: 1e-9 relative, the Gram matrix squares the condition of the smallest kept component)."""

@@ -17,6 +17,7 @@ def run(argv, capsys):
     return status, out, err
 
 
+@pytest.mark.slow
 def test_the_whole_loop(tmp_path, library, capsys):
     folder = library[0][0].parent
     basis = tmp_path / "basis.npz"
@@ -122,6 +123,7 @@ def test_bad_input_is_one_line(tmp_path, library, basis_file, capsys, argv, mess
     assert sorted(tmp_path.iterdir()) == before
 
 
+@pytest.mark.slow
 def test_a_result_whose_basis_changed(tmp_path, library, capsys):
     """A result records its basis's SHA-256: after the basis file is rebuilt differently, using the result is a
     one-line error, not a silently different material."""

@@ -121,6 +121,7 @@ def test_mcmc_samples_the_coefficients(basis_file, library):
     assert np.all(np.isfinite(result.draws))
 
 
+@pytest.mark.slow
 def test_start_batch_and_compare(basis_file, library):
     samples = [read_merl(path, subsample=200, seed=7) for path in library[0][6:8]]
     first = brdffit.fit(samples[0], model="pca", basis=str(basis_file))

@@ -110,6 +110,7 @@ def test_an_anisotropic_fits_albedo_is_compared_with_the_light_at_each_azimuth()
     assert approximation_error(WARD, WARD.predict).albedo_phi_i == 0.0
 
 
+@pytest.mark.slow
 def test_an_anisotropic_fit_is_exported_anisotropic_with_its_tangent():
     """A brushed lobe Mitsuba has no exact counterpart for (Schlick's Fresnel term) is stood in for by Mitsuba's
     anisotropic roughconductor: its roughnesses within 3% and its tangent within 1° (the stand-in's Fresnel term is
@@ -125,6 +126,7 @@ def test_an_anisotropic_fit_is_exported_anisotropic_with_its_tangent():
     assert np.degrees(material.anisotropy_rotation) == pytest.approx(-60.0, abs=2.0)
 
 
+@pytest.mark.slow
 def test_an_anisotropic_stand_in_fitted_on_fewer_viewer_zeniths_lies_as_near_as_on_the_whole_grid():
     """Mitsuba's Beckmann stand-in of a GGX lobe turned by 30°, refined on ANISOTROPIC_FIT_GRID (a third of the pairs),
     lies as far from the fit on the error grid as refined on the whole of GRID with the light at the same four azimuths
@@ -174,6 +176,7 @@ def oak():
     return fit(load_samples(EXAMPLE), "ward")
 
 
+@pytest.mark.slow
 def test_the_coarse_to_fine_refit_reaches_the_whole_grids_optimum(oak):
     """Mitsuba's GGX stand-in fitted to the oak example's Ward fit: coarse to fine on the half grid, its error over the
     error grid is that of the fit on the whole 38,880-pair grid with every start (0.065 1/sr, 118.4% of the BRDF's

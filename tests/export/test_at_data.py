@@ -40,6 +40,7 @@ def copper_data():
     return data_synth.synthesize("cook-torrance", COPPER, wi, wo, **COPPER_OPTIONS)
 
 
+@pytest.mark.slow
 def test_mitsuba_export_error_is_what_mitsuba_gives_on_the_written_file(tmp_path, copper_data):
     mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")
     mi.set_variant("scalar_rgb")
@@ -67,6 +68,7 @@ def test_mitsuba_export_error_is_what_mitsuba_gives_on_the_written_file(tmp_path
     np.testing.assert_allclose(brightness, np.median(np.array(values) / copper_data.values), atol=6e-4)
 
 
+@pytest.mark.slow
 def test_gltf_export_error_is_what_the_files_material_gives(tmp_path):
     data = load_samples(EXAMPLE)
     path = tmp_path / "oak.gltf"
@@ -141,6 +143,7 @@ def test_values_too_dark_to_see_are_left_out_of_the_relative_error():
     assert f"{error.n_dark:,} of {measured.size:,} values below 0.0001 1/sr left out" in error.line()
 
 
+@pytest.mark.slow
 def test_samples_are_read_for_the_export_as_the_fit_read_them(tmp_path, capsys):
     """A fit of a file read with ``--angles radians`` or ``--spectral-to xyz`` records it (``fit.reading``), and
     ``export --samples`` reads the file so again: it read radians as degrees (a "median error" of 11.6% on misread

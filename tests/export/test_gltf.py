@@ -502,6 +502,7 @@ RECOVERED = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("truth", RECOVERED, ids=["plastic", "metal", "between", "coat", "flat-fresnel"])
 def test_the_fit_gives_a_gltf_materials_parameters_back(truth):
     wi, wo = dense_grid()

@@ -83,6 +83,7 @@ def random_start(rng, anisotropy: bool = False) -> dict:
     return {name: value if name == "base_color" else float(value) for name, value in start.items()}
 
 
+@pytest.mark.slow
 def test_a_metal_is_recovered_and_its_gltf_export_is_the_fit_exactly(rng, tmp_path):
     # A bare metal, its coat held at 0 (--fix clearcoat=0) as a user who knows it has none holds it: free, the coat
     # takes a little of the noise of the few bright samples near the mirror that the loss weighs most (measured:
@@ -104,6 +105,7 @@ def test_a_metal_is_recovered_and_its_gltf_export_is_the_fit_exactly(rng, tmp_pa
     assert stored["baseColorFactor"][:3] == list(result.params["base_color"])
 
 
+@pytest.mark.slow
 def test_a_freed_index_is_fitted_and_written_as_khr_materials_ior(rng, tmp_path):
     samples = measured(PLASTIC, rng)
     held = fit(samples, "gltf")
@@ -123,6 +125,7 @@ def test_a_freed_index_is_fitted_and_written_as_khr_materials_ior(rng, tmp_path)
     assert material.extensions == expected
 
 
+@pytest.mark.slow
 def test_a_clear_coated_paint_is_recovered_and_exported_with_its_coat(tmp_path):
     samples = measured_lobes(PAINT)
     result = fit(samples, "gltf")
@@ -156,6 +159,7 @@ def test_a_clear_coated_paint_is_recovered_and_exported_with_its_coat(tmp_path):
     assert np.median(relative) < 0.01, np.median(relative)
 
 
+@pytest.mark.slow
 def test_a_freed_anisotropy_is_recovered_and_exported_with_the_mesh_tangents_it_needs(tmp_path):
     samples = measured_lobes(BRUSHED)
     held = fit(samples, "gltf")  # round: the default holds the anisotropy at 0
@@ -213,6 +217,7 @@ def test_a_freed_anisotropy_is_checked_as_an_anisotropic_models():
     assert not any("plane of incidence" in line for line in caveats(model, in_plane, paint, held=default_holds))
 
 
+@pytest.mark.slow
 def test_a_sheen_is_recovered_and_exported_as_khr_materials_sheen(tmp_path):
     samples = measured_lobes(VELVET)
     with warnings.catch_warnings():  # without a sheen, the base's roughness runs to its end (1) after the grazing light
@@ -306,6 +311,7 @@ def test_the_default_fit_reaches_the_best_cost_of_10_random_starts(name, free):
     assert result.cost <= min(costs) * (1.0 + SAME_MINIMUM), (result.cost, sorted(costs))
 
 
+@pytest.mark.slow
 def test_the_command_line_fits_and_exports_it(rng, tmp_path, capsys):
     samples = measured(COPPER, rng, n=500)
     path = tmp_path / "copper.csv"

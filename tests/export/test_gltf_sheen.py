@@ -143,6 +143,7 @@ def white_albedos(metallic, roughness, n=512, **extension):
     return fine[:, 0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sheen_roughness", [0.1, 1.0])
 def test_a_white_sheen_over_a_white_base_never_gains_energy_where_the_base_does_not(sheen_roughness):
     # Albedo scaling (Conty Estevez & Kulla 2017): lit at θi, the sheen reflects E(cos θi) and the base at most

@@ -108,6 +108,7 @@ def test_mitsubas_own_roughconductor_is_fitted_back(distribution, metal, alpha):
     assert result.params["m"] == pytest.approx(alpha, rel=0.01)
 
 
+@pytest.mark.slow
 def test_an_approximate_export_says_how_far_it_lies(tmp_path):
     """The example's Ward fit has no Mitsuba counterpart: Mitsuba's model is fitted to it, and its error is in the
     export (the XML's comment, the Python form's ``approximation``)."""
@@ -129,6 +130,7 @@ def test_an_approximate_export_says_how_far_it_lies(tmp_path):
     mi.load_string(xml)  # Mitsuba takes it
 
 
+@pytest.mark.slow
 def test_albedos_beyond_mitsubas_range_are_refitted_not_scaled():
     """Mitsuba refuses RGB reflectances above 1: kd + ks = 1.6 is not scaled into range (a darker material called
     exact) but refitted within it, said, and the error of what Mitsuba evaluates is reported."""
@@ -164,6 +166,7 @@ def test_mitsubas_beckmann_g1_is_within_its_documented_approximation():
     assert worst <= 0.005
 
 
+@pytest.mark.slow
 def test_a_retro_reflector_is_said_to_be_missed():
     """The real tape's 2-lobe Lafortune fit (a sharp lobe back towards the light): no microfacet model reflects
     like that, so the export's rmse is most of the BRDF's own rms, and a note says to look before using it."""
@@ -209,6 +212,7 @@ def test_anisotropic_exports_agree_with_mitsuba_in_the_tangents_frame(distributi
     assert relative.max() <= (1e-4 if distribution == "ggx" else 1e-2), relative.max()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
 def test_mitsubas_anisotropic_roughconductor_is_recovered_with_its_tangent(distribution):
     """Acceptance (issue 28): Mitsuba's own anisotropic roughconductor (alpha_u 0.05, alpha_v 0.3, gold), its tangent
@@ -259,6 +263,7 @@ def test_a_metals_negligible_diffuse_albedo_is_left_out_and_said():
     np.testing.assert_allclose(mitsuba_brdf(bsdf, WI, WO), exported.brdf(WI, WO), rtol=1e-4, atol=1e-7)
 
 
+@pytest.mark.slow
 def test_a_retro_reflector_says_it_cannot_be_a_mitsuba_bsdf():
     """The real tape's 2-lobe Lafortune fit sends light back towards the light: the glTF export said no material of
     its could reproduce that, the Mitsuba export only that its model missed the shape (found trying the tool as a new

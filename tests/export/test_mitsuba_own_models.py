@@ -100,6 +100,7 @@ def random_start(model: str, colour: str, rng) -> dict:
     return start | HELD[model] | {colour: [float(x) for x in rng.uniform(0.02, 0.98, 3)]}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", CASES)
 def test_mitsubas_own_model_is_fitted_and_exported_back_unchanged(name):
     (model, options), parameters, colour = MATERIALS[name]

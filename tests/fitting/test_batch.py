@@ -25,6 +25,7 @@ def datasets():
     return result
 
 
+@pytest.mark.slow
 def test_loop_equals_one_fit_at_a_time():
     samples = datasets()
     batch = fit_batch(samples, "ward", strategy="loop")

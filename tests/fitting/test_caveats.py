@@ -122,6 +122,7 @@ def test_results_carry_their_caveats_through_the_file(oak, tmp_path):
     assert np.all(np.isfinite(result.rmse))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ward", "cook-torrance", "ward-aniso", "phong", "blinn-phong"])
 def test_the_screen_changes_no_verdict(name):
     """The screen clears an incidence only where the fine grid finds no albedo above the limit there: on 40 seeded

@@ -24,6 +24,7 @@ def quiet(function, *args, **kwargs):
         return function(*args, **kwargs)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", [CASES[1], CASES[6], CASES[11]], ids=case_id)
 def test_the_generating_model_is_best_or_within_one_standard_error(case):
     name, options, params = case
@@ -34,6 +35,7 @@ def test_the_generating_model_is_best_or_within_one_standard_error(case):
     assert comparison.best.spec == generating.spec  # here it is the best outright
 
 
+@pytest.mark.slow
 def test_scores_follow_their_formulas():
     """AIC, BIC with the noise scale estimated (no sigma) and as χ² (sigma), the CV mean and standard error."""
     name, options, params = CASES[1]
@@ -80,6 +82,7 @@ def test_a_fold_is_a_refit_of_the_rest_scored_on_the_held_out_samples():
         assert measured == pytest.approx(np.mean(residuals**2), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_the_real_tape_prefers_several_lafortune_lobes_and_lambert_least():
     tape = load_samples(TAPE, quantity="cosine-weighted-out")
     comparison = quiet(compare, tape, ["lambert", "ward", "lafortune:1", "lafortune:2", "lafortune:3"])

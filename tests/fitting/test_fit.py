@@ -318,6 +318,7 @@ def test_residuals_of_a_result_sum_to_its_cost_with_sigma_and_weight():
         result.residuals(grey)
 
 
+@pytest.mark.slow
 def test_an_anisotropic_fit_reports_the_twin_with_the_smoother_tangent_unless_a_hold_names_the_other():
     """(αu, αv, φt) and (αv, αu, φt ± 90°) are one lobe: a fit reports alpha_u ≤ alpha_v (the tangent along the
     smoother direction, in (−90, 90]), whichever twin made the data; a user who fixes alpha_u keeps their naming.

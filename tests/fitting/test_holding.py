@@ -59,6 +59,7 @@ def flat(params: dict) -> dict[str, float]:
 
 
 # ---------------------------------------------------------------------------------------------- acceptance
+@pytest.mark.slow
 def test_fixed_eta_recovers_the_rest_and_narrows_the_errors_of_ks(dielectric):
     free = quiet_fit(dielectric, "cook-torrance", fresnel="dielectric", uncertainty="laplace")
     held = quiet_fit(dielectric, "cook-torrance", fresnel="dielectric", uncertainty="laplace", fixed={"eta": 1.5})

@@ -12,6 +12,8 @@ from brdffit.fitting.objective.problem import build_problem, cost, normal_equati
 from brdffit.fitting.options import MAX_STEPS
 from brdffit.fitting.solver.compiled import compiled_solver
 
+pytestmark = pytest.mark.slow  # refits under perturbed data, to finite-difference the optimum: ~70 s
+
 MODEL, OPTIONS, PARAMS = CASES[1]  # Ward, pickled oak (Ngan et al. 2005)
 
 

@@ -39,6 +39,7 @@ def quiet_fit(*args, **kwargs):
         return fit(*args, **kwargs)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("quantity", "loss", "lobes"), sorted(TAPE_BEST))
 def test_the_real_tape_reaches_the_best_known_optimum_by_default_or_says_it_may_not(quantity, loss, lobes):
     """Within 1% of the lowest cost known (costs differ by rounding across machines, far less than 1%), or the fit

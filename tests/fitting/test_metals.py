@@ -30,6 +30,7 @@ def copper():
     return data_synth.synthesize("cook-torrance", COPPER, wi, wo, noise=0.01, seed=4, **OPTIONS)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("loss", ["log", "l2"])
 def test_normal_equations_equal_the_dense_ones(copper, loss):
     """JᵀJ, Jᵀr and rᵀr accumulated over the per-channel basis equal those of the dense Jacobian (jax.jacfwd of the
@@ -57,6 +58,7 @@ def test_equal_channels_are_the_one_channel_conductor(rng):
     np.testing.assert_allclose(values, np.repeat(brdffit.evaluate(model, one, wi, wo), 3, axis=1), rtol=1e-14)
 
 
+@pytest.mark.slow
 def test_a_fit_of_equal_channels_is_the_one_channel_fit():
     """Three identical channels fit as one: the same roughness and index in every channel (both fits converge to
     the same optimum; 1e-6 relative is the solver's stopping tolerance), three times the cost."""

@@ -6,7 +6,7 @@ import warnings
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from catalogue import CASES, anisotropic, case_id
+from catalogue import anisotropic, case_params
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from paths import EXAMPLE
@@ -31,7 +31,7 @@ from brdffit.fitting.solver.compiled import Solved
 GEOMETRY = data_synth.uniform_random(200, seed=4)
 
 
-@pytest.mark.parametrize("case", CASES, ids=[case_id(case) for case in CASES])
+@pytest.mark.parametrize("case", case_params(as_one=True))
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(edge=st.lists(st.sampled_from([-800.0, -40.0, -5.0, 0.0, 2.0]), min_size=12, max_size=12))
 def test_a_result_at_any_edge_is_read_back_by_every_command(case, edge, tmp_path):

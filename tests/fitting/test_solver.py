@@ -66,6 +66,7 @@ def test_shorter_steps_have_the_asked_scaled_length(rng, fraction):
     assert float(np.asarray(delta) @ gradient) < 0
 
 
+@pytest.mark.slow
 def test_step_counts_match_minpack():
     """From the same data-driven start, brdffit's steps (rejected ones included) are comparable to scipy's lm
     (MINPACK) function evaluations, and its cost is no higher: on eight seeded random Cook-Torrance materials,
@@ -99,6 +100,7 @@ def _minpack(model, samples, theta0):
     return scipy.optimize.least_squares(lambda theta: np.asarray(residual(jnp.asarray(theta))), theta0, method="lm")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("budget", [1, 2, 5, 50])
 def test_a_step_budget_stops_the_solve_as_max_steps_does(budget):
     """A budget (an argument of the compiled program, which lets one program run the starts' race and the full

@@ -84,6 +84,7 @@ def test_the_starts_ask_the_models_diffuse_term():
     assert float(start.specular[0, 0]) == pytest.approx(0.05, rel=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("options", "fixed", "bounds"),
     [

@@ -15,6 +15,8 @@ from brdffit.errors import BrdfInputError
 from brdffit.svbrdf.gltf_maps import gltf_maps
 from brdffit.svbrdf.images import srgb_decoded
 
+pytestmark = pytest.mark.slow  # its module fixture fits a whole capture: ~35 s
+
 
 @pytest.fixture(scope="module")
 def gltf_fit(tmp_path_factory):

@@ -11,6 +11,8 @@ from brdffit.data_synth.capture import blend_field, light_positions, write_captu
 from brdffit.export.mitsuba_eval import mitsuba
 from brdffit.svbrdf.capture import texel_centres
 
+pytestmark = pytest.mark.slow  # renders photographs with Mitsuba and fits them: ~20 s
+
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")
 
 SHAPE = (6, 6)

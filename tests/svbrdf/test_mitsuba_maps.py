@@ -18,6 +18,8 @@ from brdffit.svbrdf.mitsuba_maps import mitsuba_bsdf_of_maps, write_mitsuba_maps
 from brdffit.svbrdf.relight import stacked_params, texel_brdf
 from brdffit.svbrdf.texels import point_light
 
+pytestmark = pytest.mark.slow  # its module fixture fits a whole capture: ~30 s
+
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is not installed (pip install 'brdffit[render]')")
 
 #: Held: a coat the photographs cannot determine, and the specular level Mitsuba's principled takes as one number.

@@ -19,6 +19,8 @@ from brdffit.physics.models.registry import get_model
 from brdffit.svbrdf.smoothing import TOLERANCE, shape_mask
 from brdffit.svbrdf.texels import read_photographs, texel_samples
 
+pytestmark = pytest.mark.slow  # its fixtures fit captures with and without the prior: ~40 s
+
 TAU = 0.3
 
 

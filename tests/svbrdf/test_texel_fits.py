@@ -30,6 +30,7 @@ def fitted(ward_capture, tmp_path_factory):
     return maps, truth, output
 
 
+@pytest.mark.slow
 def test_the_maps_recover_the_truth(fitted):
     maps, truth, _ = fitted
     assert maps.summary()["fitted"] == maps.summary()["converged"] == 256

@@ -79,6 +79,7 @@ def test_without_sigma_the_errors_scale_with_the_residual_variance():
     assert result.uncertainty["warnings"] == []
 
 
+@pytest.mark.slow
 def test_without_sigma_a_varying_scatter_is_reported():
     """2% multiplicative noise without sigma: the log-loss residuals' scatter follows the signal, so the s²-scaled
     (Gauss-Newton) errors are too small; the sandwich errors are larger, so they are the ones reported, the method
@@ -244,6 +245,7 @@ def test_laplace_68_percent_intervals_are_calibrated(calibration_fits):
     assert np.all((spread > 0.85) & (spread < 1.15)), spread
 
 
+@pytest.mark.slow
 def test_mcmc_agrees_with_laplace(calibration_fits):
     """One replicate: posterior standard deviations within 20% of Laplace's, medians within 1σ of the optimum.
 
@@ -509,6 +511,7 @@ def test_cli_chain_takes_one_input(oak_file, tmp_path, capsys):
     assert status == 2 and "--chain and --corner take one samples file; got 2" in err
 
 
+@pytest.mark.slow
 def test_mcmc_near_a_bound_stays_in_the_domain_and_keeps_laplace_warnings():
     """Cook-Torrance below 45° leaves f0 nearly free (only ks·f0 is measured) and the optimum on f0's bound:
     every walker starts and stays inside [0, 1], and the degeneracy Laplace finds is reported by MCMC too."""

@@ -3,7 +3,7 @@ measured lookup against the model it was sampled from, and the display transform
 
 import numpy as np
 import pytest
-from catalogue import RECIPROCAL_CASES, case_id
+from catalogue import RECIPROCAL_CASES, case_params
 from paths import EXAMPLE
 
 from brdffit import BrdfInputError, data_synth, evaluate, load_samples
@@ -111,7 +111,7 @@ def test_a_light_from_behind_lights_nothing_and_lights_add_up():
     assert np.allclose(both, apart, rtol=1e-13, atol=0)
 
 
-@pytest.mark.parametrize("case", RECIPROCAL_CASES, ids=[case_id(case) for case in RECIPROCAL_CASES])
+@pytest.mark.parametrize("case", case_params(RECIPROCAL_CASES, as_one=True))
 def test_swapping_light_and_view_gives_the_same_brdf_helmholtz(case):
     """On the middle row of an odd-sized image (``y = 0``), pixels a and b at angles βa, βb from the view axis,
     with the light at ``α = βa + βb``, see the pair (θi, θo) = (βb, βa) and (βa, βb), both in the plane of

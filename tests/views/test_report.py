@@ -11,6 +11,8 @@ from brdffit import BrdfInputError, data_synth, save_samples
 from brdffit.cli import main
 from brdffit.views.report import report
 
+pytestmark = pytest.mark.slow  # its module fixture compares models and writes a report: ~20 s
+
 PARAMS = {"rho_d": [0.2, 0.15, 0.1], "rho_s": [0.05, 0.05, 0.05], "alpha": 0.15}
 
 
