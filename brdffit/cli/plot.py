@@ -55,6 +55,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="slices and polar: the light zeniths to show (default: the data's, at most 4)",
     )
     add_loading_options(parser)
+    # Not given, these are the fits' (their fit.reading), else load_samples's defaults: _read_as_fitted.
+    parser.set_defaults(**dict.fromkeys(FITS_DECIDE))
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
 
@@ -94,8 +96,16 @@ def run(args: argparse.Namespace) -> int:
         check_figure_path(args.output, argument="output")
     results = [fit for _, fit in fits]
     samples_path = args.files[-1]
-    max_theta = _read_as_fitted(args, fits, samples_path)
-    samples = load(samples_path, args).within(max_theta)
+    max_theta, taken = _read_as_fitted(args, fits, samples_path)
+    try:
+        samples = load(samples_path, args).within(max_theta)
+    except BrdfInputError as error:
+        if not taken:
+            raise
+        said = ", ".join(f"{name}={value}" for name, value in taken.items())
+        raise BrdfInputError(
+            f"{samples_path}: read as the fits read their samples (their fit.reading: {said}): ", *error.parts
+        ) from None
     for path, fit in fits:
         if tuple(fit.channels) != samples.channels:
             raise BrdfInputError(
@@ -158,43 +168,52 @@ def _not_a_result(path: str) -> None:
         raise BrdfInputError(f"{path} is a result file, not samples; the samples file comes last")
 
 
-def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> float | None:
-    """Read the samples as the fits did: their quantity and the options their files were read with (``fit.reading``:
-    a format given, radians, a spectral conversion, MERL's bin centres), each where the command line leaves it at its
-    default and the fits agree (else a fit that read its samples otherwise is warned about), and their ``max_theta``
-    when the fits agree, which is returned."""
-    import inspect
+#: The reading options whose default ``plot`` leaves to the fits (None: not given; :func:`_read_as_fitted`).
+FITS_DECIDE = ("angles", "spectral_to", "illuminant", "observer", "bin_centres")
 
-    from ..data.load import READING_OPTIONS, load_samples
 
-    defaults = {name: parameter.default for name, parameter in inspect.signature(load_samples).parameters.items()}
+def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> tuple[float | None, dict]:
+    """Set ``args``' reading options to read the samples as the fits did, where the command line does not give
+    them: the fits' quantity (when they record one and agree) and each option of ``fit.reading`` they agree on
+    (:func:`~brdffit.data.load.agreed_reading`), else :func:`~brdffit.load_samples`'s defaults. Warns about a fit
+    that read its samples otherwise than these are read. Returns the fits' ``max_theta`` when they agree (else
+    None) and the options taken from the fits that are not the defaults."""
+    from ..data.load import READING_OPTIONS, agreed_reading, load_samples_defaults
+    from ..data.quantities import canonical
+
+    defaults = load_samples_defaults()
+    quantities = {fit.quantity for _, fit in fits if fit.quantity is not None}
+    agreed = agreed_reading(fit.reading for _, fit in fits)
+    taken = {}
     for name in ["quantity", *READING_OPTIONS]:
-        # What each fit read with: a quantity not recorded is unknown; a reading option not recorded, its default.
-        used = [
-            (path, fit.quantity if name == "quantity" else fit.reading.get(name, defaults[name]))
-            for path, fit in fits
-            if name != "quantity" or fit.quantity is not None
-        ]
-        values = {repr(value) for _, value in used}
-        if getattr(args, name) == defaults[name] and len(values) == 1:
-            setattr(args, name, used[0][1])
-            continue
-        given = "brdf" if name == "quantity" and args.quantity is None else getattr(args, name)
+        if getattr(args, name) is None:  # not given: the fits decide
+            fits_say = quantities.pop() if name == "quantity" and len(quantities) == 1 else agreed.get(name)
+            setattr(args, name, fits_say if fits_say is not None else defaults[name])
+            if fits_say is not None and name != "quantity":
+                taken[name] = fits_say
+        if name == "format" or (name in ("illuminant", "observer") and args.spectral_to == "keep"):
+            continue  # a format read otherwise fails to read; these two describe a conversion neither side makes
+        if name == "quantity":
+            read_as = canonical(args.quantity) if args.quantity is not None else "brdf"
+            used = [(path, fit.quantity) for path, fit in fits if fit.quantity is not None]
+        else:
+            read_as = getattr(args, name)
+            used = [(path, fit.reading.get(name, defaults[name])) for path, fit in fits]
         for path, value in used:
-            if value != given:
+            if value != read_as:
                 warn(
                     InputWarning(
                         f"{path} was fitted to samples read {_read_with(name, value)}; {samples_path} is read"
-                        f" {_read_with(name, given)}"
+                        f" {_read_with(name, read_as)}"
                     )
                 )
     limits = {fit.max_theta for _, fit in fits}
-    return limits.pop() if len(limits) == 1 else None
+    return (limits.pop() if len(limits) == 1 else None), taken
 
 
 def _read_with(name: str, value) -> str:
     """How a reading option's value reads in a warning: ``as brdf`` (the quantity), ``with --angles radians``,
-    ``without --format``."""
+    ``without --bin-centres``."""
     option = "--" + name.replace("_", "-")
     if name == "quantity":
         return f"as {value}"

@@ -18,7 +18,7 @@ channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 
 import inspect
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -196,6 +196,26 @@ def checked_reading(reading: dict[str, Any]) -> dict[str, Any]:
                 " spectral_to as load_samples takes them, bin_centres true or false)"
             )
     return reading
+
+
+def agreed_reading(readings: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    """The options of :data:`READING_OPTIONS` to read a samples file with again as results read theirs (each
+    ``fit.reading``): those whose value every reading gives alike and that differ from :func:`load_samples`'s default
+    (an option a reading does not record is at its default). An option the readings disagree on is left at its
+    default."""
+    readings = list(readings)
+    defaults = load_samples_defaults()
+    agreed = {}
+    for name in READING_OPTIONS:
+        values = [reading.get(name, defaults[name]) for reading in readings]
+        if values and all(value == values[0] for value in values) and values[0] != defaults[name]:
+            agreed[name] = values[0]
+    return agreed
+
+
+def load_samples_defaults() -> dict[str, Any]:
+    """:func:`load_samples`'s keyword arguments and their defaults."""
+    return {name: parameter.default for name, parameter in inspect.signature(load_samples).parameters.items()}
 
 
 def _read(samples: Samples, reading: tuple[tuple[str, Any], ...]) -> Samples:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._files import atomic_path
-from ..data.load import as_samples
+from ..data.load import agreed_reading, as_samples
 from ..data.samples import Samples
 from ..errors import Argument, BrdfInputError, InputWarning, warn
 from ..fitting.single.result import FitResult
@@ -100,17 +100,17 @@ def check_figure_path(path, argument: str = "path") -> Path:
 def checked_samples(samples, results: Sequence[FitResult] = ()) -> Samples:
     """``samples`` if it is a :class:`Samples`, else a one-line error naming the argument. A path is read with
     :func:`brdffit.load_samples`'s defaults, but as ``results``' samples were read where they agree: their
-    ``quantity`` (when they record one) and the options of ``fit.reading`` (radians, a spectral conversion, ...).
+    ``quantity`` (when they record one) and each option of ``fit.reading`` (radians, a spectral conversion, ...;
+    :func:`~brdffit.data.load.agreed_reading`).
     Warns (:class:`~brdffit.InputWarning`) about a result fitted to values read as another quantity than these
     samples' (``brdf`` and ``cosine-weighted-out`` values of one file are different BRDFs): the figure would compare
     them without a word."""
     if isinstance(samples, str | os.PathLike):
         quantities = {result.quantity for result in results if result.quantity is not None}
-        readings = {tuple(result.reading.items()) for result in results}
         samples = as_samples(
             samples,
             **({"quantity": quantities.pop()} if len(quantities) == 1 else {}),
-            **(dict(readings.pop()) if len(readings) == 1 else {}),
+            **agreed_reading(result.reading for result in results),
         )
     if not isinstance(samples, Samples):
         kind = f"an empty {type(samples).__name__}" if isinstance(samples, Sequence) and not samples else None

@@ -140,6 +140,14 @@ def test_the_samples_are_read_with_the_options_the_fit_read_them_with(files, tmp
     status, _, err = run(["plot", result, radians, "--kind", "residuals", "-o", tmp_path / "r.png"], capsys)
     assert status == 0 and err == "", err
     assert read[0].wi.tolist() == load_samples(radians, angles="radians").wi.tolist()
+    # told the default: read so, and said
+    read.clear()
+    status, _, err = run(
+        ["plot", result, radians, "--kind", "residuals", "--angles", "degrees", "-o", tmp_path / "g.png"], capsys
+    )
+    assert status == 0
+    assert f"{result} was fitted to samples read with --angles radians; {radians} is read with --angles degrees" in err
+    assert read[0].wi.tolist() != load_samples(radians, angles="radians").wi.tolist()
     # the other way round: a fit of degrees, the file read in radians as told
     status, _, err = run(
         ["plot", files / "ward.json", radians, "--kind", "residuals", "--angles", "radians", "-o", tmp_path / "d.png"],
@@ -147,6 +155,18 @@ def test_the_samples_are_read_with_the_options_the_fit_read_them_with(files, tmp
     )
     assert status == 0
     assert f"{files / 'ward.json'} was fitted to samples read with --angles degrees; {radians} is read with" in err
+
+
+def test_a_file_the_fits_reading_cannot_read_says_the_reading_came_from_the_fit(files, tmp_path, capsys):
+    from paths import TAPE
+
+    result = tmp_path / "csv.json"
+    assert main(["fit", str(files / "ward.csv"), "--model", "lambert", "--format", "csv", "-q", "-o", str(result)]) == 0
+    capsys.readouterr()
+    status, out, err = run(["plot", result, TAPE, "-o", f"{tmp_path}/figures/"], capsys)
+    assert (status, out, err.count("\n")) == (2, "", 1), err
+    assert f"{TAPE}: read as the fits read their samples (their fit.reading: format=csv): " in err
+    assert not (tmp_path / "figures").exists()
 
 
 def test_an_existing_file_is_no_folder(files, tmp_path, capsys):
