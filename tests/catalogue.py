@@ -186,7 +186,8 @@ def case_id(case) -> str:
 #: anisotropic, Cook-Torrance with Beckmann, V-groove and Schlick, a renderer's metal (GGX, Smith, a complex index),
 #: one Lafortune lobe. The others (the variants of these, and the renderers' whole-lobe models, the costliest to
 #: compile: glTF's, principled, roughplastic, ~10–30 s a test) are marked ``slow``: ``make test-slow``, which CI runs
-#: too; the export tests (``tests/export``) fit and check the renderers' models in ``make test``.
+#: too. In ``make test`` the export tests still fit glTF's material and check its exact export; principled's and
+#: roughplastic's fits are in ``make test-slow`` alone.
 QUICK_CASES = {
     "lambert",
     "ward",

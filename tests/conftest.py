@@ -20,11 +20,12 @@ from brdffit._programs import stored as stored_programs
 
 jax.config.update("jax_enable_x64", True)
 
-# Every random choice takes a seed, hypothesis's too: its examples are derived from each test's name (``derandomize``),
-# so a run repeats the one before it on any machine, and nothing is kept between runs (``database=None``). A developer
-# who wants fresh examples runs ``HYPOTHESIS_PROFILE=explore pytest ...`` (random draws; a failure prints its seed).
+# Every random choice takes a seed, hypothesis's too: its examples are derived from each test's source and signature
+# (``derandomize``), so a run repeats the one before it on any machine (editing a test changes its examples), and
+# nothing is kept between runs (``database=None``). A developer who wants fresh examples runs
+# ``HYPOTHESIS_PROFILE=explore pytest ...``: random draws, and a failure prints how to reproduce it (``print_blob``).
 settings.register_profile("seeded", derandomize=True, database=None)
-settings.register_profile("explore", derandomize=False, database=None)
+settings.register_profile("explore", derandomize=False, database=None, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "seeded"))
 
 # The command line keeps compiled programs in ~/.cache; the tests keep theirs in a folder of their own, one for each

@@ -86,15 +86,10 @@ def anisotropy(model, params: dict, **model_options) -> float:
     (spread; near the mirror direction; those with a direction at the horizon or below left out), as a fraction of
     its largest value there (0 for a BRDF that is 0 there; NaN where a value is not a finite number)."""
     rng = np.random.default_rng(0)
-    spread_i, spread_o = (
-        spherical_to_direction(np.arccos(rng.uniform(0.1, 1.0, TURNED_PAIRS)), rng.uniform(0, 2 * np.pi, TURNED_PAIRS))
-        for _ in range(2)
-    )
+    spread_i, spread_o = _directions(rng, min_cos=0.1), _directions(rng, min_cos=0.1)
     # near the mirror direction: wo is wi reflected about a half vector tilted by δ towards azimuth ψ
     half = spherical_to_direction(np.geomspace(1e-3, 0.6, TURNED_PAIRS), rng.uniform(0, 2 * np.pi, TURNED_PAIRS))
-    near_i = spherical_to_direction(
-        np.arccos(rng.uniform(0.5, 1.0, TURNED_PAIRS)), rng.uniform(0, 2 * np.pi, TURNED_PAIRS)
-    )
+    near_i = _directions(rng, min_cos=0.5)
     near_o = 2 * np.sum(near_i * half, axis=1, keepdims=True) * half - near_i
     wi, wo = np.concatenate([spread_i, near_i]), np.concatenate([spread_o, near_o])
     kept = (wi[:, 2] > HORIZON) & (wo[:, 2] > HORIZON)
@@ -106,3 +101,10 @@ def anisotropy(model, params: dict, **model_options) -> float:
         return float("nan")
     largest = np.max(np.abs(values[0]))
     return float(np.max(np.abs(values[1:] - values[0])) / largest) if largest > 0 else 0.0
+
+
+def _directions(rng: np.random.Generator, min_cos: float) -> np.ndarray:
+    """:data:`TURNED_PAIRS` directions drawn by ``rng``, ``cos θ`` uniform in ``[min_cos, 1]``, azimuth uniform."""
+    return spherical_to_direction(
+        np.arccos(rng.uniform(min_cos, 1.0, TURNED_PAIRS)), rng.uniform(0, 2 * np.pi, TURNED_PAIRS)
+    )
