@@ -25,8 +25,9 @@ $(VALIDATOR): $(STAMP)
 		npm install --silent --no-audit --no-fund --prefix $(VENV)/node gltf-validator@2.0.0-dev.3.10; \
 	else echo "npm not found: the tests that run the Khronos glTF validator will skip"; fi
 
-# The tests in two parts: `make test` all but the slow ones (11-17 minutes on 2 cores), `make test-slow` those marked slow
-# (cases of ten seconds or more, the catalogue's models beyond one of each kind: 8-15 minutes). CI runs both.
+# The tests in two parts: `make test` all but the slow ones (~2,200 tests, 15 minutes on 2 cores), `make test-slow` those
+# marked slow (~300: cases of ten seconds or more, the catalogue's models beyond one of each kind; 22 minutes). CI runs
+# both.
 test: $(STAMP) $(VALIDATOR)
 	$(BIN)/python -m pytest -n 2 -q
 
