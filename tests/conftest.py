@@ -83,6 +83,17 @@ def random_directions(rng, n: int, min_cos: float = 1e-3) -> np.ndarray:
     return np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta], axis=-1)
 
 
+def save_in_radians(samples, path, channels=None):
+    """``samples`` written to the CSV ``path`` with its angle columns in radians (read with ``angles="radians"``), its
+    value columns named ``channels`` (default: the samples' own); returns ``path``."""
+    from brdffit.physics.geometry import angles_from_directions
+
+    angles = [np.radians(angle) for angle in angles_from_directions(samples.wi, samples.wo)]
+    header = ",".join(["theta_i", "phi_i", "theta_o", "phi_o", *(channels or samples.channels)])
+    np.savetxt(path, np.column_stack([*angles, samples.values]), delimiter=",", header=header, comments="", fmt="%.17g")
+    return path
+
+
 def directions_from_degrees(theta, phi) -> np.ndarray:
     theta, phi = np.radians(np.atleast_1d(theta)), np.radians(np.atleast_1d(phi))
     return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)

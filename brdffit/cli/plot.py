@@ -20,6 +20,7 @@ from .files import stem as stem_of
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
+    from ..data.load import READING_OPTIONS
     from ..views.plots import KINDS
     from ..views.render import LIGHTS
 
@@ -55,8 +56,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
         help="slices and polar: the light zeniths to show (default: the data's, at most 4)",
     )
     add_loading_options(parser)
-    # Not given, these are the fits' (their fit.reading), else load_samples's defaults: _read_as_fitted.
-    parser.set_defaults(**dict.fromkeys(FITS_DECIDE))
+    # Not given, the reading options are the fits' (their fit.reading), else load_samples's defaults: _read_as_fitted.
+    parser.set_defaults(**dict.fromkeys(READING_OPTIONS))
     parser.add_argument("--seed", type=int, default=0, help="seed of --subsample (default 0)")
 
 
@@ -86,6 +87,7 @@ def _figures(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..data.load import errors_name_the_reading
     from ..views.figures import check_figure_path
     from ..views.plots import KINDS
     from ..views.residuals import colour_limit
@@ -97,15 +99,8 @@ def run(args: argparse.Namespace) -> int:
     results = [fit for _, fit in fits]
     samples_path = args.files[-1]
     max_theta, taken = _read_as_fitted(args, fits, samples_path)
-    try:
+    with errors_name_the_reading(samples_path, taken, "the fits read their samples (their"):
         samples = load(samples_path, args).within(max_theta)
-    except BrdfInputError as error:
-        if not taken:
-            raise
-        said = ", ".join(f"{name}={value}" for name, value in taken.items())
-        raise BrdfInputError(
-            f"{samples_path}: read as the fits read their samples (their fit.reading: {said}): ", *error.parts
-        ) from None
     for path, fit in fits:
         if tuple(fit.channels) != samples.channels:
             raise BrdfInputError(
@@ -166,10 +161,6 @@ def _not_a_result(path: str) -> None:
         return  # not JSON: the samples reader says what is wrong with it
     if isinstance(content, dict) and ("params" in content or "models" in content):
         raise BrdfInputError(f"{path} is a result file, not samples; the samples file comes last")
-
-
-#: The reading options whose default ``plot`` leaves to the fits (None: not given; :func:`_read_as_fitted`).
-FITS_DECIDE = ("angles", "spectral_to", "illuminant", "observer", "bin_centres")
 
 
 def _read_as_fitted(args: argparse.Namespace, fits: list, samples_path: str) -> tuple[float | None, dict]:

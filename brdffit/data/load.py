@@ -18,7 +18,8 @@ channels, if asked, into XYZ or linear sRGB (``spectral.py``).
 
 import inspect
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -211,6 +212,20 @@ def agreed_reading(readings: Iterable[dict[str, Any]]) -> dict[str, Any]:
         if values and all(value == values[0] for value in values) and values[0] != defaults[name]:
             agreed[name] = values[0]
     return agreed
+
+
+@contextmanager
+def errors_name_the_reading(path, reading: dict[str, Any], whose: str) -> Iterator[None]:
+    """Within it, a :class:`BrdfInputError` (reading ``path`` with ``reading``, options taken from results'
+    ``fit.reading``) says where they came from: ``{path}: read as {whose} fit.reading: a=b, …): {the error}``, with
+    ``whose`` such as ``the fit read its samples (the result's``. Without ``reading`` the error is left as it is."""
+    try:
+        yield
+    except BrdfInputError as error:
+        if not reading:
+            raise
+        said = ", ".join(f"{name}={value}" for name, value in reading.items())
+        raise BrdfInputError(f"{path}: read as {whose} fit.reading: {said}): ", *error.parts) from None
 
 
 def load_samples_defaults() -> dict[str, Any]:

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.load import load_samples
+from ..data.load import errors_name_the_reading, load_samples
 from ..data.samples import Samples
 from ..errors import BrdfInputError
 from ..fitting.objective.losses import RELATIVE_FLOOR
@@ -104,15 +104,8 @@ def data_for(result: FitResult, samples: "Samples | str | os.PathLike", subset: 
     fit's ``max_theta``, with the result's channels (a one-line error otherwise); with ``subset``, at most
     :data:`MAX_PAIRS` pairs (a seeded random subset)."""
     if not isinstance(samples, Samples):
-        try:
+        with errors_name_the_reading(samples, result.reading, "the fit read its samples (the result's"):
             samples = load_samples(samples, quantity=result.quantity, **result.reading)
-        except BrdfInputError as error:
-            if not result.reading:
-                raise
-            said = ", ".join(f"{name}={value}" for name, value in result.reading.items())
-            raise BrdfInputError(
-                f"{samples}: read as the fit read its samples (the result's fit.reading: {said}): ", *error.parts
-            ) from None
     samples = samples.within(result.max_theta)
     if tuple(samples.channels) != tuple(result.channels):
         raise BrdfInputError(

@@ -121,19 +121,16 @@ def test_the_samples_are_read_with_the_options_the_fit_read_them_with(files, tmp
     """A fit of a CSV whose angles are radians records ``fit.reading = {"angles": "radians"}``; plot reads the file
     so again without being told (read in degrees, every direction would lie within 1.6° of the normal, and the
     figures would compare the fit with other data), and says so when told otherwise."""
-    import numpy as np
+    from conftest import save_in_radians
 
-    table = np.genfromtxt(files / "ward.csv", delimiter=",", names=True)
-    radians = tmp_path / "radians.csv"
-    columns = list(table.dtype.names)
-    rows = [[np.radians(row[c]) if c.startswith(("theta", "phi")) else row[c] for c in columns] for row in table]
-    radians.write_text(",".join(columns) + "\n" + "\n".join(",".join(repr(float(v)) for v in r) for r in rows) + "\n")
+    from brdffit import load_samples
+
+    radians = save_in_radians(load_samples(files / "ward.csv"), tmp_path / "radians.csv")
     result = tmp_path / "radians.json"
     assert main(["fit", str(radians), "--model", "ward", "--angles", "radians", "-q", "-o", str(result)]) == 0
     assert json.loads(result.read_text())["fit"]["reading"] == {"angles": "radians"}
     capsys.readouterr()
     import brdffit.cli.plot
-    from brdffit import load_samples
 
     read = []
     monkeypatch.setattr(brdffit.cli.plot, "load", lambda *a: read.append(brdffit.cli.arguments.load(*a)) or read[-1])

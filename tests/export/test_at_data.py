@@ -149,15 +149,12 @@ def test_samples_are_read_for_the_export_as_the_fit_read_them(tmp_path, capsys):
     ``export --samples`` reads the file so again: it read radians as degrees (a "median error" of 11.6% on misread
     angles, and a warning to give ``--angles``, which export did not take) and refused the spectral file the fit
     was made from as having other channels (found trying the tool as a new user)."""
-    from brdffit.cli import main
-    from brdffit.physics.geometry import angles_from_directions
+    from conftest import save_in_radians
 
-    samples = load_samples(EXAMPLE)
-    radians = tmp_path / "radians.csv"
-    theta_i, phi_i, theta_o, phi_o = (np.radians(angle) for angle in angles_from_directions(samples.wi, samples.wo))
-    table = np.column_stack([theta_i, phi_i, theta_o, phi_o, samples.values])  # r, g, b named as bands in nm
-    header = "theta_i,phi_i,theta_o,phi_o,450,550,650"
-    np.savetxt(radians, table, delimiter=",", header=header, comments="", fmt="%.17g")
+    from brdffit.cli import main
+
+    # r, g, b named as bands in nm
+    radians = save_in_radians(load_samples(EXAMPLE), tmp_path / "radians.csv", channels=["450", "550", "650"])
     fitted = tmp_path / "fit.json"
     argv = ["fit", str(radians), "--angles", "radians", "--spectral-to", "xyz", "--model", "ward", "-o", str(fitted)]
     assert main(argv) == 0

@@ -6,11 +6,11 @@ import re
 
 import numpy as np
 import pytest
-from conftest import directions_from_degrees
+from conftest import directions_from_degrees, save_in_radians
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from paths import EXAMPLE, EXAMPLE_PARAMS
 
-from brdffit import BrdfInputError, FitResult, data_synth, load_samples, save_samples
+from brdffit import BrdfInputError, FitResult, data_synth, load_samples
 from brdffit.data.samples import Samples
 from brdffit.views.slices import PLANE_TOLERANCE, slices
 
@@ -213,12 +213,7 @@ def test_a_path_is_read_with_the_options_of_the_results_reading(tmp_path):
     from brdffit.views.figures import checked_samples
 
     samples = data_synth.synthesize("lambert", {"rho_d": [0.3]}, *data_synth.hemisphere_grid(3, 4, 6))
-    save_samples(samples, tmp_path / "degrees.csv")
-    table = np.genfromtxt(tmp_path / "degrees.csv", delimiter=",", names=True)
-    for column in ("theta_i", "phi_i", "theta_o", "phi_o"):
-        table[column] = np.radians(table[column])
-    path = tmp_path / "radians.csv"
-    np.savetxt(path, table, delimiter=",", header=",".join(table.dtype.names), comments="")
+    path = save_in_radians(samples, tmp_path / "radians.csv")
     result = result_of("lambert", {"rho_d": [0.3]}, channels=samples.channels)
     read = checked_samples(path, [FitResult(**{**result.__dict__, "reading": {"angles": "radians"}})])
     np.testing.assert_allclose(read.wi, load_samples(path, angles="radians").wi, rtol=0, atol=0)
